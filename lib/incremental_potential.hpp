@@ -1,0 +1,103 @@
+#pragma once
+// The backward-Euler incremental potential Ψ(q_k; q_{k−1}, Δq_{k−1}) (paper §4.2):
+//   Ψ = Σ inertia terms + Σ potentials (gravity, forces, torques, springs).
+// One IncrementalPotential per independent component of a model (bodies not coupled by
+// springs are minimised separately). A component composes exactly the term types its
+// scene uses: each type lives in its own vector, and an empty vector costs nothing.
+//
+// Assembly scatters each term's fixed-size local gradient/Hessian into the component's
+// tangent vector and dense Hessian through the term's precomputed offsets. It allocates
+// nothing: callers provide g and H, sized once.
+
+#include <tuple>
+#include <vector>
+
+#include "inertia.hpp"
+#include "loads.hpp"
+#include "model.hpp"
+#include "spring.hpp"
+
+namespace liedyn {
+
+class IncrementalPotential {
+ public:
+  std::vector<TranslationalInertia> translational_inertia;
+  std::vector<RotationalInertia> rotational_inertia;
+  std::vector<Gravity> gravity;
+  std::vector<ConstantForce> forces;
+  std::vector<ConstantTorque> torques;
+  std::vector<Spring> springs;
+
+  // Fixes the per-step data (x̃, R̃, R_{k−1}) from the previous state and step.
+  void begin_step(const State& previous, const Step& previous_step);
+
+  // Ψ(q).
+  double value(const State& q) const;
+
+  // Ψ(q), and its Lie gradient g and Lie Hessian H (overwritten; sized by the caller).
+  template <class Vector, class Matrix>
+  double assemble(const State& q, Vector& g, Matrix& H) const;
+
+  // Potential energy of the conservative loads alone (gravity, constant forces, springs):
+  // what frames.csv reports. Inertia and torque terms are not energies of the state.
+  double potential_energy(const State& q) const;
+
+ private:
+  template <class Function>
+  void for_each_term_vector(Function&& f) const {
+    f(translational_inertia);
+    f(rotational_inertia);
+    f(gravity);
+    f(forces);
+    f(torques);
+    f(springs);
+  }
+};
+
+// A set of DOF blocks minimised together, with their place in the tangent vector.
+struct DofBlock {
+  int index = -1;   // into State::points or State::rotations
+  int offset = -1;  // into the component's tangent vector
+};
+
+struct Component {
+  int dofs = 0;
+  std::vector<DofBlock> points;
+  std::vector<DofBlock> rotations;
+  IncrementalPotential potential;
+};
+
+// Splits a validated model into independent components (bodies joined by springs share
+// one) and builds each component's terms with their scatter offsets. Body order is kept;
+// within a component each body contributes [x, θ] in that order.
+std::vector<Component> build_components(const Model& model);
+
+// ---------------------------------------------------------------------------------------
+template <class Vector, class Matrix>
+double IncrementalPotential::assemble(const State& q, Vector& g, Matrix& H) const {
+  g.setZero();
+  H.setZero();
+  double value = 0.0;
+  for_each_term_vector([&](const auto& terms) {
+    using Term = typename std::decay_t<decltype(terms)>::value_type;
+    constexpr int B = Term::kBlocks;
+    LocalGradient<B> g_local;
+    LocalHessian<B> H_local;
+    for (const Term& term : terms) {
+      value += term.evaluate(q, &g_local, &H_local);
+      for (int i = 0; i < B; ++i) {
+        const int oi = term.offsets[i];
+        if (oi < 0) continue;
+        g.template segment<3>(oi) += g_local.template segment<3>(3 * i);
+        for (int j = 0; j < B; ++j) {
+          const int oj = term.offsets[j];
+          if (oj < 0) continue;
+          H.template block<3, 3>(oi, oj) += H_local.template block<3, 3>(3 * i, 3 * j);
+        }
+      }
+    }
+  });
+  return value;
+}
+
+}  // namespace liedyn

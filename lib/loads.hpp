@@ -1,0 +1,51 @@
+#pragma once
+// External loads as potentials: gravity, constant forces at attached points, constant
+// world torques. Values, Lie gradients and Lie Hessians per term (conventions: so3.hpp).
+
+#include "state.hpp"
+#include "term.hpp"
+
+namespace liedyn {
+
+// Gravity on a point mass: V = −m g·x;  ∇V = −m g,  ∇²V = 0.
+struct Gravity {
+  static constexpr int kBlocks = 1;
+  std::array<int, kBlocks> offsets{-1};
+  int point = -1;
+  Vector3 weight = Vector3::Zero();  // m g
+
+  double evaluate(const State& q, LocalGradient<1>* g, LocalHessian<1>* H) const;
+};
+
+// A constant world force F applied at p = x + R p̄ (blocks: x, θ). V = −F·p, so with
+// f = ∂V/∂p = −F (eqs. 22, 23):
+//   ∂V/∂x = −F,   DV/DR = r × f = −r × F (minus the torque),   D²V/DR² = ½(f rᵀ + r fᵀ) − (f·r) I.
+struct ConstantForce {
+  static constexpr int kBlocks = 2;
+  std::array<int, kBlocks> offsets{-1, -1};
+  AttachedPoint at;
+  Vector3 force = Vector3::Zero();
+
+  double evaluate(const State& q, LocalGradient<2>* g, LocalHessian<2>* H) const;
+};
+
+// A constant world torque τ on a rotation. A constant world torque has no potential on
+// SO(3), so each step uses the incremental potential
+//   V(R) = −τ · vee(P),   P = R R_{k−1}ᵀ,   vee(P) = sin φ n for P = exp(φ n),
+// whose Lie gradient is exactly −τ at P = I and −τ + O(φ) over the step (first order, like
+// backward Euler itself):
+//   DV/DR = −½ (tr(P) I − P)ᵀ τ,
+//   D²V/DR² = ¼ (P hat(τ) − hat(τ) Pᵀ) − ½ tr(hat(τ) P) I.
+// Derived by substituting exp(θ) ≈ I + hat(θ) + ½hat(θ)² (paper §3.2); FD-checked in tests.
+struct ConstantTorque {
+  static constexpr int kBlocks = 1;
+  std::array<int, kBlocks> offsets{-1};
+  int rotation = -1;
+  Vector3 torque = Vector3::Zero();
+  Matrix3 R_previous = Matrix3::Identity();
+
+  void begin_step(const State& previous, const Step& previous_step);
+  double evaluate(const State& q, LocalGradient<1>* g, LocalHessian<1>* H) const;
+};
+
+}  // namespace liedyn

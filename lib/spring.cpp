@@ -1,0 +1,43 @@
+#include "spring.hpp"
+
+#include "so3.hpp"
+
+namespace liedyn {
+
+double Spring::evaluate(const State& q, LocalGradient<4>* g, LocalHessian<4>* H) const {
+  const Vector3 d = b.position(q) - a.position(q);
+  const double l = d.norm();
+  const double stretch = l - rest_length;
+  if (g == nullptr && H == nullptr) return 0.5 * stiffness * stretch * stretch;
+
+  Vector3 f;  // ∂V/∂d
+  Matrix3 K;  // ∂²V/∂d²
+  if (rest_length == 0.0) {
+    f = stiffness * d;
+    K = stiffness * Matrix3::Identity();
+  } else if (l > 0.0) {
+    const Vector3 n = d / l;
+    const Matrix3 nn = n * n.transpose();
+    f = stiffness * stretch * n;
+    K = stiffness * nn + stiffness * stretch / l * (Matrix3::Identity() - nn);
+  } else {
+    // Coincident endpoints with L > 0: the direction is undefined, V is stationary along
+    // every direction at first order; use the isotropic limit of the axial stiffness.
+    f.setZero();
+    K = stiffness * Matrix3::Identity();
+  }
+
+  const Vector3 r_a = a.lever(q);
+  const Vector3 r_b = b.lever(q);
+  Eigen::Matrix<double, 3, 12> Jd;  // ∂d/∂(x_a, θ_a, x_b, θ_b)
+  Jd << -Matrix3::Identity(), so3::hat(r_a), Matrix3::Identity(), -so3::hat(r_b);
+  if (g != nullptr) *g = Jd.transpose() * f;
+  if (H != nullptr) {
+    *H = Jd.transpose() * K * Jd;
+    H->block<3, 3>(3, 3) += rotated_point_curvature(r_a, -f);  // f_a = ∂V/∂p_a = −f
+    H->block<3, 3>(9, 9) += rotated_point_curvature(r_b, f);
+  }
+  return 0.5 * stiffness * stretch * stretch;
+}
+
+}  // namespace liedyn

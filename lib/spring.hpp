@@ -1,0 +1,28 @@
+#pragma once
+// Linear spring between two attached points (bodies or world anchors), paper eqs. 22–23.
+//
+//   V = ½ k (‖d‖ − L)²,   d = p_b − p_a,   p = x + R p̄.
+// With l = ‖d‖, n = d/l:
+//   ∂V/∂d = k (l − L) n,
+//   ∂²V/∂d² = k n nᵀ + k (l − L)/l (I − n nᵀ)    (L = 0: exactly k I).
+// Blocks (x_a, θ_a, x_b, θ_b); ∂d/∂(blocks) = [−I, hat(r_a), I, −hat(r_b)], r = R p̄. Then
+//   gradient = (∂d)ᵀ ∂V/∂d,   Hessian = (∂d)ᵀ ∂²V/∂d² (∂d) + eq. (23) curvature at each rotation.
+// The Hessian is exact and indefinite for a compressed spring (l < L) and for some lever
+// configurations; the Newton solver regularises the assembled matrix (see solvers/newton.hpp).
+
+#include "state.hpp"
+#include "term.hpp"
+
+namespace liedyn {
+
+struct Spring {
+  static constexpr int kBlocks = 4;
+  std::array<int, kBlocks> offsets{-1, -1, -1, -1};  // x_a, θ_a, x_b, θ_b
+  AttachedPoint a, b;
+  double stiffness = 0.0;    // k  [N/m]
+  double rest_length = 0.0;  // L  [m]
+
+  double evaluate(const State& q, LocalGradient<4>* g, LocalHessian<4>* H) const;
+};
+
+}  // namespace liedyn

@@ -1,0 +1,19 @@
+#include "state.hpp"
+
+namespace liedyn {
+
+Vector3 AttachedPoint::position(const State& q) const {
+  if (point < 0) return local;
+  return q.points[point] + lever(q);
+}
+
+Vector3 AttachedPoint::lever(const State& q) const {
+  if (rotation < 0) return Vector3::Zero();
+  return q.rotations[rotation] * local;
+}
+
+Matrix3 rotated_point_curvature(const Vector3& r, const Vector3& f) {
+  return 0.5 * (f * r.transpose() + r * f.transpose()) - f.dot(r) * Matrix3::Identity();
+}
+
+}  // namespace liedyn

@@ -1,0 +1,39 @@
+#include "output.hpp"
+
+#include <unistd.h>
+
+#include <stdexcept>
+#include <system_error>
+
+namespace liedyn {
+
+AtomicFile::AtomicFile(std::filesystem::path target)
+    : target_(std::move(target)),
+      temporary_(target_.string() + ".tmp-" + std::to_string(::getpid())) {
+  stream_.open(temporary_, std::ios::out | std::ios::trunc);
+  if (!stream_) throw std::runtime_error(temporary_.string() + ": cannot open for writing");
+  stream_.precision(17);
+}
+
+AtomicFile::~AtomicFile() {
+  if (!committed_) {
+    stream_.close();
+    std::error_code ignored;
+    std::filesystem::remove(temporary_, ignored);
+  }
+}
+
+void AtomicFile::commit() {
+  stream_.flush();
+  const bool ok = static_cast<bool>(stream_);
+  stream_.close();
+  if (!ok) throw std::runtime_error(temporary_.string() + ": write failed");
+  std::error_code error;
+  std::filesystem::rename(temporary_, target_, error);
+  if (error) {
+    throw std::runtime_error(target_.string() + ": cannot rename into place: " + error.message());
+  }
+  committed_ = true;
+}
+
+}  // namespace liedyn

@@ -1,0 +1,127 @@
+#include "run.hpp"
+
+#include <chrono>
+#include <iomanip>
+#include <ostream>
+#include <sstream>
+
+#include "../lib/so3.hpp"
+#include "../solvers/simulator.hpp"
+#include "output.hpp"
+
+namespace liedyn {
+namespace {
+
+void write_trajectory_rows(std::ostream& out, const Simulator& sim) {
+  const auto& bodies = sim.model().bodies;
+  for (std::size_t i = 0; i < bodies.size(); ++i) {
+    const Vector3& x = sim.state().points[i];
+    const Eigen::Quaterniond q = so3::to_quaternion(sim.state().rotations[i]);
+    out << sim.frame() << ',' << sim.time() << ',' << bodies[i].name << ",body,0," << x.x() << ','
+        << x.y() << ',' << x.z() << ',' << q.w() << ',' << q.x() << ',' << q.y() << ',' << q.z()
+        << '\n';
+  }
+}
+
+void write_frame_row(std::ostream& out, const Simulator& sim, const StepReport* report) {
+  const Vector3 L = sim.angular_momentum();
+  out << sim.frame() << ',' << sim.time() << ',';
+  if (report != nullptr) {
+    out << report->iterations << ',' << report->gradient_norm << ','
+        << (report->converged() ? 1 : 0) << ',';
+  } else {
+    out << "0,0,1,";  // frame 0: the initial state, not a solve
+  }
+  out << sim.kinetic_energy() << ',' << sim.potential_energy() << ',' << L.x() << ',' << L.y()
+      << ',' << L.z() << ',' << (report ? report->step_norm : 0.0) << ','
+      << (report ? report->regularized_iterations : 0) << ','
+      << (report ? to_string(report->status) : "initial") << '\n';
+}
+
+}  // namespace
+
+SimulationSummary simulate_scene(const Scene& scene, const std::filesystem::path& out_dir,
+                                 std::ostream* progress) {
+  using Clock = std::chrono::steady_clock;
+  std::filesystem::create_directories(out_dir);
+  AtomicFile trajectory(out_dir / "trajectory.csv");
+  AtomicFile frames(out_dir / "frames.csv");
+  trajectory.stream() << "frame,time,object,kind,index,x,y,z,qw,qx,qy,qz\n";
+  frames.stream() << "frame,time,newton_iterations,gradient_norm,converged,kinetic_energy,"
+                     "potential_energy,angular_momentum_x,angular_momentum_y,angular_momentum_z,"
+                     "step_norm,regularized_iterations,status\n";
+
+  Simulator sim(scene.model, scene.solver);
+  SimulationSummary summary;
+  summary.frames_requested = scene.frames;
+  summary.initial_energy = sim.kinetic_energy() + sim.potential_energy();
+  write_trajectory_rows(trajectory.stream(), sim);
+  write_frame_row(frames.stream(), sim, nullptr);
+
+  const auto start = Clock::now();
+  auto last_progress = start;
+  bool progress_shown = false;
+  for (int k = 1; k <= scene.frames; ++k) {
+    const StepReport report = sim.step();
+    if (!report.state_updated()) {
+      summary.failed = true;
+      std::ostringstream os;
+      os << "step " << k << " (t = " << k * scene.model.time_step
+         << " s) failed: " << to_string(report.status) << " after " << report.iterations
+         << " Newton iterations, gradient norm " << report.gradient_norm;
+      summary.failure = os.str();
+      break;
+    }
+    ++summary.frames_completed;
+    summary.total_iterations += report.iterations;
+    summary.max_iterations_in_step = std::max(summary.max_iterations_in_step, report.iterations);
+    summary.max_gradient_norm = std::max(summary.max_gradient_norm, report.gradient_norm);
+    if (!report.converged()) ++summary.unconverged_steps;
+    if (report.regularized_iterations > 0) ++summary.regularized_steps;
+    write_trajectory_rows(trajectory.stream(), sim);
+    write_frame_row(frames.stream(), sim, &report);
+
+    const auto now = Clock::now();
+    if (progress != nullptr && now - start > std::chrono::seconds(1) &&
+        now - last_progress > std::chrono::milliseconds(250)) {
+      *progress << "\rframe " << k << "/" << scene.frames << " (" << std::fixed
+                << std::setprecision(0) << 100.0 * k / scene.frames << "%)" << std::flush;
+      progress->unsetf(std::ios::fixed);
+      last_progress = now;
+      progress_shown = true;
+    }
+  }
+  if (progress_shown) *progress << "\n";
+  summary.wall_seconds = std::chrono::duration<double>(Clock::now() - start).count();
+  summary.final_energy = sim.kinetic_energy() + sim.potential_energy();
+  // Commit even after a failed step: the frames up to it are valid and are kept.
+  trajectory.commit();
+  frames.commit();
+  return summary;
+}
+
+std::string format_summary(const Scene& scene, const SimulationSummary& s) {
+  std::ostringstream os;
+  os << "scene        " << scene.source << "\n";
+  if (!scene.description.empty()) os << "             " << scene.description << "\n";
+  os << "bodies       " << scene.model.bodies.size() << ", h = " << scene.model.time_step
+     << " s, tolerance " << scene.solver.tolerance << ", max_iterations "
+     << scene.solver.max_iterations << "\n";
+  os << "frames       " << s.frames_completed << " of " << s.frames_requested << " in "
+     << std::setprecision(3) << s.wall_seconds << " s";
+  if (s.frames_completed > 0) {
+    os << " (" << 1e6 * s.wall_seconds / s.frames_completed << " µs/step)";
+  }
+  os << "\n";
+  os << "newton       " << s.total_iterations << " iterations, "
+     << (s.frames_completed ? double(s.total_iterations) / s.frames_completed : 0.0)
+     << " per step (max " << s.max_iterations_in_step << ")\n";
+  os << "unconverged  " << s.unconverged_steps << " steps ended at max_iterations\n";
+  os << "regularized  " << s.regularized_steps << " steps needed a Hessian shift\n";
+  os << "energy       " << std::setprecision(6) << s.initial_energy << " -> " << s.final_energy
+     << " J\n";
+  if (s.failed) os << "FAILED       " << s.failure << "\n";
+  return os.str();
+}
+
+}  // namespace liedyn

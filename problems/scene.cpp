@@ -1,0 +1,314 @@
+#include "scene.hpp"
+
+#include <cmath>
+#include <fstream>
+#include <map>
+#include <nlohmann/json.hpp>
+#include <set>
+#include <sstream>
+
+#include "../lib/so3.hpp"
+
+namespace liedyn {
+
+SceneError::SceneError(std::string file, std::string field, std::string reason)
+    : std::runtime_error(file + ": " + (field.empty() ? std::string() : field + ": ") + reason),
+      file_(std::move(file)),
+      field_(std::move(field)),
+      reason_(std::move(reason)) {}
+
+namespace {
+
+using nlohmann::json;
+
+// A JSON object being read, with the dotted path of its place in the file. Each key read is
+// remembered; finish() rejects the keys nobody asked for (typos must not pass silently).
+class ObjectReader {
+ public:
+  ObjectReader(const json& value, std::string path, const std::string& source)
+      : value_(value), path_(std::move(path)), source_(source) {
+    if (!value_.is_object()) fail(path_, "must be a JSON object");
+  }
+
+  [[noreturn]] void fail(const std::string& field, const std::string& reason) const {
+    throw SceneError(source_, field, reason);
+  }
+
+  std::string field(const std::string& key) const {
+    return path_.empty() ? key : path_ + "." + key;
+  }
+
+  bool has(const std::string& key) {
+    known_.insert(key);
+    return value_.contains(key);
+  }
+
+  const json& get(const std::string& key) {
+    if (!has(key)) fail(field(key), "is required but missing");
+    return value_.at(key);
+  }
+
+  double number(const std::string& key) { return to_number(get(key), field(key)); }
+  double number(const std::string& key, double fallback) {
+    return has(key) ? number(key) : fallback;
+  }
+
+  double to_number(const json& v, const std::string& f) const {
+    if (!v.is_number()) fail(f, "must be a number (got " + type_of(v) + ")");
+    const double x = v.get<double>();
+    if (!std::isfinite(x)) fail(f, "must be finite");
+    return x;
+  }
+
+  int integer(const std::string& key, int lo) {
+    const json& v = get(key);
+    if (!v.is_number_integer()) fail(field(key), "must be an integer (got " + type_of(v) + ")");
+    const auto x = v.get<long long>();
+    if (x < lo || x > std::numeric_limits<int>::max()) {
+      fail(field(key), "must be an integer ≥ " + std::to_string(lo) + " (got " +
+                           std::to_string(x) + ")");
+    }
+    return static_cast<int>(x);
+  }
+
+  std::string string(const std::string& key) {
+    const json& v = get(key);
+    if (!v.is_string()) fail(field(key), "must be a string (got " + type_of(v) + ")");
+    return v.get<std::string>();
+  }
+  std::string string(const std::string& key, const std::string& fallback) {
+    return has(key) ? string(key) : fallback;
+  }
+
+  // Fixed-length array of finite numbers.
+  template <int N>
+  Eigen::Matrix<double, N, 1> vector(const std::string& key) {
+    const json& v = get(key);
+    const std::string f = field(key);
+    if (!v.is_array() || v.size() != N) {
+      fail(f, "must be an array of " + std::to_string(N) + " numbers");
+    }
+    Eigen::Matrix<double, N, 1> out;
+    for (int i = 0; i < N; ++i) out(i) = to_number(v[i], f + "[" + std::to_string(i) + "]");
+    return out;
+  }
+  template <int N>
+  Eigen::Matrix<double, N, 1> vector(const std::string& key,
+                                     const Eigen::Matrix<double, N, 1>& fallback) {
+    return has(key) ? vector<N>(key) : fallback;
+  }
+
+  // An inertia tensor: 3 principal moments or a 3×3 array.
+  Matrix3 inertia(const std::string& key) {
+    const json& v = get(key);
+    const std::string f = field(key);
+    if (v.is_array() && v.size() == 3 && v[0].is_number()) return vector<3>(key).asDiagonal();
+    if (v.is_array() && v.size() == 3) {
+      Matrix3 m;
+      for (int r = 0; r < 3; ++r) {
+        const std::string row = f + "[" + std::to_string(r) + "]";
+        if (!v[r].is_array() || v[r].size() != 3) fail(row, "must be an array of 3 numbers");
+        for (int c = 0; c < 3; ++c) m(r, c) = to_number(v[r][c], row + "[" + std::to_string(c) + "]");
+      }
+      return m;
+    }
+    fail(f, "must be 3 principal moments [I1, I2, I3] or a 3×3 array");
+  }
+
+  const json& array(const std::string& key) {
+    const json& v = get(key);
+    if (!v.is_array()) fail(field(key), "must be an array (got " + type_of(v) + ")");
+    return v;
+  }
+
+  void finish() const {
+    for (const auto& item : value_.items()) {
+      if (!known_.count(item.key())) {
+        std::string allowed;
+        for (const std::string& k : known_) allowed += (allowed.empty() ? "" : ", ") + k;
+        fail(field(item.key()), "unknown key (allowed here: " + allowed + ")");
+      }
+    }
+  }
+
+  static std::string type_of(const json& v) {
+    return v.is_null() ? "null" : std::string(v.type_name());
+  }
+
+ private:
+  const json& value_;
+  std::string path_;
+  const std::string& source_;
+  std::set<std::string> known_;
+};
+
+std::string item_path(const std::string& array, std::size_t i) {
+  return array + "[" + std::to_string(i) + "]";
+}
+
+// Body name → index, for springs, forces and torques.
+int body_index(ObjectReader& r, const std::string& key, const std::map<std::string, int>& names,
+               bool allow_world) {
+  const std::string name = allow_world ? r.string(key, "world") : r.string(key);
+  if (allow_world && name == "world") return -1;
+  const auto it = names.find(name);
+  if (it == names.end()) {
+    std::string known;
+    for (const auto& [n, i] : names) known += (known.empty() ? "" : ", ") + n;
+    r.fail(r.field(key), "names no body \"" + name + "\" (bodies: " + known +
+                             (allow_world ? "; or \"world\")" : ")"));
+  }
+  return it->second;
+}
+
+Scene parse(const json& root, const std::string& source) {
+  Scene scene;
+  scene.source = source;
+  ObjectReader top(root, "", source);
+  scene.description = top.string("description", "");
+  scene.model.time_step = top.number("time_step");
+  if (scene.model.time_step <= 0.0) top.fail("time_step", "must be positive");
+  scene.frames = top.integer("frames", 0);
+  scene.model.gravity = top.vector<3>("gravity", Vector3::Zero());
+
+  if (top.has("solver")) {
+    ObjectReader s(top.get("solver"), "solver", source);
+    const std::string backend = s.string("backend", "newton");
+    if (backend == "ceres" || backend == "ipopt") {
+      s.fail("solver.backend", "\"" + backend +
+                                   "\" is not available yet (only \"newton\" is implemented)");
+    } else if (backend != "newton") {
+      s.fail("solver.backend", "unknown backend \"" + backend + "\" (expected \"newton\")");
+    }
+    const std::string rotation = s.string("rotation", "lie");
+    if (rotation == "rotvec" || rotation == "quat") {
+      s.fail("solver.rotation", "\"" + rotation +
+                                    "\" is not available yet (only \"lie\" is implemented)");
+    } else if (rotation != "lie") {
+      s.fail("solver.rotation", "unknown rotation parameterisation \"" + rotation +
+                                    "\" (expected \"lie\")");
+    }
+    scene.solver.tolerance = s.number("tolerance", scene.solver.tolerance);
+    if (s.has("max_iterations")) scene.solver.max_iterations = s.integer("max_iterations", 1);
+    scene.solver.armijo = s.number("armijo", scene.solver.armijo);
+    scene.solver.min_step_length = s.number("min_step_length", scene.solver.min_step_length);
+    s.finish();
+  }
+
+  std::map<std::string, int> names;
+  const json& bodies = top.array("bodies");
+  if (bodies.empty()) top.fail("bodies", "must list at least one body");
+  for (std::size_t i = 0; i < bodies.size(); ++i) {
+    ObjectReader b(bodies[i], item_path("bodies", i), source);
+    RigidBody body;
+    body.name = b.string("name");
+    if (body.name.empty() || body.name == "world") {
+      b.fail(b.field("name"), "must be a non-empty name other than \"world\"");
+    }
+    if (!names.emplace(body.name, static_cast<int>(i)).second) {
+      b.fail(b.field("name"), "repeats the name \"" + body.name + "\"");
+    }
+    body.mass = b.number("mass");
+    body.inertia = b.inertia("inertia");
+    body.position = b.vector<3>("position", Vector3::Zero());
+    if (b.has("orientation")) {
+      const Eigen::Vector4d wxyz = b.vector<4>("orientation");
+      if (std::abs(wxyz.norm() - 1.0) > kQuaternionNormTolerance) {
+        std::ostringstream os;
+        os << "must be a unit quaternion [w, x, y, z] (norm " << wxyz.norm()
+           << ", tolerance " << kQuaternionNormTolerance << ")";
+        b.fail(b.field("orientation"), os.str());
+      }
+      body.orientation =
+          so3::from_quaternion(Eigen::Quaterniond(wxyz(0), wxyz(1), wxyz(2), wxyz(3)));
+    }
+    body.linear_velocity = b.vector<3>("linear_velocity", Vector3::Zero());
+    body.angular_velocity = b.vector<3>("angular_velocity", Vector3::Zero());
+    b.finish();
+    scene.model.bodies.push_back(body);
+  }
+
+  if (top.has("springs")) {
+    const json& springs = top.array("springs");
+    for (std::size_t i = 0; i < springs.size(); ++i) {
+      ObjectReader s(springs[i], item_path("springs", i), source);
+      SpringSpec spec;
+      spec.a.body = body_index(s, "body_a", names, true);
+      spec.a.point = s.vector<3>("point_a", Vector3::Zero());
+      spec.b.body = body_index(s, "body_b", names, true);
+      spec.b.point = s.vector<3>("point_b", Vector3::Zero());
+      spec.stiffness = s.number("stiffness");
+      if (s.has("rest_length")) {
+        spec.rest_length = s.number("rest_length");
+      } else {
+        // Default: the initial distance between the two points.
+        const auto world = [&](const BodyPoint& p) -> Vector3 {
+          if (p.body < 0) return p.point;
+          const RigidBody& body = scene.model.bodies[p.body];
+          return body.position + body.orientation * p.point;
+        };
+        spec.rest_length = (world(spec.b) - world(spec.a)).norm();
+      }
+      s.finish();
+      scene.model.springs.push_back(spec);
+    }
+  }
+  if (top.has("forces")) {
+    const json& forces = top.array("forces");
+    for (std::size_t i = 0; i < forces.size(); ++i) {
+      ObjectReader f(forces[i], item_path("forces", i), source);
+      ForceSpec spec;
+      spec.at.body = body_index(f, "body", names, false);
+      spec.at.point = f.vector<3>("point", Vector3::Zero());
+      spec.force = f.vector<3>("force");
+      f.finish();
+      scene.model.forces.push_back(spec);
+    }
+  }
+  if (top.has("torques")) {
+    const json& torques = top.array("torques");
+    for (std::size_t i = 0; i < torques.size(); ++i) {
+      ObjectReader t(torques[i], item_path("torques", i), source);
+      TorqueSpec spec;
+      spec.body = body_index(t, "body", names, false);
+      spec.torque = t.vector<3>("torque");
+      t.finish();
+      scene.model.torques.push_back(spec);
+    }
+  }
+  top.finish();
+
+  // Physical checks (positivity, inertia, …) live with the model, which names the field.
+  try {
+    scene.model.validate();
+    scene.solver.validate();
+  } catch (const ModelError& e) {
+    const std::string prefix = e.field() + ": ";
+    std::string reason = e.what();
+    if (reason.rfind(prefix, 0) == 0) reason = reason.substr(prefix.size());
+    throw SceneError(source, e.field(), reason);
+  }
+  return scene;
+}
+
+}  // namespace
+
+Scene parse_scene(const std::string& json_text, const std::string& source) {
+  json root;
+  try {
+    root = json::parse(json_text);
+  } catch (const json::parse_error& e) {
+    throw SceneError(source, "", std::string("invalid JSON: ") + e.what());
+  }
+  return parse(root, source);
+}
+
+Scene load_scene(const std::filesystem::path& file) {
+  std::ifstream in(file);
+  if (!in) throw SceneError(file.string(), "", "cannot open the file for reading");
+  std::ostringstream text;
+  text << in.rdbuf();
+  return parse_scene(text.str(), file.string());
+}
+
+}  // namespace liedyn

@@ -1,0 +1,43 @@
+#pragma once
+// Scene files (JSON) → Model + solver options. The schema is documented in
+// docs/scene-format.md; every field is checked and unknown keys are rejected.
+
+#include <filesystem>
+#include <stdexcept>
+#include <string>
+
+#include "../solvers/newton.hpp"
+
+namespace liedyn {
+
+// Bad scene input. what() reads "<file>: <field>: <reason>".
+class SceneError : public std::runtime_error {
+ public:
+  SceneError(std::string file, std::string field, std::string reason);
+  const std::string& file() const { return file_; }
+  const std::string& field() const { return field_; }
+  const std::string& reason() const { return reason_; }
+
+ private:
+  std::string file_, field_, reason_;
+};
+
+struct Scene {
+  std::string source;  // file name (or a label) used in messages
+  std::string description;
+  int frames = 0;      // time steps to simulate; frame 0 is the initial state
+  Model model;
+  NewtonOptions solver;
+};
+
+// Parses and validates JSON text; `source` names it in error messages.
+Scene parse_scene(const std::string& json_text, const std::string& source);
+
+// Reads and parses a scene file. Throws SceneError (also for an unreadable file).
+Scene load_scene(const std::filesystem::path& file);
+
+// Relative tolerance on ‖q‖ − 1 for "orientation" quaternions; within it the quaternion is
+// normalised, beyond it the scene is rejected.
+inline constexpr double kQuaternionNormTolerance = 1e-6;
+
+}  // namespace liedyn

@@ -1,0 +1,172 @@
+#include "newton.hpp"
+
+#include <cmath>
+#include <limits>
+
+#include "../lib/so3.hpp"
+
+namespace liedyn {
+
+void NewtonOptions::validate() const {
+  if (!(tolerance > 0.0) || !std::isfinite(tolerance)) {
+    throw ModelError("solver.tolerance", "must be a finite positive number");
+  }
+  if (max_iterations < 1) throw ModelError("solver.max_iterations", "must be at least 1");
+  if (!(armijo > 0.0 && armijo < 0.5)) throw ModelError("solver.armijo", "must be in (0, 0.5)");
+  if (!(min_step_length > 0.0 && min_step_length < 1.0)) {
+    throw ModelError("solver.min_step_length", "must be in (0, 1)");
+  }
+}
+
+const char* to_string(StepStatus status) {
+  switch (status) {
+    case StepStatus::kConverged: return "converged";
+    case StepStatus::kMaxIterations: return "max_iterations";
+    case StepStatus::kLineSearchFailed: return "line_search_failed";
+    case StepStatus::kNonFinite: return "non_finite";
+  }
+  return "unknown";
+}
+
+void StepReport::merge(const StepReport& other) {
+  // The worst status wins; iterations are the slowest component's (they are independent).
+  if (static_cast<int>(other.status) > static_cast<int>(status)) status = other.status;
+  iterations = std::max(iterations, other.iterations);
+  regularized_iterations = std::max(regularized_iterations, other.regularized_iterations);
+  factorizations += other.factorizations;
+  gradient_norm = std::hypot(gradient_norm, other.gradient_norm);
+  step_norm = std::max(step_norm, other.step_norm);
+}
+
+template <int N>
+DenseNewton<N>::DenseNewton(Component component, const NewtonOptions& options)
+    : component_(std::move(component)),
+      options_(options),
+      g_(component_.dofs),
+      delta_(component_.dofs),
+      H_(component_.dofs, component_.dofs),
+      H_shifted_(component_.dofs, component_.dofs),
+      llt_(component_.dofs),
+      saved_points_(component_.points.size()),
+      entry_points_(component_.points.size()),
+      saved_rotations_(component_.rotations.size()),
+      entry_rotations_(component_.rotations.size()) {}
+
+template <int N>
+void DenseNewton<N>::save(const State& q) {
+  for (std::size_t i = 0; i < component_.points.size(); ++i) {
+    saved_points_[i] = q.points[component_.points[i].index];
+  }
+  for (std::size_t i = 0; i < component_.rotations.size(); ++i) {
+    saved_rotations_[i] = q.rotations[component_.rotations[i].index];
+  }
+}
+
+template <int N>
+void DenseNewton<N>::restore(State& q) const {
+  for (std::size_t i = 0; i < component_.points.size(); ++i) {
+    q.points[component_.points[i].index] = saved_points_[i];
+  }
+  for (std::size_t i = 0; i < component_.rotations.size(); ++i) {
+    q.rotations[component_.rotations[i].index] = saved_rotations_[i];
+  }
+}
+
+template <int N>
+void DenseNewton<N>::retract(State& q, double alpha) const {
+  for (const DofBlock& b : component_.points) {
+    q.points[b.index] += alpha * delta_.template segment<3>(b.offset);
+  }
+  for (const DofBlock& b : component_.rotations) {
+    Matrix3& R = q.rotations[b.index];
+    R = so3::orthonormalize(so3::exp(alpha * delta_.template segment<3>(b.offset)) * R);
+  }
+}
+
+template <int N>
+bool DenseNewton<N>::factorize(StepReport& report, bool& regularized) {
+  regularized = false;
+  llt_.compute(H_);
+  ++report.factorizations;
+  if (llt_.info() == Eigen::Success) return true;
+  const double scale = std::max(H_.diagonal().cwiseAbs().maxCoeff(),
+                                std::numeric_limits<double>::min());
+  regularized = true;
+  for (double mu = 1e-8 * scale; mu < 1e12 * scale; mu *= 10.0) {
+    H_shifted_ = H_;
+    H_shifted_.diagonal().array() += mu;
+    llt_.compute(H_shifted_);
+    ++report.factorizations;
+    if (llt_.info() == Eigen::Success) return true;
+  }
+  return false;
+}
+
+template <int N>
+StepReport DenseNewton<N>::solve(State& q) {
+  StepReport report;
+  // Keep the entry state so that a failed step leaves q untouched.
+  for (std::size_t i = 0; i < component_.points.size(); ++i) {
+    entry_points_[i] = q.points[component_.points[i].index];
+  }
+  for (std::size_t i = 0; i < component_.rotations.size(); ++i) {
+    entry_rotations_[i] = q.rotations[component_.rotations[i].index];
+  }
+  auto fail = [&](StepStatus status) {
+    report.status = status;
+    for (std::size_t i = 0; i < component_.points.size(); ++i) {
+      q.points[component_.points[i].index] = entry_points_[i];
+    }
+    for (std::size_t i = 0; i < component_.rotations.size(); ++i) {
+      q.rotations[component_.rotations[i].index] = entry_rotations_[i];
+    }
+    return report;
+  };
+
+  for (;;) {
+    const double psi = component_.potential.assemble(q, g_, H_);
+    report.gradient_norm = g_.norm();
+    if (!std::isfinite(psi) || !g_.allFinite() || !H_.allFinite()) {
+      return fail(StepStatus::kNonFinite);
+    }
+    bool regularized = false;
+    if (!factorize(report, regularized)) return fail(StepStatus::kNonFinite);
+    delta_ = llt_.solve(g_);
+    delta_ = -delta_;
+    if (!delta_.allFinite()) return fail(StepStatus::kNonFinite);
+    report.step_norm = delta_.template lpNorm<Eigen::Infinity>();
+    if (!regularized && report.step_norm <= options_.tolerance) {
+      report.status = StepStatus::kConverged;
+      return report;
+    }
+    if (report.iterations >= options_.max_iterations) {
+      report.status = StepStatus::kMaxIterations;
+      return report;
+    }
+
+    // Backtracking (Armijo) line search on Ψ. Near convergence the predicted decrease can
+    // fall below the round-off of Ψ itself; a change within that round-off is accepted.
+    const double slope = g_.dot(delta_);  // < 0: H (or H + μI) is positive definite
+    const double roundoff = 64.0 * std::numeric_limits<double>::epsilon() * std::abs(psi);
+    save(q);
+    double alpha = 1.0;
+    for (;;) {
+      retract(q, alpha);
+      const double psi_trial = component_.potential.value(q);
+      if (std::isfinite(psi_trial) &&
+          psi_trial <= psi + options_.armijo * alpha * slope + roundoff) {
+        break;
+      }
+      restore(q);
+      alpha *= 0.5;
+      if (alpha < options_.min_step_length) return fail(StepStatus::kLineSearchFailed);
+    }
+    ++report.iterations;
+    if (regularized) ++report.regularized_iterations;
+  }
+}
+
+template class DenseNewton<6>;
+template class DenseNewton<Eigen::Dynamic>;
+
+}  // namespace liedyn

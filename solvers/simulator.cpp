@@ -1,0 +1,96 @@
+#include "simulator.hpp"
+
+#include "../lib/so3.hpp"
+
+namespace liedyn {
+
+Simulator::Simulator(Model model, const NewtonOptions& options)
+    : model_(std::move(model)), options_(options) {
+  model_.validate();
+  options_.validate();
+  state_ = model_.initial_state();
+  step_ = model_.initial_step();
+  previous_ = state_;
+  previous_step_ = step_;
+  for (Component& c : build_components(model_)) {
+    if (c.dofs == 6) {
+      single_bodies_.emplace_back(std::move(c), options_);
+    } else {
+      coupled_bodies_.emplace_back(std::move(c), options_);
+    }
+  }
+}
+
+StepReport Simulator::step() {
+  previous_ = state_;  // same sizes: copies without allocating
+  previous_step_ = step_;
+  for (std::size_t i = 0; i < state_.points.size(); ++i) {
+    state_.points[i] = previous_.points[i] + step_.points[i];
+  }
+  for (std::size_t i = 0; i < state_.rotations.size(); ++i) {
+    state_.rotations[i] = so3::orthonormalize(step_.rotations[i] * previous_.rotations[i]);
+  }
+
+  StepReport report;
+  auto run = [&](auto& solvers) {
+    for (auto& solver : solvers) {
+      solver.component().potential.begin_step(previous_, previous_step_);
+      report.merge(solver.solve(state_));
+    }
+  };
+  run(single_bodies_);
+  run(coupled_bodies_);
+
+  if (!report.state_updated()) {
+    state_ = previous_;
+    return report;
+  }
+  for (std::size_t i = 0; i < state_.points.size(); ++i) {
+    step_.points[i] = state_.points[i] - previous_.points[i];
+  }
+  for (std::size_t i = 0; i < state_.rotations.size(); ++i) {
+    step_.rotations[i] = so3::orthonormalize(state_.rotations[i] * previous_.rotations[i].transpose());
+  }
+  ++frame_;
+  return report;
+}
+
+Vector3 Simulator::linear_velocity(int body) const {
+  return step_.points[body] / model_.time_step;
+}
+
+Vector3 Simulator::angular_velocity(int body) const {
+  return so3::log(step_.rotations[body]) / model_.time_step;
+}
+
+double Simulator::kinetic_energy() const {
+  double energy = 0.0;
+  for (std::size_t i = 0; i < model_.bodies.size(); ++i) {
+    const RigidBody& b = model_.bodies[i];
+    const Matrix3& R = state_.rotations[i];
+    const Vector3 v = linear_velocity(static_cast<int>(i));
+    const Vector3 w = angular_velocity(static_cast<int>(i));
+    energy += 0.5 * b.mass * v.squaredNorm() + 0.5 * w.dot(R * b.inertia * R.transpose() * w);
+  }
+  return energy;
+}
+
+double Simulator::potential_energy() const {
+  double energy = 0.0;
+  for (const auto& s : single_bodies_) energy += s.component().potential.potential_energy(state_);
+  for (const auto& s : coupled_bodies_) energy += s.component().potential.potential_energy(state_);
+  return energy;
+}
+
+Vector3 Simulator::angular_momentum() const {
+  Vector3 L = Vector3::Zero();
+  for (std::size_t i = 0; i < model_.bodies.size(); ++i) {
+    const RigidBody& b = model_.bodies[i];
+    const Matrix3& R = state_.rotations[i];
+    L += b.mass * state_.points[i].cross(linear_velocity(static_cast<int>(i)));
+    L += R * b.inertia * R.transpose() * angular_velocity(static_cast<int>(i));
+  }
+  return L;
+}
+
+}  // namespace liedyn
