@@ -84,9 +84,9 @@ SimulationSummary simulate_scene(const Scene& scene, const std::filesystem::path
     const auto now = Clock::now();
     if (progress != nullptr && now - start > std::chrono::seconds(1) &&
         now - last_progress > std::chrono::milliseconds(250)) {
-      *progress << "\rframe " << k << "/" << scene.frames << " (" << std::fixed
-                << std::setprecision(0) << 100.0 * k / scene.frames << "%)" << std::flush;
-      progress->unsetf(std::ios::fixed);
+      std::ostringstream line;  // formatted apart so the caller's stream keeps its settings
+      line << "\rframe " << k << "/" << scene.frames << " (" << (100LL * k) / scene.frames << "%)";
+      *progress << line.str() << std::flush;
       last_progress = now;
       progress_shown = true;
     }

@@ -1,0 +1,26 @@
+#!/usr/bin/env bash
+# Installs what is missing, configures, builds and runs every test.
+#   bash scripts/test.sh              Release build in build/
+#   bash scripts/test.sh --sanitize   AddressSanitizer + UBSan build in build-asan/
+set -euo pipefail
+root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
+bash "$root/scripts/install-deps.sh"
+
+build="$root/build"
+options=(-DCMAKE_BUILD_TYPE=Release)
+if [ "${1:-}" = "--sanitize" ]; then
+  build="$root/build-asan"
+  options=(-DCMAKE_BUILD_TYPE=RelWithDebInfo -DLIEDYN_SANITIZE=ON -DLIEDYN_BUILD_BENCHMARKS=OFF)
+  export ASAN_OPTIONS=detect_leaks=1:abort_on_error=1
+  export UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1
+fi
+# ccache (outside the clone) makes repeated CI runs on the same machine cheap.
+if command -v ccache >/dev/null; then
+  export CCACHE_DIR="${CCACHE_DIR:-/var/cache/liedyn-ccache}"
+  mkdir -p "$CCACHE_DIR" 2>/dev/null || export CCACHE_DIR="$HOME/.cache/liedyn-ccache"
+  options+=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache)
+fi
+jobs=$(nproc)
+cmake -S "$root" -B "$build" "${options[@]}"
+cmake --build "$build" -j"$jobs"
+ctest --test-dir "$build" --output-on-failure -j"$jobs"
