@@ -9,7 +9,9 @@
 // tangent vector and dense Hessian through the term's precomputed offsets. It allocates
 // nothing: callers provide g and H, sized once.
 
-#include <tuple>
+#include <algorithm>
+#include <cmath>
+#include <limits>
 #include <vector>
 
 #include "inertia.hpp"
@@ -35,8 +37,16 @@ class IncrementalPotential {
   double value(const State& q) const;
 
   // Ψ(q), and its Lie gradient g and Lie Hessian H (overwritten; sized by the caller).
+  // If `roundoff` is non-null it receives an estimate of the absolute round-off error of
+  // Ψ(q), which the line search needs as a floor:
+  //   u · Σ_terms (|Ψ_t| + (‖g_t‖₁ + √(2 |Ψ_t| tr|H_t|)) · s),   s = 1 + max_i ‖x_i‖∞,
+  // u the unit round-off. Each DOF carries a relative round-off u (rotation entries are
+  // O(1)), so a term's error is its gradient with respect to the stored numbers times their
+  // magnitude. That is not the Lie gradient g_t, which vanishes at a stationary point while
+  // the gradient with respect to the 9 entries of R does not (e.g. ‖(R − R̃)J‖/h² for the
+  // rotational inertia); for a quadratic-like term it is about √(2 Ψ_t ‖H_t‖).
   template <class Vector, class Matrix>
-  double assemble(const State& q, Vector& g, Matrix& H) const;
+  double assemble(const State& q, Vector& g, Matrix& H, double* roundoff = nullptr) const;
 
   // Potential energy of the conservative loads alone (gravity, constant forces, springs):
   // what frames.csv reports. Inertia and torque terms are not energies of the state.
@@ -74,17 +84,32 @@ std::vector<Component> build_components(const Model& model);
 
 // ---------------------------------------------------------------------------------------
 template <class Vector, class Matrix>
-double IncrementalPotential::assemble(const State& q, Vector& g, Matrix& H) const {
+double IncrementalPotential::assemble(const State& q, Vector& g, Matrix& H,
+                                      double* roundoff) const {
   g.setZero();
   H.setZero();
   double value = 0.0;
+  double magnitude = 0.0;  // the Σ above
+  double position_scale = 1.0;
+  if (roundoff != nullptr) {
+    for (const Vector3& x : q.points) {
+      position_scale = std::max(position_scale, 1.0 + x.cwiseAbs().maxCoeff());
+    }
+  }
   for_each_term_vector([&](const auto& terms) {
     using Term = typename std::decay_t<decltype(terms)>::value_type;
     constexpr int B = Term::kBlocks;
     LocalGradient<B> g_local;
     LocalHessian<B> H_local;
     for (const Term& term : terms) {
-      value += term.evaluate(q, &g_local, &H_local);
+      const double term_value = term.evaluate(q, &g_local, &H_local);
+      value += term_value;
+      if (roundoff != nullptr) {
+        const double ambient_gradient =
+            std::sqrt(2.0 * std::abs(term_value) * H_local.diagonal().cwiseAbs().sum());
+        magnitude += std::abs(term_value) +
+                     (g_local.template lpNorm<1>() + ambient_gradient) * position_scale;
+      }
       for (int i = 0; i < B; ++i) {
         const int oi = term.offsets[i];
         if (oi < 0) continue;
@@ -97,6 +122,7 @@ double IncrementalPotential::assemble(const State& q, Vector& g, Matrix& H) cons
       }
     }
   });
+  if (roundoff != nullptr) *roundoff = std::numeric_limits<double>::epsilon() * magnitude;
   return value;
 }
 

@@ -2,6 +2,7 @@
 
 #include <Eigen/Eigenvalues>
 #include <cmath>
+#include <numbers>
 #include <sstream>
 
 #include "so3.hpp"
@@ -68,13 +69,23 @@ void Model::validate() const {
     }
     require_finite(b.linear_velocity, index_field("bodies", i, "linear_velocity"));
     require_finite(b.angular_velocity, index_field("bodies", i, "angular_velocity"));
+    // ΔR_0 = exp(h ω_0) and the reported ω = log(ΔR)/h only represent |ω| h < π: a faster
+    // spin would silently alias to a slower one (or the opposite sense).
+    if (b.angular_velocity.norm() * time_step >= std::numbers::pi) {
+      std::ostringstream os;
+      os << "|angular_velocity| · time_step = " << b.angular_velocity.norm() * time_step
+         << " rad per step must be below π (reduce time_step)";
+      throw ModelError(index_field("bodies", i, "angular_velocity"), os.str());
+    }
   }
   for (std::size_t i = 0; i < springs.size(); ++i) {
     const SpringSpec& s = springs[i];
     require_body(s.a.body, bodies.size(), index_field("springs", i, "body_a"), true);
     require_body(s.b.body, bodies.size(), index_field("springs", i, "body_b"), true);
-    if (s.a.body == -1 && s.b.body == -1) {
-      throw ModelError(index_field("springs", i, ""), "connects two world anchors");
+    if (s.a.body == s.b.body) {
+      throw ModelError(index_field("springs", i, "body_b"),
+                       s.a.body == -1 ? "connects two world anchors"
+                                      : "connects a body to itself (the spring would do nothing)");
     }
     require_finite(s.a.point, index_field("springs", i, "point_a"));
     require_finite(s.b.point, index_field("springs", i, "point_b"));

@@ -33,7 +33,10 @@ double Spring::evaluate(const State& q, LocalGradient<4>* g, LocalHessian<4>* H)
   Jd << -Matrix3::Identity(), so3::hat(r_a), Matrix3::Identity(), -so3::hat(r_b);
   if (g != nullptr) *g = Jd.transpose() * f;
   if (H != nullptr) {
-    *H = Jd.transpose() * K * Jd;
+    // Coefficient-based (lazy) product: a plain 12×3·3×12 product is large enough for Eigen
+    // to dispatch it to its blocked GEMM kernel, whose packing costs more than the flops.
+    const Eigen::Matrix<double, 12, 3> JtK = Jd.transpose() * K;
+    H->noalias() = JtK.lazyProduct(Jd);
     H->block<3, 3>(3, 3) += rotated_point_curvature(r_a, -f);  // f_a = ∂V/∂p_a = −f
     H->block<3, 3>(9, 9) += rotated_point_curvature(r_b, f);
   }

@@ -2,10 +2,13 @@
 
 #include <cmath>
 #include <fstream>
+#include <functional>
+#include <limits>
 #include <map>
 #include <nlohmann/json.hpp>
 #include <set>
 #include <sstream>
+#include <vector>
 
 #include "../lib/so3.hpp"
 
@@ -62,12 +65,20 @@ class ObjectReader {
 
   int integer(const std::string& key, int lo) {
     const json& v = get(key);
-    if (!v.is_number_integer()) fail(field(key), "must be an integer (got " + type_of(v) + ")");
-    const auto x = v.get<long long>();
-    if (x < lo || x > std::numeric_limits<int>::max()) {
-      fail(field(key), "must be an integer ≥ " + std::to_string(lo) + " (got " +
-                           std::to_string(x) + ")");
+    if (!v.is_number_integer()) {
+      fail(field(key), "must be an integer (got " + (v.is_number() ? v.dump() : type_of(v)) + ")");
     }
+    const std::string range = "must be an integer in [" + std::to_string(lo) + ", " +
+                              std::to_string(std::numeric_limits<int>::max()) + "] (got " +
+                              v.dump() + ")";
+    // Unsigned values above the range of long long would wrap in get<long long>().
+    if (v.is_number_unsigned() &&
+        v.get<unsigned long long>() >
+            static_cast<unsigned long long>(std::numeric_limits<int>::max())) {
+      fail(field(key), range);
+    }
+    const auto x = v.get<long long>();
+    if (x < lo || x > std::numeric_limits<int>::max()) fail(field(key), range);
     return static_cast<int>(x);
   }
 
@@ -291,19 +302,90 @@ Scene parse(const json& root, const std::string& source) {
   return scene;
 }
 
+// Follows the dotted path of the value being parsed, so that errors raised while parsing
+// (number overflow, repeated keys) can name their field like the checks after it.
+class PathTracker {
+ public:
+  explicit PathTracker(const std::string& source) : source_(source) {}
+
+  bool operator()(int /*depth*/, json::parse_event_t event, json& parsed) {
+    switch (event) {
+      case json::parse_event_t::object_start:
+        frames_.push_back({true, 0, {}, {}});
+        break;
+      case json::parse_event_t::array_start:
+        frames_.push_back({false, 0, {}, {}});
+        break;
+      case json::parse_event_t::key: {
+        Frame& top = frames_.back();
+        top.key = parsed.get<std::string>();
+        // nlohmann::json silently keeps the last of repeated keys; reject them instead.
+        if (!top.keys.insert(top.key).second) {
+          throw SceneError(source_, path(), "appears twice in the same object");
+        }
+        break;
+      }
+      case json::parse_event_t::object_end:
+      case json::parse_event_t::array_end:
+        frames_.pop_back();
+        next();
+        break;
+      case json::parse_event_t::value:
+        next();
+        break;
+    }
+    return true;
+  }
+
+  // Dotted path of the value being parsed now.
+  std::string path() const {
+    std::string p;
+    for (const Frame& f : frames_) {
+      if (f.object) {
+        p += (p.empty() ? "" : ".") + f.key;
+      } else {
+        p += "[" + std::to_string(f.index) + "]";
+      }
+    }
+    return p;
+  }
+
+ private:
+  struct Frame {
+    bool object;
+    std::size_t index;           // arrays: index of the element being parsed
+    std::string key;             // objects: key of the member being parsed
+    std::set<std::string> keys;  // objects: keys seen so far
+  };
+  void next() {
+    if (!frames_.empty() && !frames_.back().object) ++frames_.back().index;
+  }
+
+  const std::string& source_;
+  std::vector<Frame> frames_;
+};
+
 }  // namespace
 
 Scene parse_scene(const std::string& json_text, const std::string& source) {
   json root;
+  PathTracker tracker(source);
   try {
-    root = json::parse(json_text);
-  } catch (const json::parse_error& e) {
+    root = json::parse(json_text, std::ref(tracker));
+  } catch (const json::out_of_range& e) {
+    // e.g. 1e999 overflows a double (JSON has no Inf or NaN literals).
+    throw SceneError(source, tracker.path(), std::string("must be a finite number: ") + e.what());
+  } catch (const json::exception& e) {
     throw SceneError(source, "", std::string("invalid JSON: ") + e.what());
   }
   return parse(root, source);
 }
 
 Scene load_scene(const std::filesystem::path& file) {
+  std::error_code ec;
+  if (std::filesystem::is_directory(file, ec)) {
+    throw SceneError(file.string(), "", "is a directory, not a scene file");
+  }
   std::ifstream in(file);
   if (!in) throw SceneError(file.string(), "", "cannot open the file for reading");
   std::ostringstream text;

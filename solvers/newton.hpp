@@ -85,6 +85,10 @@ class DenseNewton {
  private:
   // Factorises H, regularising if needed; false if even the regularised matrix fails.
   bool factorize(StepReport& report, bool& regularized);
+  // Factorises H + μI (μ = 0: H itself); false if it is not positive definite.
+  bool try_factorize(double mu);
+  // δ = −(H + μI)⁻¹ g with the last successful factorisation.
+  void solve_factorized();
   void save(const State& q);
   void restore(State& q) const;
   void retract(State& q, double alpha) const;
@@ -92,6 +96,8 @@ class DenseNewton {
   Component component_;
   NewtonOptions options_;
   Vector g_, delta_;
+  // N fixed: H_shifted_ holds the Cholesky factor of H (+ μI), factorised by a hand-unrolled
+  // routine (newton.cpp) and llt_ is unused. N = Eigen::Dynamic: H_shifted_ = H + μI, llt_.
   Matrix H_, H_shifted_;
   Eigen::LLT<Matrix> llt_;
   std::vector<Vector3> saved_points_, entry_points_;

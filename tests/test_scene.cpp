@@ -1,0 +1,582 @@
+// Scene files: parse_scene / load_scene (problems/scene.hpp), documented in
+// docs/scene-format.md. Valid scenes must produce exactly the Model they describe (with the
+// documented defaults); every kind of bad input must raise a SceneError that names the file
+// and the exact dotted path of the offending field.
+
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <Eigen/LU>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <numbers>
+#include <string>
+
+#include "problems/scene.hpp"
+
+namespace liedyn {
+namespace {
+
+constexpr const char* kSource = "unit_scene.json";
+
+const std::string kBody = R"("name": "a", "mass": 2, "inertia": [1, 2, 2.5])";
+
+// A scene with one body (its members given by `body`) and extra top-level members `extra`,
+// which must end with ", " when not empty.
+std::string scene(const std::string& body = kBody, const std::string& extra = "") {
+  return R"({"time_step": 0.01, "frames": 5, )" + extra + R"("bodies": [{)" + body + "}]}";
+}
+
+// Parses text that must be rejected; returns the error (or fails the test).
+SceneError rejected(const std::string& text) {
+  try {
+    parse_scene(text, kSource);
+  } catch (const SceneError& e) {
+    return e;
+  } catch (const std::exception& e) {
+    ADD_FAILURE() << "expected a SceneError, got another exception: " << e.what();
+    return SceneError("", "", "");
+  }
+  ADD_FAILURE() << "scene was accepted:\n" << text;
+  return SceneError("", "", "");
+}
+
+// The error names the file and `field` (exactly), and its reason contains `reason_part`.
+void expect_rejected(const std::string& text, const std::string& field,
+                     const std::string& reason_part = "") {
+  SCOPED_TRACE(text);
+  const SceneError e = rejected(text);
+  EXPECT_EQ(e.field(), field) << e.what();
+  EXPECT_EQ(e.file(), kSource);
+  const std::string what = e.what();
+  EXPECT_EQ(what.rfind(std::string(kSource) + ": ", 0), 0u) << what;
+  if (!field.empty()) {
+    EXPECT_NE(what.find(": " + field + ": "), std::string::npos) << what;
+  }
+  EXPECT_NE(e.reason().find(reason_part), std::string::npos)
+      << "reason \"" << e.reason() << "\" lacks \"" << reason_part << "\"";
+}
+
+// --- Valid scenes ----------------------------------------------------------------------
+
+TEST(SceneParse, MinimalSceneGetsDefaults) {
+  const Scene s = parse_scene(scene(), kSource);
+  EXPECT_EQ(s.source, kSource);
+  EXPECT_EQ(s.description, "");
+  EXPECT_EQ(s.frames, 5);
+  EXPECT_DOUBLE_EQ(s.model.time_step, 0.01);
+  EXPECT_TRUE(s.model.gravity.isZero(0.0));
+  ASSERT_EQ(s.model.bodies.size(), 1u);
+  const RigidBody& b = s.model.bodies[0];
+  EXPECT_EQ(b.name, "a");
+  EXPECT_DOUBLE_EQ(b.mass, 2.0);
+  EXPECT_TRUE(b.inertia.isApprox(Vector3(1, 2, 2.5).asDiagonal().toDenseMatrix(), 0.0));
+  EXPECT_TRUE(b.position.isZero(0.0));
+  EXPECT_TRUE(b.orientation.isIdentity(0.0));
+  EXPECT_TRUE(b.linear_velocity.isZero(0.0));
+  EXPECT_TRUE(b.angular_velocity.isZero(0.0));
+  EXPECT_TRUE(s.model.springs.empty());
+  EXPECT_TRUE(s.model.forces.empty());
+  EXPECT_TRUE(s.model.torques.empty());
+  EXPECT_DOUBLE_EQ(s.solver.tolerance, 1e-9);
+  EXPECT_EQ(s.solver.max_iterations, 50);
+  EXPECT_DOUBLE_EQ(s.solver.armijo, 1e-4);
+  EXPECT_DOUBLE_EQ(s.solver.min_step_length, 1e-10);
+}
+
+TEST(SceneParse, FullSceneGivesTheDescribedModel) {
+  const std::string text = R"({
+    "description": "two bodies",
+    "time_step": 0.005,
+    "frames": 7,
+    "gravity": [0, 0, -9.81],
+    "solver": { "backend": "newton", "rotation": "lie", "tolerance": 1e-8,
+                "max_iterations": 12, "armijo": 0.01, "min_step_length": 1e-6 },
+    "bodies": [
+      { "name": "a", "mass": 1.5, "inertia": [1, 2, 2.5],
+        "position": [1, 2, 3], "orientation": [1, 0, 0, 0],
+        "linear_velocity": [0.1, 0.2, 0.3], "angular_velocity": [-1, 0, 4] },
+      { "name": "b", "mass": 3, "inertia": [[2, 0.1, 0], [0.1, 2, 0], [0, 0, 3]],
+        "position": [4, 2, 3] }
+    ],
+    "springs": [
+      { "body_a": "a", "point_a": [0, 0, 0.5], "body_b": "b", "point_b": [0, 0, -0.5],
+        "stiffness": 100, "rest_length": 1.25 },
+      { "point_a": [0, 0, 10], "body_b": "b", "stiffness": 5 }
+    ],
+    "forces": [ { "body": "b", "point": [0, 1, 0], "force": [1, 0, 0] },
+                { "body": "a", "force": [0, 0, 2] } ],
+    "torques": [ { "body": "a", "torque": [0, 0, 0.5] } ]
+  })";
+  const Scene s = parse_scene(text, kSource);
+  EXPECT_EQ(s.description, "two bodies");
+  EXPECT_EQ(s.frames, 7);
+  EXPECT_DOUBLE_EQ(s.model.time_step, 0.005);
+  EXPECT_TRUE(s.model.gravity.isApprox(Vector3(0, 0, -9.81), 0.0));
+  EXPECT_DOUBLE_EQ(s.solver.tolerance, 1e-8);
+  EXPECT_EQ(s.solver.max_iterations, 12);
+  EXPECT_DOUBLE_EQ(s.solver.armijo, 0.01);
+  EXPECT_DOUBLE_EQ(s.solver.min_step_length, 1e-6);
+
+  ASSERT_EQ(s.model.bodies.size(), 2u);
+  const RigidBody& a = s.model.bodies[0];
+  EXPECT_EQ(a.name, "a");
+  EXPECT_DOUBLE_EQ(a.mass, 1.5);
+  EXPECT_TRUE(a.position.isApprox(Vector3(1, 2, 3), 0.0));
+  EXPECT_TRUE(a.orientation.isIdentity(1e-15));
+  EXPECT_TRUE(a.linear_velocity.isApprox(Vector3(0.1, 0.2, 0.3), 0.0));
+  EXPECT_TRUE(a.angular_velocity.isApprox(Vector3(-1, 0, 4), 0.0));
+  const RigidBody& b = s.model.bodies[1];
+  EXPECT_EQ(b.name, "b");
+  Matrix3 Ib;
+  Ib << 2, 0.1, 0, 0.1, 2, 0, 0, 0, 3;
+  EXPECT_TRUE(b.inertia.isApprox(Ib, 0.0));
+  EXPECT_TRUE(b.linear_velocity.isZero(0.0));
+
+  ASSERT_EQ(s.model.springs.size(), 2u);
+  const SpringSpec& s0 = s.model.springs[0];
+  EXPECT_EQ(s0.a.body, 0);
+  EXPECT_EQ(s0.b.body, 1);
+  EXPECT_TRUE(s0.a.point.isApprox(Vector3(0, 0, 0.5), 0.0));
+  EXPECT_TRUE(s0.b.point.isApprox(Vector3(0, 0, -0.5), 0.0));
+  EXPECT_DOUBLE_EQ(s0.stiffness, 100.0);
+  EXPECT_DOUBLE_EQ(s0.rest_length, 1.25);
+  const SpringSpec& s1 = s.model.springs[1];
+  EXPECT_EQ(s1.a.body, -1);  // omitted body_a: a world anchor
+  EXPECT_EQ(s1.b.body, 1);
+  EXPECT_TRUE(s1.b.point.isZero(0.0));
+  // Default rest length: initial distance from the anchor (0,0,10) to b's centre (4,2,3).
+  EXPECT_NEAR(s1.rest_length, std::sqrt(16.0 + 4.0 + 49.0), 1e-14);
+
+  ASSERT_EQ(s.model.forces.size(), 2u);
+  EXPECT_EQ(s.model.forces[0].at.body, 1);
+  EXPECT_TRUE(s.model.forces[0].at.point.isApprox(Vector3(0, 1, 0), 0.0));
+  EXPECT_TRUE(s.model.forces[0].force.isApprox(Vector3(1, 0, 0), 0.0));
+  EXPECT_EQ(s.model.forces[1].at.body, 0);
+  EXPECT_TRUE(s.model.forces[1].at.point.isZero(0.0));
+  ASSERT_EQ(s.model.torques.size(), 1u);
+  EXPECT_EQ(s.model.torques[0].body, 0);
+  EXPECT_TRUE(s.model.torques[0].torque.isApprox(Vector3(0, 0, 0.5), 0.0));
+}
+
+TEST(SceneParse, SpringRestLengthDefaultsToInitialDistanceOfRotatedPoints) {
+  // Body a is turned 90° about z, so its body point (1,0,0) sits at world (0,1,0); body b's
+  // centre is at (3,1,0). The distance is 3 only if the orientation is applied (unrotated
+  // it would be √5).
+  const std::string text = R"({"time_step": 0.01, "frames": 1, "bodies": [
+      {"name": "a", "mass": 1, "inertia": [1, 1, 1],
+       "orientation": [0.70710678118654752, 0, 0, 0.70710678118654752]},
+      {"name": "b", "mass": 1, "inertia": [1, 1, 1], "position": [3, 1, 0]}],
+    "springs": [{"body_a": "a", "point_a": [1, 0, 0], "body_b": "b",
+                 "stiffness": 10}]})";
+  const Scene s = parse_scene(text, kSource);
+  ASSERT_EQ(s.model.springs.size(), 1u);
+  EXPECT_NEAR(s.model.springs[0].rest_length, 3.0, 1e-14);
+}
+
+TEST(SceneParse, InertiaAsMomentsOrMatrix) {
+  const Scene moments =
+      parse_scene(scene(R"("name": "a", "mass": 1, "inertia": [3, 4, 5])"), kSource);
+  Matrix3 expected = Matrix3::Zero();
+  expected.diagonal() << 3, 4, 5;
+  EXPECT_TRUE(moments.model.bodies[0].inertia.isApprox(expected, 0.0));
+
+  const Scene matrix = parse_scene(
+      scene(R"("name": "a", "mass": 1, "inertia": [[3, 0.5, -0.25], [0.5, 4, 0], [-0.25, 0, 5]])"),
+      kSource);
+  expected << 3, 0.5, -0.25, 0.5, 4, 0, -0.25, 0, 5;
+  EXPECT_TRUE(matrix.model.bodies[0].inertia.isApprox(expected, 0.0));
+}
+
+TEST(SceneParse, InertiaLimitsOfTheTriangleInequality) {
+  // A thin rod has one moment → 0 (moments must stay > 0): near the limit is accepted.
+  EXPECT_NO_THROW(
+      parse_scene(scene(R"("name": "a", "mass": 1, "inertia": [1e-9, 1, 1])"), kSource));
+  // A flat plate meets the triangle inequality with equality (I3 = I1 + I2).
+  EXPECT_NO_THROW(parse_scene(scene(R"("name": "a", "mass": 1, "inertia": [1, 1, 2])"), kSource));
+}
+
+TEST(SceneParse, QuaternionIsWxyzBodyToWorld) {
+  // 90° about z: [w, x, y, z] = [cos 45°, 0, 0, sin 45°] maps the body x axis to world y.
+  const double c = std::cos(std::numbers::pi / 4), sn = std::sin(std::numbers::pi / 4);
+  char orientation[128];
+  std::snprintf(orientation, sizeof orientation, R"("orientation": [%.17g, 0, 0, %.17g])", c, sn);
+  const Scene s = parse_scene(scene(kBody + ", " + orientation), kSource);
+  const Matrix3& R = s.model.bodies[0].orientation;
+  EXPECT_TRUE((R * Vector3::UnitX()).isApprox(Vector3::UnitY(), 1e-15)) << R;
+  EXPECT_TRUE((R * Vector3::UnitY()).isApprox(-Vector3::UnitX(), 1e-15)) << R;
+  EXPECT_TRUE((R * Vector3::UnitZ()).isApprox(Vector3::UnitZ(), 1e-15)) << R;
+
+  // [0, 0, 0, 1] is w = 0, z = 1: half a turn about z (in [x, y, z, w] order it would be
+  // the identity).
+  const Scene half = parse_scene(scene(kBody + R"(, "orientation": [0, 0, 0, 1])"), kSource);
+  EXPECT_TRUE(
+      (half.model.bodies[0].orientation * Vector3::UnitX()).isApprox(-Vector3::UnitX(), 1e-15));
+}
+
+TEST(SceneParse, NearlyUnitQuaternionIsNormalised) {
+  // ‖q‖ − 1 = 5e-7 is within kQuaternionNormTolerance = 1e-6.
+  const Scene s = parse_scene(
+      scene(kBody + R"(, "orientation": [0.7071071367811865, 0, 0, 0.7071071367811865])"), kSource);
+  const Matrix3& R = s.model.bodies[0].orientation;
+  EXPECT_LT((R.transpose() * R - Matrix3::Identity()).norm(), 1e-14);
+  EXPECT_NEAR(R.determinant(), 1.0, 1e-14);
+  EXPECT_TRUE((R * Vector3::UnitX()).isApprox(Vector3::UnitY(), 1e-12)) << R;
+}
+
+TEST(SceneParse, LoadsTheButterflyBoltExample) {
+  const std::filesystem::path file =
+      std::filesystem::path(LIEDYN_SOURCE_DIR) / "problems/scenes/butterfly_bolt.json";
+  const Scene s = load_scene(file);
+  EXPECT_EQ(s.source, file.string());
+  EXPECT_EQ(s.frames, 1000);
+  EXPECT_DOUBLE_EQ(s.model.time_step, 0.01);
+  ASSERT_EQ(s.model.bodies.size(), 1u);
+  EXPECT_EQ(s.model.bodies[0].name, "bolt");
+  Matrix3 expected = Matrix3::Zero();
+  expected.diagonal() << 1.0, 2.0, 2.8;
+  EXPECT_TRUE(s.model.bodies[0].inertia.isApprox(expected, 0.0));
+  EXPECT_TRUE(s.model.bodies[0].angular_velocity.isApprox(Vector3(0, 2, 0.01), 0.0));
+}
+
+// --- Bad input: every error names the file and the field ------------------------------
+
+TEST(SceneErrors, MessageIsFileFieldReason) {
+  const SceneError e = rejected(scene(R"("name": "a", "mass": -1, "inertia": [1, 1, 1])"));
+  EXPECT_EQ(std::string(e.what()), std::string(kSource) + ": bodies[0].mass: " + e.reason());
+}
+
+TEST(SceneErrors, MissingFields) {
+  expect_rejected(R"({"frames": 1, "bodies": [{)" + kBody + "}]}", "time_step", "missing");
+  expect_rejected(R"({"time_step": 0.01, "bodies": [{)" + kBody + "}]}", "frames", "missing");
+  expect_rejected(R"({"time_step": 0.01, "frames": 1})", "bodies", "missing");
+  expect_rejected(scene(R"("mass": 1, "inertia": [1, 1, 1])"), "bodies[0].name", "missing");
+  expect_rejected(scene(R"("name": "a", "inertia": [1, 1, 1])"), "bodies[0].mass", "missing");
+  expect_rejected(scene(R"("name": "a", "mass": 1)"), "bodies[0].inertia", "missing");
+  expect_rejected(scene(kBody, R"("springs": [{"body_b": "a"}], )"), "springs[0].stiffness",
+                  "missing");
+  expect_rejected(scene(kBody, R"("forces": [{"body": "a"}], )"), "forces[0].force", "missing");
+  expect_rejected(scene(kBody, R"("forces": [{"force": [1, 0, 0]}], )"), "forces[0].body",
+                  "missing");
+  expect_rejected(scene(kBody, R"("torques": [{"body": "a"}], )"), "torques[0].torque", "missing");
+}
+
+TEST(SceneErrors, WrongTypes) {
+  expect_rejected(R"({"time_step": "0.01", "frames": 1, "bodies": [{)" + kBody + "}]}", "time_step",
+                  "number");
+  expect_rejected(scene(R"("name": "a", "mass": "2", "inertia": [1, 1, 1])"), "bodies[0].mass",
+                  "number");
+  expect_rejected(scene(R"("name": "a", "mass": null, "inertia": [1, 1, 1])"), "bodies[0].mass",
+                  "null");
+  expect_rejected(scene(R"("name": 3, "mass": 1, "inertia": [1, 1, 1])"), "bodies[0].name",
+                  "string");
+  expect_rejected(scene(kBody + R"(, "position": [0, 0])"), "bodies[0].position", "3 numbers");
+  expect_rejected(scene(kBody + R"(, "position": [0, "1", 0])"), "bodies[0].position[1]", "number");
+  expect_rejected(scene(kBody + R"(, "angular_velocity": {"x": 1})"), "bodies[0].angular_velocity",
+                  "3 numbers");
+  expect_rejected(scene(kBody + R"(, "orientation": [1, 0, 0])"), "bodies[0].orientation",
+                  "4 numbers");
+  expect_rejected(scene(R"("name": "a", "mass": 1, "inertia": "big")"), "bodies[0].inertia", "3×3");
+  expect_rejected(scene(R"("name": "a", "mass": 1, "inertia": [[1, 0, 0], [0, 1], [0, 0, 1]])"),
+                  "bodies[0].inertia[1]", "3 numbers");
+  expect_rejected(scene(R"("name": "a", "mass": 1, "inertia": [[1, 0, 0], [0, 1, 0]])"),
+                  "bodies[0].inertia", "3×3");
+  expect_rejected(scene(kBody, R"("gravity": 9.81, )"), "gravity", "3 numbers");
+  expect_rejected(scene(kBody, R"("description": 5, )"), "description", "string");
+  expect_rejected(scene(kBody, R"("solver": "newton", )"), "solver", "object");
+  expect_rejected(scene(kBody, R"("springs": {"body_b": "a"}, )"), "springs", "array");
+  expect_rejected(R"({"time_step": 0.01, "frames": 1, "bodies": {"a": {}}})", "bodies", "array");
+  expect_rejected(R"({"time_step": 0.01, "frames": 1, "bodies": [{)" + kBody + "}, 7]}",
+                  "bodies[1]", "object");
+  expect_rejected(R"([1, 2, 3])", "", "object");
+}
+
+TEST(SceneErrors, NonFiniteNumbers) {
+  // JSON has no Inf: an overflowing literal must not become one.
+  expect_rejected(scene(R"("name": "a", "mass": 1e999, "inertia": [1, 1, 1])"), "bodies[0].mass",
+                  "finite");
+  expect_rejected(scene(kBody, R"("gravity": [0, 0, -1e999], )"), "gravity[2]", "finite");
+  expect_rejected(scene(kBody + R"(, "linear_velocity": [1e999, 0, 0])"),
+                  "bodies[0].linear_velocity[0]", "finite");
+  expect_rejected(R"({"time_step": 1e999, "frames": 1, "bodies": [{)" + kBody + "}]}", "time_step",
+                  "finite");
+  // Nor NaN or Infinity literals: they are JSON syntax errors, reported against the file.
+  expect_rejected(scene(R"("name": "a", "mass": NaN, "inertia": [1, 1, 1])"), "", "invalid JSON");
+  expect_rejected(scene(kBody + R"(, "position": [Infinity, 0, 0])"), "", "invalid JSON");
+}
+
+TEST(SceneErrors, NonPositiveMass) {
+  expect_rejected(scene(R"("name": "a", "mass": 0, "inertia": [1, 1, 1])"), "bodies[0].mass",
+                  "positive");
+  expect_rejected(scene(R"("name": "a", "mass": -2, "inertia": [1, 1, 1])"), "bodies[0].mass",
+                  "positive");
+  expect_rejected(R"({"time_step": 0.01, "frames": 1, "bodies": [{)" + kBody +
+                      R"(}, {"name": "b", "mass": -1e-300, "inertia": [1, 1, 1]}]})",
+                  "bodies[1].mass", "positive");
+}
+
+TEST(SceneErrors, BadInertia) {
+  const auto second_body = [](const std::string& inertia) {
+    return R"({"time_step": 0.01, "frames": 1, "bodies": [{)" + kBody +
+           R"(}, {"name": "b", "mass": 1, "inertia": )" + inertia + "}]}";
+  };
+  expect_rejected(second_body("[[1, 0.5, 0], [0, 1, 0], [0, 0, 1]]"), "bodies[1].inertia",
+                  "symmetric");
+  // Symmetric with eigenvalues 3, −1, 1.
+  expect_rejected(second_body("[[1, 2, 0], [2, 1, 0], [0, 0, 1]]"), "bodies[1].inertia",
+                  "positive definite");
+  expect_rejected(second_body("[-1, 2, 2]"), "bodies[1].inertia", "positive definite");
+  expect_rejected(second_body("[0.0, 1, 1]"), "bodies[1].inertia", "positive definite");
+  expect_rejected(second_body("[1, 1, 3]"), "bodies[1].inertia", "triangle");
+  expect_rejected(second_body("[1, 1, 2.001]"), "bodies[1].inertia", "triangle");
+  // Rotated so the violation is not visible on the diagonal alone: moments 1, 1, 3 about
+  // axes turned 45° about z.
+  expect_rejected(second_body("[[2, 1, 0], [1, 2, 0], [0, 0, 1]]"), "bodies[1].inertia",
+                  "triangle");
+  expect_rejected(second_body("[[1, 0, 0], [0, 1, 0], [0, 0, 1e999]]"), "bodies[1].inertia[2][2]",
+                  "finite");
+}
+
+TEST(SceneErrors, NonUnitQuaternion) {
+  expect_rejected(scene(kBody + R"(, "orientation": [1.00001, 0, 0, 0])"), "bodies[0].orientation",
+                  "unit quaternion");
+  expect_rejected(scene(kBody + R"(, "orientation": [1, 1, 0, 0])"), "bodies[0].orientation",
+                  "unit quaternion");
+  expect_rejected(scene(kBody + R"(, "orientation": [0, 0, 0, 0])"), "bodies[0].orientation",
+                  "unit quaternion");
+  EXPECT_NO_THROW(parse_scene(scene(kBody + R"(, "orientation": [1.0000005, 0, 0, 0])"), kSource));
+}
+
+TEST(SceneErrors, UnknownKeys) {
+  expect_rejected(scene(kBody, R"("gravty": [0, 0, -9.81], )"), "gravty", "unknown key");
+  expect_rejected(scene(kBody + R"(, "colour": "red")"), "bodies[0].colour", "unknown key");
+  expect_rejected(scene(kBody + R"(, "angular_velocity_body": [0, 0, 1])"),
+                  "bodies[0].angular_velocity_body", "unknown key");
+  expect_rejected(scene(kBody, R"("solver": {"tol": 1e-6}, )"), "solver.tol", "unknown key");
+  expect_rejected(scene(kBody, R"("springs": [{"body_b": "a", "stiffness": 1, "damping": 2}], )"),
+                  "springs[0].damping", "unknown key");
+  expect_rejected(scene(kBody, R"("forces": [{"body": "a", "force": [0, 0, 1], "torque": 1}], )"),
+                  "forces[0].torque", "unknown key");
+  // The reason lists what is allowed.
+  const SceneError e = rejected(scene(kBody + R"(, "colour": "red")"));
+  EXPECT_NE(e.reason().find("inertia"), std::string::npos) << e.reason();
+}
+
+TEST(SceneErrors, RepeatedKeysAreNotSilentlyMerged) {
+  expect_rejected(scene(R"("name": "a", "mass": 1, "mass": -1, "inertia": [1, 1, 1])"),
+                  "bodies[0].mass", "twice");
+  expect_rejected(
+      R"({"time_step": 0.01, "time_step": 0.02, "frames": 1, "bodies": [{)" + kBody + "}]}",
+      "time_step", "twice");
+  // The same key in different objects is fine.
+  EXPECT_NO_THROW(parse_scene(R"({"time_step": 0.01, "frames": 1, "bodies": [{)" + kBody +
+                                  R"(}, {"name": "b", "mass": 2, "inertia": [1, 1, 1]}]})",
+                              kSource));
+}
+
+TEST(SceneErrors, UnknownBodyNames) {
+  expect_rejected(
+      scene(kBody, R"("springs": [{"body_a": "a", "body_b": "ghost", "stiffness": 1}], )"),
+      "springs[0].body_b", "ghost");
+  expect_rejected(scene(kBody, R"("springs": [{"body_b": "a", "stiffness": 1},
+                                              {"body_a": "A", "body_b": "a", "stiffness": 1}], )"),
+                  "springs[1].body_a", "\"A\"");
+  expect_rejected(scene(kBody, R"("forces": [{"body": "b", "force": [0, 0, 1]}], )"),
+                  "forces[0].body", "\"b\"");
+  expect_rejected(scene(kBody, R"("torques": [{"body": "ghost", "torque": [0, 0, 1]}], )"),
+                  "torques[0].body", "ghost");
+  // Forces and torques act on bodies; only springs may end at the world.
+  expect_rejected(scene(kBody, R"("forces": [{"body": "world", "force": [0, 0, 1]}], )"),
+                  "forces[0].body", "world");
+  expect_rejected(scene(kBody, R"("springs": [{"body_b": 3, "stiffness": 1}], )"),
+                  "springs[0].body_b", "string");
+  // A spring between two world points connects nothing.
+  expect_rejected(scene(kBody, R"("springs": [{"point_a": [0, 0, 1], "stiffness": 1}], )"),
+                  "springs[0].body_b", "two world anchors");
+  // Both ends on one body: a rigid body cannot stretch it, so it would silently do nothing.
+  expect_rejected(scene(kBody, R"("springs": [{"body_a": "a", "body_b": "a", "stiffness": 1,)"
+                               R"( "point_b": [0, 0, 1]}], )"),
+                  "springs[0].body_b", "itself");
+}
+
+TEST(SceneErrors, SpinTooFastForTheTimeStep) {
+  // h |ω| = 0.01 · 400 = 4 rad per step > π: exp(h ω) would alias to a slower spin.
+  expect_rejected(scene(std::string(kBody) + R"(, "angular_velocity": [0, 0, 400])"),
+                  "bodies[0].angular_velocity", "below π");
+  // Just below the limit is accepted.
+  EXPECT_NO_THROW(
+      parse_scene(scene(std::string(kBody) + R"(, "angular_velocity": [0, 0, 314])"), kSource));
+}
+
+TEST(SceneErrors, BadSpringValues) {
+  expect_rejected(scene(kBody, R"("springs": [{"body_b": "a", "stiffness": -1}], )"),
+                  "springs[0].stiffness", "≥ 0");
+  expect_rejected(
+      scene(kBody, R"("springs": [{"body_b": "a", "stiffness": 1, "rest_length": -0.5}], )"),
+      "springs[0].rest_length", "≥ 0");
+}
+
+TEST(SceneErrors, BodyNames) {
+  expect_rejected(
+      R"({"time_step": 0.01, "frames": 1, "bodies": [{)" + kBody + "}, {" + kBody + "}]}",
+      "bodies[1].name", "repeats");
+  expect_rejected(scene(R"("name": "world", "mass": 1, "inertia": [1, 1, 1])"), "bodies[0].name",
+                  "world");
+  expect_rejected(scene(R"("name": "", "mass": 1, "inertia": [1, 1, 1])"), "bodies[0].name",
+                  "non-empty");
+}
+
+TEST(SceneErrors, EmptyBodies) {
+  expect_rejected(R"({"time_step": 0.01, "frames": 1, "bodies": []})", "bodies", "at least one");
+}
+
+TEST(SceneErrors, UnavailableAndUnknownSolverChoices) {
+  for (const char* backend : {"ceres", "ipopt"}) {
+    expect_rejected(scene(kBody, std::string(R"("solver": {"backend": ")") + backend + "\"}, "),
+                    "solver.backend", "not available yet");
+  }
+  for (const char* rotation : {"rotvec", "quat"}) {
+    expect_rejected(scene(kBody, std::string(R"("solver": {"rotation": ")") + rotation + "\"}, "),
+                    "solver.rotation", "not available yet");
+  }
+  expect_rejected(scene(kBody, R"("solver": {"backend": "gauss-seidel"}, )"), "solver.backend",
+                  "unknown backend");
+  expect_rejected(scene(kBody, R"("solver": {"rotation": "euler"}, )"), "solver.rotation",
+                  "unknown");
+  expect_rejected(scene(kBody, R"("solver": {"backend": 1}, )"), "solver.backend", "string");
+}
+
+TEST(SceneErrors, BadSolverNumbers) {
+  expect_rejected(scene(kBody, R"("solver": {"tolerance": 0}, )"), "solver.tolerance", "positive");
+  expect_rejected(scene(kBody, R"("solver": {"tolerance": -1e-9}, )"), "solver.tolerance",
+                  "positive");
+  expect_rejected(scene(kBody, R"("solver": {"tolerance": "tight"}, )"), "solver.tolerance",
+                  "number");
+  expect_rejected(scene(kBody, R"("solver": {"max_iterations": 0}, )"), "solver.max_iterations",
+                  "integer");
+  expect_rejected(scene(kBody, R"("solver": {"max_iterations": 2.5}, )"), "solver.max_iterations",
+                  "integer");
+  expect_rejected(scene(kBody, R"("solver": {"armijo": 0.5}, )"), "solver.armijo", "(0, 0.5)");
+  expect_rejected(scene(kBody, R"("solver": {"armijo": 0}, )"), "solver.armijo", "(0, 0.5)");
+  expect_rejected(scene(kBody, R"("solver": {"min_step_length": 1}, )"), "solver.min_step_length",
+                  "(0, 1)");
+}
+
+TEST(SceneErrors, BadFrames) {
+  const auto with_frames = [](const std::string& frames) {
+    return R"({"time_step": 0.01, "frames": )" + frames + R"(, "bodies": [{)" + kBody + "}]}";
+  };
+  expect_rejected(with_frames("-1"), "frames", "integer");
+  expect_rejected(with_frames("2.5"), "frames", "integer");
+  expect_rejected(with_frames("\"20\""), "frames", "integer");
+  expect_rejected(with_frames("3000000000"), "frames", "integer");
+  // Beyond the range of a signed 64-bit integer: must not wrap around to −1.
+  const SceneError e = rejected(with_frames("18446744073709551615"));
+  EXPECT_EQ(e.field(), "frames");
+  EXPECT_EQ(e.reason().find("-1"), std::string::npos) << e.reason();
+  EXPECT_EQ(parse_scene(with_frames("0"), kSource).frames, 0);
+}
+
+TEST(SceneErrors, NonPositiveTimeStep) {
+  for (const char* h : {"0", "-0.01", "-0"}) {
+    expect_rejected(
+        std::string(R"({"time_step": )") + h + R"(, "frames": 1, "bodies": [{)" + kBody + "}]}",
+        "time_step", "positive");
+  }
+}
+
+TEST(SceneErrors, InvalidJson) {
+  expect_rejected(scene(kBody + ","), "", "invalid JSON");  // trailing comma
+  expect_rejected(R"({"time_step": 0.01, "frames": 1, "bodies": [{)" + kBody + "}],}", "",
+                  "invalid JSON");
+  expect_rejected("", "", "invalid JSON");
+  expect_rejected(scene() + " {}", "", "invalid JSON");
+  // A syntax error says where.
+  const SceneError e = rejected(scene(kBody + ","));
+  EXPECT_NE(e.reason().find("line 1"), std::string::npos) << e.reason();
+}
+
+class SceneFile : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = std::filesystem::temp_directory_path() /
+           ("liedyn_scene_test_" + std::to_string(::getpid()) + "_" +
+            ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    std::filesystem::remove_all(dir_);
+    std::filesystem::create_directories(dir_);
+  }
+  void TearDown() override { std::filesystem::remove_all(dir_); }
+  std::filesystem::path write(const std::string& name, const std::string& text) {
+    const std::filesystem::path p = dir_ / name;
+    std::ofstream(p) << text;
+    return p;
+  }
+  std::filesystem::path dir_;
+};
+
+TEST_F(SceneFile, LoadNamesTheFileInErrors) {
+  const std::filesystem::path p =
+      write("bad_mass.json", scene(R"("name": "a", "mass": -1, "inertia": [1, 1, 1])"));
+  try {
+    load_scene(p);
+    FAIL() << "accepted";
+  } catch (const SceneError& e) {
+    EXPECT_EQ(e.file(), p.string());
+    EXPECT_EQ(e.field(), "bodies[0].mass");
+    EXPECT_EQ(std::string(e.what()).rfind(p.string() + ": bodies[0].mass: ", 0), 0u) << e.what();
+  }
+}
+
+TEST_F(SceneFile, LoadValidFile) {
+  const Scene s = load_scene(write("ok.json", scene()));
+  EXPECT_EQ(s.source, (dir_ / "ok.json").string());
+  EXPECT_EQ(s.frames, 5);
+}
+
+TEST_F(SceneFile, InvalidJsonInFileNamesTheFile) {
+  const std::filesystem::path p = write("trailing_comma.json", scene(kBody + ","));
+  try {
+    load_scene(p);
+    FAIL() << "accepted";
+  } catch (const SceneError& e) {
+    EXPECT_EQ(e.file(), p.string());
+    EXPECT_NE(std::string(e.what()).find("trailing_comma.json"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("invalid JSON"), std::string::npos) << e.what();
+  }
+}
+
+TEST_F(SceneFile, UnreadableFile) {
+  const std::filesystem::path missing = dir_ / "no_such_scene.json";
+  try {
+    load_scene(missing);
+    FAIL() << "accepted";
+  } catch (const SceneError& e) {
+    EXPECT_EQ(e.file(), missing.string());
+    EXPECT_NE(e.reason().find("cannot open"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("no_such_scene.json"), std::string::npos) << e.what();
+  }
+  // A directory is not a scene either.
+  try {
+    load_scene(dir_);
+    FAIL() << "accepted";
+  } catch (const SceneError& e) {
+    EXPECT_EQ(e.file(), dir_.string());
+    EXPECT_NE(e.reason().find("directory"), std::string::npos) << e.what();
+  }
+  // No read permission (meaningless for root, who reads anyway).
+  if (::geteuid() != 0) {
+    const std::filesystem::path locked = write("locked.json", scene());
+    std::filesystem::permissions(locked, std::filesystem::perms::none);
+    try {
+      load_scene(locked);
+      ADD_FAILURE() << "accepted";
+    } catch (const SceneError& e) {
+      EXPECT_EQ(e.file(), locked.string());
+    }
+    std::filesystem::permissions(locked, std::filesystem::perms::owner_all);
+  }
+}
+
+}  // namespace
+}  // namespace liedyn
