@@ -8,8 +8,8 @@ Vector3 AttachedPoint::position(const State& q) const {
 }
 
 Vector3 AttachedPoint::lever(const State& q) const {
-  if (rotation < 0) return Vector3::Zero();
-  return q.rotations[rotation] * local;
+  if (rotation >= 0) return q.rotations[rotation] * local;
+  return point >= 0 ? local : Vector3::Zero();
 }
 
 Matrix3 rotated_point_curvature(const Vector3& r, const Vector3& f) {

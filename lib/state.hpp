@@ -25,8 +25,10 @@ struct Step {
   std::vector<Matrix3> rotations;  // ΔR
 };
 
-// A point that is either fixed in the world or attached to a rigid frame (x, R):
-//   p = x + R p̄   (p̄ = `local`, in the frame's coordinates), or p = `local` if unattached.
+// A point that is fixed in the world, or attached to a point x with or without a rotation:
+//   p = x + R p̄   (rotation ≥ 0; p̄ = `local`, in the frame's coordinates),
+//   p = x + p̄     (rotation = −1: a translating offset),
+//   p = p̄         (point = −1: a world anchor).
 // Its tangent Jacobian is [∂p/∂x, ∂p/∂θ] = [I, −hat(R p̄)] (paper eq. 22).
 struct AttachedPoint {
   int point = -1;     // index into State::points, −1 for a world anchor
@@ -35,7 +37,7 @@ struct AttachedPoint {
 
   // World position.
   Vector3 position(const State& q) const;
-  // Lever arm r = R p̄ (zero when unattached or not rotating).
+  // Offset r = p − x: R p̄, or p̄ without a rotation (only R p̄ enters the Lie derivatives).
   Vector3 lever(const State& q) const;
 };
 
