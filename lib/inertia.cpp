@@ -23,21 +23,23 @@ double TranslationalInertia::evaluate(const State& q, LocalGradient<1>* g,
 void RotationalInertia::begin_step(const State& previous, const Step& previous_step) {
   const Matrix3& R_prev = previous.rotations[rotation];
   R_tilde = (2.0 * Matrix3::Identity() - previous_step.rotations[rotation].transpose()) * R_prev;
+  R_tilde_J_over_h2 = R_tilde * J_over_h2;
 }
 
 double RotationalInertia::evaluate(const State& q, LocalGradient<1>* g,
                                    LocalHessian<1>* H) const {
   const Matrix3& R = q.rotations[rotation];
+  const Matrix3 RJ = R * J_over_h2;  // R J/h²
   if (g != nullptr || H != nullptr) {
-    const Matrix3 M = R * J_over_h2 * R_tilde.transpose();  // M = R J R̃ᵀ/h² = S + A
-    if (g != nullptr) *g = 2.0 * so3::vee(M);                // (12): vee takes A
+    const Matrix3 M = RJ * R_tilde.transpose();  // M = R J R̃ᵀ/h² = S + A
+    if (g != nullptr) *g = 2.0 * so3::vee(M);    // (12): vee takes A
     if (H != nullptr) {
       const Matrix3 S = 0.5 * (M + M.transpose());
       *H = S.trace() * Matrix3::Identity() - S;  // (13)
     }
   }
-  const Matrix3 D = R - R_tilde;
-  return 0.5 * (D * J_over_h2 * D.transpose()).trace();
+  // ½ tr((R − R̃) J (R − R̃)ᵀ)/h² = ½ Σᵢⱼ [(R − R̃) J/h²]ᵢⱼ (R − R̃)ᵢⱼ
+  return 0.5 * (RJ - R_tilde_J_over_h2).cwiseProduct(R - R_tilde).sum();
 }
 
 }  // namespace liedyn

@@ -36,18 +36,6 @@ RodriguesCoefficients rodrigues_coefficients(double t) {
 
 }  // namespace
 
-Matrix3 hat(const Vector3& u) {
-  Matrix3 m;
-  m << 0.0, -u.z(), u.y(),  //
-      u.z(), 0.0, -u.x(),   //
-      -u.y(), u.x(), 0.0;
-  return m;
-}
-
-Vector3 vee(const Matrix3& M) {
-  return 0.5 * Vector3(M(2, 1) - M(1, 2), M(0, 2) - M(2, 0), M(1, 0) - M(0, 1));
-}
-
 Matrix3 exp(const Vector3& theta, Matrix3* J_R_theta) {
   const double t = theta.norm();
   const RodriguesCoefficients k = rodrigues_coefficients(t);

@@ -24,11 +24,19 @@ using Vector3 = Eigen::Vector3d;
 using Matrix3 = Eigen::Matrix3d;
 
 // hat(u) = [u]×, the antisymmetric matrix with hat(u) v = u × v.
-Matrix3 hat(const Vector3& u);
+inline Matrix3 hat(const Vector3& u) {
+  Matrix3 m;
+  m << 0.0, -u.z(), u.y(),  //
+      u.z(), 0.0, -u.x(),   //
+      -u.y(), u.x(), 0.0;
+  return m;
+}
 
 // vee(M) = hat⁻¹ of the antisymmetric part of M:  vee(M) = ½ (M₃₂−M₂₃, M₁₃−M₃₁, M₂₁−M₁₂).
 // For an antisymmetric M this is the exact inverse of hat.
-Vector3 vee(const Matrix3& M);
+inline Vector3 vee(const Matrix3& M) {
+  return 0.5 * Vector3(M(2, 1) - M(1, 2), M(0, 2) - M(2, 0), M(1, 0) - M(0, 1));
+}
 
 // exp(θ) = I + sin t/t [θ]× + (1−cos t)/t² [θ]×²,  t = ‖θ‖  (Rodrigues, paper eq. 4).
 // Taylor branches near t = 0 keep full precision down to t = 0.

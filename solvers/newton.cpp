@@ -215,13 +215,15 @@ StepReport DenseNewton<N>::solve(State& q) {
     double roundoff = 0.0;
     const double psi = component_.potential.assemble(q, g_, H_, &roundoff);
     report.gradient_norm = g_.norm();
-    if (!std::isfinite(psi) || !g_.allFinite() || !H_.allFinite()) {
+    // A NaN or Inf entry makes the sum non-finite (so does an overflow to ±Inf, which is
+    // as unusable); one sum is much cheaper than testing all entries.
+    if (!std::isfinite(psi + g_.sum() + H_.sum())) {
       return fail(StepStatus::kNonFinite);
     }
     bool regularized = false;
     if (!factorize(report, regularized)) return fail(StepStatus::kNonFinite);
     solve_factorized();
-    if (!delta_.allFinite()) return fail(StepStatus::kNonFinite);
+    if (!std::isfinite(delta_.sum())) return fail(StepStatus::kNonFinite);
     report.step_norm = delta_.template lpNorm<Eigen::Infinity>();
     if (!regularized && report.step_norm <= options_.tolerance) {
       report.status = StepStatus::kConverged;
