@@ -23,7 +23,6 @@ double TranslationalInertia::evaluate(const State& q, LocalGradient<1>* g,
 void RotationalInertia::begin_step(const State& previous, const Step& previous_step) {
   const Matrix3& R_prev = previous.rotations[rotation];
   R_tilde = (2.0 * Matrix3::Identity() - previous_step.rotations[rotation].transpose()) * R_prev;
-  R_tilde_J_over_h2 = R_tilde * J_over_h2;
 }
 
 double RotationalInertia::evaluate(const State& q, LocalGradient<1>* g,
@@ -38,8 +37,9 @@ double RotationalInertia::evaluate(const State& q, LocalGradient<1>* g,
       *H = S.trace() * Matrix3::Identity() - S;  // (13)
     }
   }
-  // ½ tr((R − R̃) J (R − R̃)ᵀ)/h² = ½ Σᵢⱼ [(R − R̃) J/h²]ᵢⱼ (R − R̃)ᵢⱼ
-  return 0.5 * (RJ - R_tilde_J_over_h2).cwiseProduct(R - R_tilde).sum();
+  // ½ tr(D J Dᵀ)/h² = ½ Σᵢⱼ (D J/h²)ᵢⱼ Dᵢⱼ,  D = R − R̃
+  const Matrix3 D = R - R_tilde;
+  return 0.5 * (D * J_over_h2).cwiseProduct(D).sum();
 }
 
 }  // namespace liedyn

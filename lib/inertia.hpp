@@ -39,7 +39,6 @@ struct RotationalInertia {
   int rotation = -1;
   Matrix3 J_over_h2 = Matrix3::Zero();  // J/h²
   Matrix3 R_tilde = Matrix3::Identity();
-  Matrix3 R_tilde_J_over_h2 = Matrix3::Zero();  // R̃ J/h², fixed during a step
 
   // R̃ = (2I − ΔR_{k−1}ᵀ) R_{k−1} = 2R_{k−1} − R_{k−2}   (10)
   void begin_step(const State& previous, const Step& previous_step);
