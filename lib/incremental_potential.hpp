@@ -21,6 +21,17 @@
 
 namespace liedyn {
 
+// Adds Hessian blocks into a dense matrix (fixed or dynamic size).
+template <class Matrix>
+struct DenseHessianSink {
+  Matrix& H;
+  void clear() { H.setZero(); }
+  template <class Block>
+  void add(int row, int column, const Block& block) {
+    H.template block<3, 3>(row, column) += block;
+  }
+};
+
 class IncrementalPotential {
  public:
   std::vector<TranslationalInertia> translational_inertia;
@@ -46,7 +57,17 @@ class IncrementalPotential {
   // the gradient with respect to the 9 entries of R does not (e.g. ‖(R − R̃)J‖/h² for the
   // rotational inertia); for a quadratic-like term it is about √(2 Ψ_t ‖H_t‖).
   template <class Vector, class Matrix>
-  double assemble(const State& q, Vector& g, Matrix& H, double* roundoff = nullptr) const;
+  double assemble(const State& q, Vector& g, Matrix& H, double* roundoff = nullptr) const {
+    DenseHessianSink<Matrix> sink{H};
+    return assemble_into(q, g, sink, roundoff);
+  }
+
+  // The same, with the Hessian's 3×3 blocks handed to `sink`:
+  //   sink.clear();  then  sink.add(row_offset, column_offset, block)  for every block of
+  // every term whose two offsets are DOFs, always in the same order for a given potential
+  // (a sparse sink relies on that order to find each block's place in a fixed pattern).
+  template <class Vector, class Sink>
+  double assemble_into(const State& q, Vector& g, Sink& sink, double* roundoff = nullptr) const;
 
   // Potential energy of the conservative loads alone (gravity, constant forces, springs):
   // what frames.csv reports. Inertia and torque terms are not energies of the state.
@@ -83,11 +104,11 @@ struct Component {
 std::vector<Component> build_components(const Model& model);
 
 // ---------------------------------------------------------------------------------------
-template <class Vector, class Matrix>
-double IncrementalPotential::assemble(const State& q, Vector& g, Matrix& H,
-                                      double* roundoff) const {
+template <class Vector, class Sink>
+double IncrementalPotential::assemble_into(const State& q, Vector& g, Sink& sink,
+                                           double* roundoff) const {
   g.setZero();
-  H.setZero();
+  sink.clear();
   double value = 0.0;
   double magnitude = 0.0;  // the Σ above
   double position_scale = 1.0;
@@ -117,7 +138,7 @@ double IncrementalPotential::assemble(const State& q, Vector& g, Matrix& H,
         for (int j = 0; j < B; ++j) {
           const int oj = term.offsets[j];
           if (oj < 0) continue;
-          H.template block<3, 3>(oi, oj) += H_local.template block<3, 3>(3 * i, 3 * j);
+          sink.add(oi, oj, H_local.template block<3, 3>(3 * i, 3 * j));
         }
       }
     }

@@ -14,16 +14,18 @@
 // it succeeds; such iterations are counted in StepReport::regularized_iterations and a
 // regularised step never counts as converged.
 //
-// Memory: all buffers are sized in the constructor; solve() allocates nothing (tested).
-// N = 6 gives the fixed-size path for a single rigid body; N = Eigen::Dynamic serves
-// components of several bodies coupled by springs (dense: fine for tens of bodies).
+// Memory: all buffers are sized in the constructor (the sparse pattern at the first
+// assembly); later solves allocate nothing (tests/allocation_test.cpp).
+// Linear algebra (solvers/linear_system.hpp): DenseSystem<6> for a single rigid body,
+// DenseSystem<Dynamic> for a few bodies coupled by springs, SparseSystem (CHOLMOD) beyond
+// Simulator::kDenseLimit coupled DOFs.
 
-#include <Eigen/Cholesky>
 #include <Eigen/Core>
 #include <string>
 #include <vector>
 
 #include "../lib/incremental_potential.hpp"
+#include "linear_system.hpp"
 
 namespace liedyn {
 
@@ -67,16 +69,17 @@ struct StepReport {
   void merge(const StepReport& other);
 };
 
-template <int N>
-class DenseNewton {
+// Newton's method on one component, over a linear system type (solvers/linear_system.hpp).
+template <class System>
+class Newton {
  public:
-  using Vector = Eigen::Matrix<double, N, 1>;
-  using Matrix = Eigen::Matrix<double, N, N>;
+  using Vector = typename System::Vector;
 
-  DenseNewton(Component component, const NewtonOptions& options);
+  Newton(Component component, const NewtonOptions& options);
 
   Component& component() { return component_; }
   const Component& component() const { return component_; }
+  const System& system() const { return system_; }
 
   // Minimises the component's potential, starting from (and writing into) q.
   // On failure, q is restored to its value on entry.
@@ -85,26 +88,25 @@ class DenseNewton {
  private:
   // Factorises H, regularising if needed; false if even the regularised matrix fails.
   bool factorize(StepReport& report, bool& regularized);
-  // Factorises H + μI (μ = 0: H itself); false if it is not positive definite.
-  bool try_factorize(double mu);
-  // δ = −(H + μI)⁻¹ g with the last successful factorisation.
-  void solve_factorized();
   void save(const State& q);
   void restore(State& q) const;
   void retract(State& q, double alpha) const;
 
   Component component_;
   NewtonOptions options_;
-  Vector g_, delta_;
-  // N fixed: H_shifted_ holds the Cholesky factor of H (+ μI), factorised by a hand-unrolled
-  // routine (newton.cpp) and llt_ is unused. N = Eigen::Dynamic: H_shifted_ = H + μI, llt_.
-  Matrix H_, H_shifted_;
-  Eigen::LLT<Matrix> llt_;
+  System system_;
+  Vector delta_;
   std::vector<Vector3> saved_points_, entry_points_;
   std::vector<Matrix3> saved_rotations_, entry_rotations_;
 };
 
-extern template class DenseNewton<6>;
-extern template class DenseNewton<Eigen::Dynamic>;
+// One rigid body (fixed size), a few coupled bodies (dense), many coupled bodies (CHOLMOD).
+template <int N>
+using DenseNewton = Newton<DenseSystem<N>>;
+using SparseNewton = Newton<SparseSystem>;
+
+extern template class Newton<DenseSystem<6>>;
+extern template class Newton<DenseSystem<Eigen::Dynamic>>;
+extern template class Newton<SparseSystem>;
 
 }  // namespace liedyn

@@ -15,8 +15,10 @@ Simulator::Simulator(Model model, const NewtonOptions& options)
   for (Component& c : build_components(model_)) {
     if (c.dofs == 6) {
       single_bodies_.emplace_back(std::move(c), options_);
-    } else {
+    } else if (c.dofs <= kDenseLimit) {
       coupled_bodies_.emplace_back(std::move(c), options_);
+    } else {
+      sparse_components_.emplace_back(std::move(c), options_);
     }
   }
 }
@@ -40,6 +42,7 @@ StepReport Simulator::step() {
   };
   run(single_bodies_);
   run(coupled_bodies_);
+  run(sparse_components_);
 
   if (!report.state_updated()) {
     state_ = previous_;
@@ -79,6 +82,9 @@ double Simulator::potential_energy() const {
   double energy = 0.0;
   for (const auto& s : single_bodies_) energy += s.component().potential.potential_energy(state_);
   for (const auto& s : coupled_bodies_) energy += s.component().potential.potential_energy(state_);
+  for (const auto& s : sparse_components_) {
+    energy += s.component().potential.potential_energy(state_);
+  }
   return energy;
 }
 

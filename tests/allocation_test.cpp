@@ -413,16 +413,25 @@ Model spring_chain(int n) {
   return model;
 }
 
-// (c) Three bodies coupled by springs: the dynamic-size dense path (18 DOFs, unblocked LLT).
+// (c) Three bodies coupled by springs: the dynamic-size dense path (18 DOFs).
+static_assert(18 <= Simulator::kDenseLimit);
 TEST(Allocation, ThreeCoupledBodiesStepDoesNotAllocate) {
   Simulator sim(spring_chain(3), NewtonOptions{});
   expect_no_allocation(run_counted(sim, kSteps), kSteps);
 }
 
-// (d) Eight coupled bodies: 48 DOFs, past Eigen's 32 threshold for the blocked LLT (GEMM
-// kernels with stack-allocated packing buffers).
+// (d) Eight coupled bodies: 48 DOFs, beyond Simulator::kDenseLimit, so the sparse path.
 TEST(Allocation, EightCoupledBodiesStepDoesNotAllocate) {
   Simulator sim(spring_chain(8), NewtonOptions{});
+  expect_no_allocation(run_counted(sim, kSteps), kSteps);
+}
+
+// (e) Twenty coupled bodies: 120 DOFs > Simulator::kDenseLimit, the sparse CHOLMOD path
+// (pattern and symbolic analysis at the first step; numeric factorisation and solve2 with
+// reused workspaces afterwards). CHOLMOD allocates through malloc, which is counted too.
+TEST(Allocation, TwentyCoupledBodiesSparseStepDoesNotAllocate) {
+  static_assert(6 * 20 > Simulator::kDenseLimit);
+  Simulator sim(spring_chain(20), NewtonOptions{});
   expect_no_allocation(run_counted(sim, kSteps), kSteps);
 }
 

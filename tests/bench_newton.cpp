@@ -285,6 +285,61 @@ BENCHMARK(BM_Step_ButterflyBolt);
 void BM_Step_HeavyTop(benchmark::State& state) { run_steps(state, heavy_top()); }
 BENCHMARK(BM_Step_HeavyTop);
 
+// ---------------------------------------------------------------------------------------
+// Dense against sparse (CHOLMOD) linear algebra for n bodies in a chain of springs: one
+// Newton iteration (assembly + factorisation + solve) at a converged iterate, as in
+// BM_NewtonIteration. Picks Simulator::kDenseLimit.
+Model spring_chain(int n) {
+  Model model;
+  model.time_step = 0.01;
+  model.gravity = Vector3(0.0, 0.0, -9.81);
+  for (int i = 0; i < n; ++i) {
+    RigidBody b;
+    b.name = "link" + std::to_string(i);
+    b.inertia = Vector3(0.02, 0.03, 0.04).asDiagonal();
+    b.position = Vector3(0.3 * i, 0.0, 0.0);
+    b.angular_velocity = Vector3(0.5, -1.0, 2.0);
+    model.bodies.push_back(b);
+  }
+  SpringSpec anchor;
+  anchor.a = BodyPoint{-1, Vector3(-0.2, 0.0, 0.0)};
+  anchor.b = BodyPoint{0, Vector3(-0.1, 0.0, 0.0)};
+  anchor.stiffness = 1e3;
+  anchor.rest_length = 0.1;
+  model.springs.push_back(anchor);
+  for (int i = 0; i + 1 < n; ++i) {
+    SpringSpec s;
+    s.a = BodyPoint{i, Vector3(0.1, 0.0, 0.0)};
+    s.b = BodyPoint{i + 1, Vector3(-0.1, 0.0, 0.0)};
+    s.stiffness = 1e3;
+    s.rest_length = 0.1;
+    model.springs.push_back(s);
+  }
+  return model;
+}
+
+template <class System>
+void BM_ChainIteration(benchmark::State& state) {
+  const Model model = spring_chain(static_cast<int>(state.range(0)));
+  std::vector<Component> components = liedyn::build_components(model);
+  liedyn::Newton<System> newton(std::move(components.at(0)), NewtonOptions{});
+  State q = model.initial_state();
+  newton.component().potential.begin_step(q, model.initial_step());
+  newton.solve(q);  // converge once (and build the sparse pattern); later calls: 1 iteration
+  for (auto _ : state) {
+    const StepReport r = newton.solve(q);
+    benchmark::DoNotOptimize(r);
+    benchmark::ClobberMemory();
+  }
+  state.counters["dofs"] = static_cast<double>(6 * state.range(0));
+}
+BENCHMARK_TEMPLATE(BM_ChainIteration, liedyn::DenseSystem<Eigen::Dynamic>)
+    ->Name("BM_ChainIteration_Dense")
+    ->Arg(2)->Arg(4)->Arg(5)->Arg(6)->Arg(8)->Arg(16)->Arg(32);
+BENCHMARK_TEMPLATE(BM_ChainIteration, liedyn::SparseSystem)
+    ->Name("BM_ChainIteration_Sparse")
+    ->Arg(2)->Arg(4)->Arg(5)->Arg(6)->Arg(8)->Arg(16)->Arg(32);
+
 }  // namespace
 
 BENCHMARK_MAIN();
