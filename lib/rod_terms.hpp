@@ -1,0 +1,100 @@
+#pragma once
+// Cosserat rod energy terms (paper §6.2; Spillmann & Teschner 2007; DESIGN.md §5).
+//
+// Layout: positions at nodes x_i (State::points), rotations at edges R_i (State::rotations);
+// edge i joins nodes i and i+1 and carries the material frame R_i (R_i e_z is the edge
+// tangent at rest); every edge has rest length l. Conventions as in so3.hpp: perturbations
+// are left, R⁺ = exp(θ)R, and so3::vee(M) is the vector of the ANTISYMMETRIC part of M.
+//
+// Each term owns its value, Lie gradient and Lie Hessian (term.hpp); all three Hessians are
+// exact and may be indefinite away from rest (the Newton solver regularises).
+//
+// ---------------------------------------------------------------------------------------
+// Stretch, blocks (x_i, x_{i+1}):
+//   Ψ_s = ½ k_s l (1 − ‖e‖/l)² = ½ (k_s/l) (L − l)²,   e = x_{i+1} − x_i,  L = ‖e‖,  n = e/L.
+//   The axial force is ∂Ψ_s/∂L = (k_s/l)(L − l), so a rod under force F stretches by
+//   ΔL = F l / k_s: k_s [N] is the axial stiffness EA.
+//   ∂Ψ/∂e = (k_s/l)(L − l) n,   ∂²Ψ/∂e² = (k_s/l) [n nᵀ + (L − l)/L (I − n nᵀ)];
+//   ∂e/∂(x_i, x_{i+1}) = (−I, I).
+//
+// Shear / alignment, blocks (x_i, x_{i+1}, θ_i):
+//   Ψ_x = ½ k_x l (1 − dᵀt) = ¼ k_x l ‖d − t‖²,   d = e/L,  t = R_i e_z   (c := ½ k_x l).
+//   (The value uses the least-squares form: no cancellation near rest.)
+//   Through e (a = dᵀt, P = I − d dᵀ, ∂d/∂e = P/L):
+//     ∂Ψ/∂e   = −c P t / L,
+//     ∂²Ψ/∂e² =  c [d tᵀ + t dᵀ + a (I − 3 d dᵀ)] / L².
+//   Through θ: t → exp(θ) t = t + θ×t + ½ θ×(θ×t) + O(θ³), and
+//     dᵀ(θ×t) = θ·(t×d),   dᵀ hat(θ)² t = (θ·d)(θ·t) − (θ·θ) a,  so
+//     DΨ/DR   = −c t×d,
+//     D²Ψ/DR² = −c [½ (d tᵀ + t dᵀ) − a I].
+//   Mixed (x is additive, so it is ∂/∂e of the Lie gradient):
+//     ∂²Ψ/∂θ∂e = −c hat(t) P / L.
+//   At rest (t = d) the Hessian is c (I − d dᵀ)/L² ⊕ c (I − d dᵀ) coupled, PSD (Ψ ≥ 0 = Ψ(rest)).
+//
+// Bend / twist at interior node i, blocks (θ_a, θ_b) = (θ_{i−1}, θ_i):
+//   Ψ_b = ½ l Δωᵀ K Δω,   Δω = ω − ω̄,   ω = vee(Q)/l,   Q = R_aᵀ R_b,   K = diag(K₁, K₂, K₃)
+//   (vee(Q) = vee_exact(Q − Qᵀ)/2; ω is in the material frame of edge a).
+//   Let C = R_b R_aᵀ (relative rotation in the world frame), so that R_aᵀ M R_b = R_aᵀ M C R_a
+//   and, conjugation commuting with vee, ω(α, β) = R_aᵀ vee(E C)/l with
+//     E = exp(−α) exp(β) = I + (B − A) + ½A² + ½B² − AB + O(3),   A = hat(α), B = hat(β).
+//   Identities (any M, any u, v; derived index-wise):
+//     vee(hat(u) M)         = G_M u,   G_M = ½ (tr(M) I − M),
+//     vee(hat(u) hat(v) M)  = ½ (Mᵀu) × v − (u·v) vee(M)     (hat(u)hat(v) = v uᵀ − (u·v) I,
+//                                                              vee(a bᵀ) = ½ b × a).
+//   First order, with G = G_C:  ∂ω/∂β = R_aᵀ G / l = −∂ω/∂α.  With m = R_a K Δω (world):
+//     g_b = Gᵀ m,   g_a = −Gᵀ m      (g_a + g_b = 0: Ψ is invariant under exp(φ)(R_a, R_b)).
+//   Second order: Ψ₂ = ½ l ω₁ᵀ K ω₁ + l (KΔω)ᵀ ω₂,  and with c = vee(C), N = −C hat(m)
+//   (mᵀ((Cᵀu) × v) = uᵀ N v):
+//     l (KΔω)ᵀ ω₂ = mᵀ vee((½A² + ½B² − AB) C)
+//                 = ¼ αᵀNα + ¼ βᵀNβ − ½ αᵀNβ − ½ (m·c)(‖α‖² + ‖β‖²) + (m·c) α·β.
+//   Hence, with S = Gᵀ (R_a K R_aᵀ) G / l,
+//     H_aa = H_bb = S + ¼ (N + Nᵀ) − (m·c) I,
+//     H_ab = H_baᵀ = −S − ½ N + (m·c) I.
+//   Checks: H_aa + H_ab + H_ba + H_bb = 0 (common rotation); at rest m = 0 and H = l JᵀKJ
+//   (PSD); for a straight untwisted rod (C = I, G = I, ω̄ = 0) H_aa = H_bb = −H_ab = R K Rᵀ/l.
+
+#include "state.hpp"
+#include "term.hpp"
+
+namespace liedyn {
+
+// Discrete Darboux vector of two adjacent edge frames, in the material frame of edge a:
+//   ω = vee(R_aᵀ R_b)/l  ( = vee_exact(Q − Qᵀ)/(2l) ).  Used for the rest curvature ω̄.
+Vector3 darboux_vector(const Matrix3& Ra, const Matrix3& Rb, double rest_length);
+
+struct RodStretch {
+  static constexpr int kBlocks = 2;
+  std::array<int, kBlocks> offsets{-1, -1};  // x_i, x_{i+1}
+  int node0 = -1;                            // i    (State::points)
+  int node1 = -1;                            // i+1  (State::points)
+  double rest_length = 0.0;                  // l   [m], > 0
+  double stiffness = 0.0;                    // k_s [N]  (axial stiffness EA)
+
+  double evaluate(const State& q, LocalGradient<2>* g, LocalHessian<2>* H) const;
+};
+
+struct RodShear {
+  static constexpr int kBlocks = 3;
+  std::array<int, kBlocks> offsets{-1, -1, -1};  // x_i, x_{i+1}, θ_i
+  int node0 = -1;                                // i    (State::points)
+  int node1 = -1;                                // i+1  (State::points)
+  int edge = -1;                                 // i    (State::rotations)
+  double rest_length = 0.0;                      // l   [m]
+  double stiffness = 0.0;                        // k_x [N]
+
+  double evaluate(const State& q, LocalGradient<3>* g, LocalHessian<3>* H) const;
+};
+
+struct RodBendTwist {
+  static constexpr int kBlocks = 2;
+  std::array<int, kBlocks> offsets{-1, -1};  // θ_{i−1}, θ_i
+  int edge0 = -1;                            // i−1  (State::rotations), frame of ω
+  int edge1 = -1;                            // i    (State::rotations)
+  double rest_length = 0.0;                  // l   [m], > 0
+  Vector3 stiffness = Vector3::Zero();       // (K₁, K₂, K₃) [N m²]: bend, bend, twist
+  Vector3 rest_darboux = Vector3::Zero();    // ω̄ [1/m], material frame of edge i−1
+
+  double evaluate(const State& q, LocalGradient<2>* g, LocalHessian<2>* H) const;
+};
+
+}  // namespace liedyn
