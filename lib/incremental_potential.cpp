@@ -2,6 +2,8 @@
 
 #include <numeric>
 
+#include "rod_terms.hpp"
+
 namespace liedyn {
 
 void IncrementalPotential::begin_step(const State& previous, const Step& previous_step) {
@@ -23,6 +25,9 @@ double IncrementalPotential::potential_energy(const State& q) const {
   for (const auto& t : gravity) energy += t.evaluate(q, nullptr, nullptr);
   for (const auto& t : forces) energy += t.evaluate(q, nullptr, nullptr);
   for (const auto& t : springs) energy += t.evaluate(q, nullptr, nullptr);
+  for (const auto& t : rod_stretch) energy += t.evaluate(q, nullptr, nullptr);
+  for (const auto& t : rod_shear) energy += t.evaluate(q, nullptr, nullptr);
+  for (const auto& t : rod_bend_twist) energy += t.evaluate(q, nullptr, nullptr);
   return energy;
 }
 
@@ -125,7 +130,97 @@ std::vector<Component> build_components(const Model& model) {
     const int body = s.a.body >= 0 ? s.a.body : s.b.body;
     components[component_of[body]].potential.springs.push_back(term);
   }
+  for (int r = 0; r < static_cast<int>(model.rods.size()); ++r) {
+    Component c = build_rod_component(model, r);
+    if (c.dofs > 0) components.push_back(std::move(c));
+  }
   return components;
+}
+
+Component build_rod_component(const Model& model, int r) {
+  const RodSpec& rod = model.rods[r];
+  const RodDiscretization d = discretize(rod);
+  const int n = rod.node_count();
+  const int edges = rod.edge_count();
+  Component c;
+  // Tangent layout: node 0, edge 0, node 1, edge 1, … (clamped ones are not DOFs).
+  std::vector<int> node_offset(n, -1), edge_offset(edges, -1);
+  std::vector<bool> node_fixed(n, false), edge_fixed(edges, false);
+  for (int i : rod.fixed_nodes) node_fixed[i] = true;
+  for (int j : rod.fixed_edges) edge_fixed[j] = true;
+  for (int i = 0; i < n; ++i) {
+    if (!node_fixed[i]) {
+      node_offset[i] = c.dofs;
+      c.points.push_back({model.rod_point(r, i), c.dofs});
+      c.dofs += 3;
+    }
+    if (i < edges && !edge_fixed[i]) {
+      edge_offset[i] = c.dofs;
+      c.rotations.push_back({model.rod_rotation(r, i), c.dofs});
+      c.dofs += 3;
+    }
+  }
+
+  const double inv_h2 = 1.0 / (model.time_step * model.time_step);
+  IncrementalPotential& p = c.potential;
+  for (int i = 0; i < n; ++i) {
+    if (node_fixed[i]) continue;  // a clamped node feels neither inertia nor loads
+    TranslationalInertia ti;
+    ti.offsets = {node_offset[i]};
+    ti.point = model.rod_point(r, i);
+    ti.mass_over_h2 = d.node_mass[i] * inv_h2;
+    p.translational_inertia.push_back(ti);
+    if (!model.gravity.isZero(0.0)) {
+      Gravity g;
+      g.offsets = {node_offset[i]};
+      g.point = ti.point;
+      g.weight = d.node_mass[i] * model.gravity;
+      p.gravity.push_back(g);
+    }
+  }
+  for (int j = 0; j < edges; ++j) {
+    if (!edge_fixed[j]) {
+      RotationalInertia ri;
+      ri.offsets = {edge_offset[j]};
+      ri.rotation = model.rod_rotation(r, j);
+      ri.J_over_h2 = rotational_mass(d.edge_inertia[j]) * inv_h2;
+      p.rotational_inertia.push_back(ri);
+    }
+    RodStretch stretch;
+    stretch.offsets = {node_offset[j], node_offset[j + 1]};
+    stretch.node0 = model.rod_point(r, j);
+    stretch.node1 = model.rod_point(r, j + 1);
+    stretch.rest_length = d.rest_length[j];
+    stretch.stiffness = rod.stretch_stiffness;
+    p.rod_stretch.push_back(stretch);
+    RodShear shear;
+    shear.offsets = {node_offset[j], node_offset[j + 1], edge_offset[j]};
+    shear.node0 = stretch.node0;
+    shear.node1 = stretch.node1;
+    shear.edge = model.rod_rotation(r, j);
+    shear.rest_length = d.rest_length[j];
+    shear.stiffness = rod.shear_stiffness;
+    p.rod_shear.push_back(shear);
+  }
+  for (int i = 1; i + 1 < n; ++i) {
+    RodBendTwist bend;
+    bend.offsets = {edge_offset[i - 1], edge_offset[i]};
+    bend.edge0 = model.rod_rotation(r, i - 1);
+    bend.edge1 = model.rod_rotation(r, i);
+    bend.rest_length = d.voronoi_length[i - 1];
+    bend.stiffness = rod.bending_stiffness;
+    bend.rest_darboux = d.rest_darboux[i - 1];
+    p.rod_bend_twist.push_back(bend);
+  }
+  for (const NodeForce& f : rod.node_forces) {
+    if (node_fixed[f.node]) continue;
+    ConstantForce term;
+    term.offsets = {node_offset[f.node], -1};
+    term.at.point = model.rod_point(r, f.node);
+    term.force = f.force;
+    p.forces.push_back(term);
+  }
+  return c;
 }
 
 }  // namespace liedyn

@@ -17,6 +17,7 @@
 #include "inertia.hpp"
 #include "loads.hpp"
 #include "model.hpp"
+#include "rod_terms.hpp"
 #include "spring.hpp"
 
 namespace liedyn {
@@ -40,6 +41,9 @@ class IncrementalPotential {
   std::vector<ConstantForce> forces;
   std::vector<ConstantTorque> torques;
   std::vector<Spring> springs;
+  std::vector<RodStretch> rod_stretch;
+  std::vector<RodShear> rod_shear;
+  std::vector<RodBendTwist> rod_bend_twist;
 
   // Fixes the per-step data (x̃, R̃, R_{k−1}) from the previous state and step.
   void begin_step(const State& previous, const Step& previous_step);
@@ -69,7 +73,7 @@ class IncrementalPotential {
   template <class Vector, class Sink>
   double assemble_into(const State& q, Vector& g, Sink& sink, double* roundoff = nullptr) const;
 
-  // Potential energy of the conservative loads alone (gravity, constant forces, springs):
+  // Potential energy (gravity, constant forces, springs, rod elasticity):
   // what frames.csv reports. Inertia and torque terms are not energies of the state.
   double potential_energy(const State& q) const;
 
@@ -82,6 +86,9 @@ class IncrementalPotential {
     f(forces);
     f(torques);
     f(springs);
+    f(rod_stretch);
+    f(rod_shear);
+    f(rod_bend_twist);
   }
 };
 
@@ -99,9 +106,14 @@ struct Component {
 };
 
 // Splits a validated model into independent components (bodies joined by springs share
-// one) and builds each component's terms with their scatter offsets. Body order is kept;
-// within a component each body contributes [x, θ] in that order.
+// one; each rod is one) and builds each component's terms with their scatter offsets. Body
+// order is kept; within a component each body contributes [x, θ] in that order. A rod whose
+// nodes and edges are all clamped has no DOFs and no component.
 std::vector<Component> build_components(const Model& model);
+
+// The component of rod r: lumped inertia, gravity, stretch, shear, bend–twist and node
+// forces over its free nodes and edges (DESIGN.md §5).
+Component build_rod_component(const Model& model, int r);
 
 // ---------------------------------------------------------------------------------------
 template <class Vector, class Sink>

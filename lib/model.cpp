@@ -105,6 +105,70 @@ void Model::validate() const {
     require_body(torques[i].body, bodies.size(), index_field("torques", i, "body"), false);
     require_finite(torques[i].torque, index_field("torques", i, "torque"));
   }
+  for (std::size_t r = 0; r < rods.size(); ++r) validate_rod(rods[r], index_field("rods", r, ""));
+}
+
+void Model::validate_rod(const RodSpec& rod, const std::string& path) {
+  const auto field = [&](const std::string& member) { return path + "." + member; };
+  if (rod.nodes.size() < 2) throw ModelError(field("nodes"), "must list at least 2 nodes");
+  for (std::size_t i = 0; i < rod.nodes.size(); ++i) {
+    require_finite(rod.nodes[i], field("nodes") + "[" + std::to_string(i) + "]");
+    if (i > 0 && !((rod.nodes[i] - rod.nodes[i - 1]).norm() > 0.0)) {
+      throw ModelError(field("nodes") + "[" + std::to_string(i) + "]",
+                       "coincides with the previous node (zero-length edge)");
+    }
+  }
+  const auto positive = [&](double value, const std::string& member) {
+    if (!std::isfinite(value) || value <= 0.0) {
+      throw ModelError(field(member), "must be a finite positive number");
+    }
+  };
+  const auto non_negative = [&](double value, const std::string& member) {
+    if (!std::isfinite(value) || value < 0.0) throw ModelError(field(member), "must be finite and ≥ 0");
+  };
+  positive(rod.mass, "mass");
+  positive(rod.radius, "radius");
+  non_negative(rod.stretch_stiffness, "stretch_stiffness");
+  non_negative(rod.shear_stiffness, "shear_stiffness");
+  for (int k = 0; k < 3; ++k) {
+    non_negative(rod.bending_stiffness[k], "bending_stiffness[" + std::to_string(k) + "]");
+  }
+  const auto check_indices = [&](const std::vector<int>& indices, int count,
+                                 const std::string& member, const char* what) {
+    std::vector<bool> seen(count, false);
+    for (std::size_t k = 0; k < indices.size(); ++k) {
+      const int i = indices[k];
+      const std::string f = field(member) + "[" + std::to_string(k) + "]";
+      if (i < 0 || i >= count) {
+        throw ModelError(f, "refers to " + std::string(what) + " " + std::to_string(i) +
+                                ", but the rod has " + std::to_string(count));
+      }
+      if (seen[i]) throw ModelError(f, "repeats " + std::string(what) + " " + std::to_string(i));
+      seen[i] = true;
+    }
+  };
+  check_indices(rod.fixed_nodes, rod.node_count(), "fixed_nodes", "node");
+  check_indices(rod.fixed_edges, rod.edge_count(), "fixed_edges", "edge");
+  for (std::size_t k = 0; k < rod.node_forces.size(); ++k) {
+    const std::string f = field("node_forces") + "[" + std::to_string(k) + "]";
+    if (rod.node_forces[k].node < 0 || rod.node_forces[k].node >= rod.node_count()) {
+      throw ModelError(f + ".node", "refers to node " + std::to_string(rod.node_forces[k].node) +
+                                        ", but the rod has " + std::to_string(rod.node_count()));
+    }
+    require_finite(rod.node_forces[k].force, f + ".force");
+  }
+}
+
+int Model::rod_point(int rod, int node) const {
+  int index = static_cast<int>(bodies.size());
+  for (int r = 0; r < rod; ++r) index += rods[r].node_count();
+  return index + node;
+}
+
+int Model::rod_rotation(int rod, int edge) const {
+  int index = static_cast<int>(bodies.size());
+  for (int r = 0; r < rod; ++r) index += rods[r].edge_count();
+  return index + edge;
 }
 
 State Model::initial_state() const {
@@ -112,6 +176,11 @@ State Model::initial_state() const {
   for (const RigidBody& b : bodies) {
     q.points.push_back(b.position);
     q.rotations.push_back(so3::orthonormalize(b.orientation));
+  }
+  for (const RodSpec& rod : rods) {
+    q.points.insert(q.points.end(), rod.nodes.begin(), rod.nodes.end());
+    const std::vector<Matrix3> frames = discretize(rod).frames;
+    q.rotations.insert(q.rotations.end(), frames.begin(), frames.end());
   }
   return q;
 }
@@ -121,6 +190,10 @@ Step Model::initial_step() const {
   for (const RigidBody& b : bodies) {
     dq.points.push_back(time_step * b.linear_velocity);
     dq.rotations.push_back(so3::exp(time_step * b.angular_velocity));
+  }
+  for (const RodSpec& rod : rods) {  // rods start at rest
+    dq.points.insert(dq.points.end(), rod.node_count(), Vector3::Zero());
+    dq.rotations.insert(dq.rotations.end(), rod.edge_count(), Matrix3::Identity());
   }
   return dq;
 }

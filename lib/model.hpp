@@ -1,11 +1,14 @@
 #pragma once
-// A rigid-body model as a user describes it, in code or through a scene file
-// (problems/scene.hpp). Units SI. Body i owns point i (centre of mass) and rotation i.
+// A model of rigid bodies and Cosserat rods as a user describes it, in code or through a
+// scene file (problems/scene.hpp). Units SI.
+// State layout: body i owns point i (centre of mass) and rotation i; then each rod in turn
+// owns the next node_count() points (its nodes) and edge_count() rotations (its edges).
 
 #include <stdexcept>
 #include <string>
 #include <vector>
 
+#include "rod.hpp"
 #include "state.hpp"
 
 namespace liedyn {
@@ -60,13 +63,21 @@ struct Model {
   std::vector<SpringSpec> springs;
   std::vector<ForceSpec> forces;
   std::vector<TorqueSpec> torques;
+  std::vector<RodSpec> rods;
+
+  // Index in State::points of a rod's node, and in State::rotations of a rod's edge.
+  int rod_point(int rod, int node) const;
+  int rod_rotation(int rod, int edge) const;
 
   // Throws ModelError naming the first offending field. Checks finiteness, positivity,
   // symmetric positive-definite inertia obeying the triangle inequality, orthonormal
   // orientations, and valid body indices.
   void validate() const;
+  // The rod checks of validate(); `path` prefixes field names (e.g. "rods[0]").
+  static void validate_rod(const RodSpec& rod, const std::string& path);
 
-  // State q_0 and step Δq_0 = (h v_0, exp(h ω_0)) (DESIGN.md §3).
+  // State q_0 and step Δq_0 = (h v_0, exp(h ω_0)) (DESIGN.md §3); rods start at rest in
+  // their rest shape, with parallel-transported edge frames.
   State initial_state() const;
   Step initial_step() const;
 };

@@ -8,6 +8,7 @@ Simulator::Simulator(Model model, const NewtonOptions& options)
     : model_(std::move(model)), options_(options) {
   model_.validate();
   options_.validate();
+  for (const RodSpec& rod : model_.rods) rods_.push_back(discretize(rod));
   state_ = model_.initial_state();
   step_ = model_.initial_step();
   previous_ = state_;
@@ -58,23 +59,24 @@ StepReport Simulator::step() {
   return report;
 }
 
-Vector3 Simulator::linear_velocity(int body) const {
-  return step_.points[body] / model_.time_step;
+Vector3 Simulator::linear_velocity(int point) const {
+  return step_.points[point] / model_.time_step;
 }
 
-Vector3 Simulator::angular_velocity(int body) const {
-  return so3::log(step_.rotations[body]) / model_.time_step;
+Vector3 Simulator::angular_velocity(int rotation) const {
+  return so3::log(step_.rotations[rotation]) / model_.time_step;
 }
 
 double Simulator::kinetic_energy() const {
   double energy = 0.0;
-  for (std::size_t i = 0; i < model_.bodies.size(); ++i) {
-    const RigidBody& b = model_.bodies[i];
-    const Matrix3& R = state_.rotations[i];
-    const Vector3 v = linear_velocity(static_cast<int>(i));
-    const Vector3 w = angular_velocity(static_cast<int>(i));
-    energy += 0.5 * b.mass * v.squaredNorm() + 0.5 * w.dot(R * b.inertia * R.transpose() * w);
-  }
+  for_each_mass([&](int point, double mass, int rotation, const Matrix3& inertia) {
+    if (point >= 0) energy += 0.5 * mass * linear_velocity(point).squaredNorm();
+    if (rotation >= 0) {
+      const Matrix3& R = state_.rotations[rotation];
+      const Vector3 w = angular_velocity(rotation);
+      energy += 0.5 * w.dot(R * inertia * R.transpose() * w);
+    }
+  });
   return energy;
 }
 
@@ -90,13 +92,33 @@ double Simulator::potential_energy() const {
 
 Vector3 Simulator::angular_momentum() const {
   Vector3 L = Vector3::Zero();
-  for (std::size_t i = 0; i < model_.bodies.size(); ++i) {
-    const RigidBody& b = model_.bodies[i];
-    const Matrix3& R = state_.rotations[i];
-    L += b.mass * state_.points[i].cross(linear_velocity(static_cast<int>(i)));
-    L += R * b.inertia * R.transpose() * angular_velocity(static_cast<int>(i));
-  }
+  for_each_mass([&](int point, double mass, int rotation, const Matrix3& inertia) {
+    if (point >= 0) L += mass * state_.points[point].cross(linear_velocity(point));
+    if (rotation >= 0) {
+      const Matrix3& R = state_.rotations[rotation];
+      L += R * inertia * R.transpose() * angular_velocity(rotation);
+    }
+  });
   return L;
+}
+
+template <class Function>
+void Simulator::for_each_mass(Function&& f) const {
+  const Matrix3 none = Matrix3::Zero();
+  for (std::size_t i = 0; i < model_.bodies.size(); ++i) {
+    const int index = static_cast<int>(i);
+    f(index, model_.bodies[i].mass, index, model_.bodies[i].inertia);
+  }
+  for (std::size_t r = 0; r < model_.rods.size(); ++r) {
+    const RodDiscretization& d = rods_[r];
+    const int rod = static_cast<int>(r);
+    for (std::size_t i = 0; i < d.node_mass.size(); ++i) {
+      f(model_.rod_point(rod, static_cast<int>(i)), d.node_mass[i], -1, none);
+    }
+    for (std::size_t j = 0; j < d.edge_inertia.size(); ++j) {
+      f(-1, 0.0, model_.rod_rotation(rod, static_cast<int>(j)), d.edge_inertia[j]);
+    }
+  }
 }
 
 }  // namespace liedyn

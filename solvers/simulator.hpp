@@ -36,14 +36,22 @@ class Simulator {
   int frame() const { return frame_; }
   double time() const { return frame_ * model_.time_step; }
 
-  Vector3 linear_velocity(int body) const;
-  Vector3 angular_velocity(int body) const;  // world frame
+  // Velocity of State::points[point] and angular velocity (world frame) of
+  // State::rotations[rotation]; for body i both indices are i (see Model for rods).
+  Vector3 linear_velocity(int point) const;
+  Vector3 angular_velocity(int rotation) const;
   double kinetic_energy() const;
   double potential_energy() const;  // conservative loads (IncrementalPotential::potential_energy)
   Vector3 angular_momentum() const;
 
  private:
+  // Calls f(point, mass, rotation, body_inertia) for every lumped mass and rotational
+  // inertia (−1 for the index a mass does not have).
+  template <class Function>
+  void for_each_mass(Function&& f) const;
+
   Model model_;
+  std::vector<RodDiscretization> rods_;
   NewtonOptions options_;
   State state_, previous_;
   Step step_, previous_step_;

@@ -435,6 +435,27 @@ TEST(Allocation, TwentyCoupledBodiesSparseStepDoesNotAllocate) {
   expect_no_allocation(run_counted(sim, kSteps), kSteps);
 }
 
+// (f) A clamped Cosserat rod (40 edges, 237 DOFs) bending under gravity: the sparse path
+// with rod terms.
+TEST(Allocation, ClampedRodStepDoesNotAllocate) {
+  Model model;
+  model.time_step = 0.01;
+  model.gravity = Vector3(0.0, 0.0, -9.81);
+  liedyn::RodSpec rod;
+  rod.name = "rod";
+  for (int i = 0; i <= 40; ++i) rod.nodes.push_back(Vector3(0.025 * i, 0.0, 0.0));
+  rod.mass = 0.1;
+  rod.radius = 0.005;
+  rod.stretch_stiffness = 1e4;
+  rod.shear_stiffness = 1e4;
+  rod.bending_stiffness = Vector3(0.05, 0.05, 0.04);
+  rod.fixed_nodes = {0};
+  rod.fixed_edges = {0};
+  model.rods.push_back(rod);
+  Simulator sim(model, NewtonOptions{});
+  expect_no_allocation(run_counted(sim, kSteps), kSteps);
+}
+
 // Mixed: a free body and a coupled pair in one simulator (both solver vectors).
 TEST(Allocation, MixedComponentsStepDoesNotAllocate) {
   Model model = spring_chain(2);

@@ -1,0 +1,59 @@
+#include "rod.hpp"
+
+#include <cmath>
+
+#include "rod_terms.hpp"
+#include "so3.hpp"
+
+namespace liedyn {
+
+Matrix3 minimal_rotation(const Vector3& a, const Vector3& b) {
+  const Vector3 axis = a.cross(b);
+  const double s = axis.norm();
+  const double c = a.dot(b);
+  if (s < 1e-12 && c < 0.0) {
+    // Antiparallel: a half turn about any axis perpendicular to a.
+    Vector3 perpendicular = a.cross(Vector3::UnitX());
+    if (perpendicular.norm() < 0.5) perpendicular = a.cross(Vector3::UnitY());
+    return so3::exp(std::acos(-1.0) * perpendicular.normalized());
+  }
+  if (s == 0.0) return Matrix3::Identity();
+  return so3::exp(std::atan2(s, c) / s * axis);
+}
+
+RodDiscretization discretize(const RodSpec& rod) {
+  RodDiscretization d;
+  const int n = rod.node_count();
+  const int edges = rod.edge_count();
+  double total_length = 0.0;
+  for (int j = 0; j < edges; ++j) {
+    d.rest_length.push_back((rod.nodes[j + 1] - rod.nodes[j]).norm());
+    total_length += d.rest_length.back();
+  }
+  d.node_mass.assign(n, 0.0);
+  const double r2 = rod.radius * rod.radius;
+  for (int j = 0; j < edges; ++j) {
+    const double l = d.rest_length[j];
+    const double m = rod.mass * l / total_length;
+    d.node_mass[j] += 0.5 * m;
+    d.node_mass[j + 1] += 0.5 * m;
+    const double transverse = m * (3.0 * r2 + l * l) / 12.0;
+    d.edge_inertia.push_back(Vector3(transverse, transverse, 0.5 * m * r2).asDiagonal());
+  }
+  Vector3 previous_tangent = Vector3::UnitZ();
+  Matrix3 frame = Matrix3::Identity();
+  for (int j = 0; j < edges; ++j) {
+    const Vector3 tangent = (rod.nodes[j + 1] - rod.nodes[j]) / d.rest_length[j];
+    frame = so3::orthonormalize(minimal_rotation(previous_tangent, tangent) * frame);
+    d.frames.push_back(frame);
+    previous_tangent = tangent;
+  }
+  for (int i = 1; i + 1 < n; ++i) {
+    const double l = 0.5 * (d.rest_length[i - 1] + d.rest_length[i]);
+    d.voronoi_length.push_back(l);
+    d.rest_darboux.push_back(darboux_vector(d.frames[i - 1], d.frames[i], l));
+  }
+  return d;
+}
+
+}  // namespace liedyn

@@ -1,0 +1,59 @@
+#pragma once
+// A Cosserat rod as a user describes it, and its discretisation (paper §6.2, DESIGN.md §5).
+//
+// Nodes carry positions x_i (i = 0…n−1), edges carry rotations R_j (edge j joins nodes j and
+// j+1), with R_j e_z along the edge at rest. Masses are lumped: each edge's mass
+// m_j = m l_j / Σl is split equally between its two nodes; each edge's rotation carries the
+// rotational inertia of a solid cylinder of radius r and length l_j about its centre,
+// I_b = diag(m_j(3r² + l_j²)/12, m_j(3r² + l_j²)/12, m_j r²/2) in the edge frame.
+// Rest shape: the initial one (edge lengths l_j; Darboux vectors ω̄ from the initial frames).
+// Initial frames: R_0 is the minimal rotation taking e_z to the first edge's direction, and
+// R_j = rot(t_{j−1} → t_j) R_{j−1} (parallel transport: no twist between edges).
+
+#include <string>
+#include <vector>
+
+#include "state.hpp"
+
+namespace liedyn {
+
+struct NodeForce {
+  int node = -1;
+  Vector3 force = Vector3::Zero();  // world, N
+};
+
+struct RodSpec {
+  std::string name;
+  std::vector<Vector3> nodes;          // initial (= rest) node positions, at least 2
+  double mass = 0.0;                   // total, kg, > 0
+  double radius = 0.0;                 // m, > 0 (edge rotational inertia)
+  double stretch_stiffness = 0.0;      // k_s, N: Ψ_s = ½ k_s l (1 − ‖e‖/l)² per edge
+  double shear_stiffness = 0.0;        // k_x, N: Ψ_x = ½ k_x l (1 − dᵀ R e_z) per edge
+  Vector3 bending_stiffness = Vector3::Zero();  // K_b = diag(bend, bend, twist), N·m²
+  std::vector<int> fixed_nodes;        // clamped positions
+  std::vector<int> fixed_edges;        // clamped rotations
+  std::vector<NodeForce> node_forces;  // constant world forces on nodes
+
+  int node_count() const { return static_cast<int>(nodes.size()); }
+  int edge_count() const { return node_count() - 1; }
+};
+
+// Everything derived from a RodSpec that the energy terms and the reports need.
+struct RodDiscretization {
+  std::vector<double> node_mass;           // lumped, kg
+  std::vector<double> rest_length;         // per edge, m
+  std::vector<Matrix3> edge_inertia;       // body-frame inertia tensor per edge
+  std::vector<Matrix3> frames;             // initial edge rotations (parallel transport)
+  std::vector<double> voronoi_length;      // per interior node i = 1…n−2: ½(l_{i−1} + l_i)
+  std::vector<Vector3> rest_darboux;       // per interior node, from the initial frames
+};
+
+// Minimal rotation taking unit vector a to unit vector b (a half turn about an axis
+// perpendicular to a when b = −a).
+Matrix3 minimal_rotation(const Vector3& a, const Vector3& b);
+
+// Lumped masses, rest lengths, edge inertias, parallel-transported frames and rest Darboux
+// vectors of a validated rod.
+RodDiscretization discretize(const RodSpec& rod);
+
+}  // namespace liedyn
