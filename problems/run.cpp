@@ -21,6 +21,26 @@ void write_trajectory_rows(std::ostream& out, const Simulator& sim) {
         << x.y() << ',' << x.z() << ',' << q.w() << ',' << q.x() << ',' << q.y() << ',' << q.z()
         << '\n';
   }
+  // Rods: one row per node (position only, orientation columns empty), then one row per
+  // edge (midpoint and edge frame).
+  const auto& rods = sim.model().rods;
+  for (std::size_t r = 0; r < rods.size(); ++r) {
+    const int rod = static_cast<int>(r);
+    for (int i = 0; i < rods[r].node_count(); ++i) {
+      const Vector3& x = sim.state().points[sim.model().rod_point(rod, i)];
+      out << sim.frame() << ',' << sim.time() << ',' << rods[r].name << ",node," << i << ','
+          << x.x() << ',' << x.y() << ',' << x.z() << ",,,,\n";
+    }
+    for (int j = 0; j < rods[r].edge_count(); ++j) {
+      const Vector3 x = 0.5 * (sim.state().points[sim.model().rod_point(rod, j)] +
+                               sim.state().points[sim.model().rod_point(rod, j + 1)]);
+      const Eigen::Quaterniond q =
+          so3::to_quaternion(sim.state().rotations[sim.model().rod_rotation(rod, j)]);
+      out << sim.frame() << ',' << sim.time() << ',' << rods[r].name << ",edge," << j << ','
+          << x.x() << ',' << x.y() << ',' << x.z() << ',' << q.w() << ',' << q.x() << ','
+          << q.y() << ',' << q.z() << '\n';
+    }
+  }
 }
 
 void write_frame_row(std::ostream& out, const Simulator& sim, const StepReport* report) {
@@ -104,7 +124,11 @@ std::string format_summary(const Scene& scene, const SimulationSummary& s) {
   std::ostringstream os;
   os << "scene        " << scene.source << "\n";
   if (!scene.description.empty()) os << "             " << scene.description << "\n";
-  os << "bodies       " << scene.model.bodies.size() << ", h = " << scene.model.time_step
+  int nodes = 0;
+  for (const RodSpec& rod : scene.model.rods) nodes += rod.node_count();
+  os << "bodies       " << scene.model.bodies.size() << ", rods " << scene.model.rods.size();
+  if (!scene.model.rods.empty()) os << " (" << nodes << " nodes)";
+  os << ", h = " << scene.model.time_step
      << " s, tolerance " << scene.solver.tolerance << ", max_iterations "
      << scene.solver.max_iterations << "\n";
   os << "frames       " << s.frames_completed << " of " << s.frames_requested << " in "

@@ -5,6 +5,7 @@
 #include <functional>
 #include <limits>
 #include <map>
+#include <numbers>
 #include <nlohmann/json.hpp>
 #include <set>
 #include <sstream>
@@ -63,22 +64,24 @@ class ObjectReader {
     return x;
   }
 
-  int integer(const std::string& key, int lo) {
-    const json& v = get(key);
+  int integer(const std::string& key, int lo, int hi = std::numeric_limits<int>::max()) {
+    return to_integer(get(key), field(key), lo, hi);
+  }
+
+  int to_integer(const json& v, const std::string& f, int lo,
+                 int hi = std::numeric_limits<int>::max()) const {
     if (!v.is_number_integer()) {
-      fail(field(key), "must be an integer (got " + (v.is_number() ? v.dump() : type_of(v)) + ")");
+      fail(f, "must be an integer (got " + (v.is_number() ? v.dump() : type_of(v)) + ")");
     }
     const std::string range = "must be an integer in [" + std::to_string(lo) + ", " +
-                              std::to_string(std::numeric_limits<int>::max()) + "] (got " +
-                              v.dump() + ")";
+                              std::to_string(hi) + "] (got " + v.dump() + ")";
     // Unsigned values above the range of long long would wrap in get<long long>().
     if (v.is_number_unsigned() &&
-        v.get<unsigned long long>() >
-            static_cast<unsigned long long>(std::numeric_limits<int>::max())) {
-      fail(field(key), range);
+        v.get<unsigned long long>() > static_cast<unsigned long long>(hi)) {
+      fail(f, range);
     }
     const auto x = v.get<long long>();
-    if (x < lo || x > std::numeric_limits<int>::max()) fail(field(key), range);
+    if (x < lo || x > hi) fail(f, range);
     return static_cast<int>(x);
   }
 
@@ -94,8 +97,10 @@ class ObjectReader {
   // Fixed-length array of finite numbers.
   template <int N>
   Eigen::Matrix<double, N, 1> vector(const std::string& key) {
-    const json& v = get(key);
-    const std::string f = field(key);
+    return to_vector<N>(get(key), field(key));
+  }
+  template <int N>
+  Eigen::Matrix<double, N, 1> to_vector(const json& v, const std::string& f) const {
     if (!v.is_array() || v.size() != N) {
       fail(f, "must be an array of " + std::to_string(N) + " numbers");
     }
@@ -157,19 +162,143 @@ std::string item_path(const std::string& array, std::size_t i) {
   return array + "[" + std::to_string(i) + "]";
 }
 
-// Body name → index, for springs, forces and torques.
+// Body name → index, for springs, forces and torques. `rods` holds the rod names (which
+// loads cannot refer to: rods take node_forces instead).
 int body_index(ObjectReader& r, const std::string& key, const std::map<std::string, int>& names,
-               bool allow_world) {
+               const std::set<std::string>& rods, bool allow_world) {
   const std::string name = allow_world ? r.string(key, "world") : r.string(key);
   if (allow_world && name == "world") return -1;
   const auto it = names.find(name);
   if (it == names.end()) {
+    if (rods.count(name)) {
+      r.fail(r.field(key), "names the rod \"" + name +
+                               "\"; springs, forces and torques act on bodies only (load a rod "
+                               "with its node_forces)");
+    }
     std::string known;
     for (const auto& [n, i] : names) known += (known.empty() ? "" : ", ") + n;
     r.fail(r.field(key), "names no body \"" + name + "\" (bodies: " + known +
                              (allow_world ? "; or \"world\")" : ")"));
   }
   return it->second;
+}
+
+// Names of bodies and rods share one namespace (trajectory.csv's `object` column). Checks a
+// new name at `field` and records it as belonging to `owner` (e.g. "bodies[0]").
+void claim_name(const ObjectReader& r, const std::string& name, const std::string& field,
+                const std::string& owner, std::map<std::string, std::string>& taken) {
+  if (name.empty() || name == "world") {
+    r.fail(field, "must be a non-empty name other than \"world\"");
+  }
+  const auto [it, inserted] = taken.emplace(name, owner);
+  if (!inserted) r.fail(field, "repeats the name \"" + name + "\" of " + it->second);
+}
+
+// Most edges a rod shape generator may produce (a typo such as 1e9 edges would otherwise
+// exhaust memory before any check).
+constexpr int kMaxGeneratedEdges = 1000000;
+
+// Node positions from a "shape" generator object at `path` (docs/scene-format.md#rods).
+std::vector<Vector3> rod_shape(const json& value, const std::string& path,
+                               const std::string& source) {
+  ObjectReader g(value, path, source);
+  const std::string type = g.string("type");
+  std::vector<Vector3> nodes;
+  double size = 0.0;  // of the shape: consecutive nodes closer than 1e-12 · size coincide
+  if (type == "line") {
+    const Vector3 start = g.vector<3>("start");
+    const Vector3 end = g.vector<3>("end");
+    const int edges = g.integer("edges", 1, kMaxGeneratedEdges);
+    size = (end - start).norm();
+    if (!(size > 0.0)) g.fail(g.field("end"), "must differ from \"start\"");
+    nodes.reserve(edges + 1);
+    for (int k = 0; k < edges; ++k) {
+      nodes.push_back(start + (static_cast<double>(k) / edges) * (end - start));
+    }
+    nodes.push_back(end);
+  } else if (type == "helix") {
+    const double radius = g.number("radius");
+    if (radius <= 0.0) g.fail(g.field("radius"), "must be positive");
+    const double pitch = g.number("pitch");
+    const double turns = g.number("turns");
+    if (turns <= 0.0) g.fail(g.field("turns"), "must be positive");
+    const int edges = g.integer("edges", 1, kMaxGeneratedEdges);
+    const Vector3 center = g.vector<3>("center", Vector3::Zero());
+    size = radius + std::abs(pitch) * turns;
+    nodes.reserve(edges + 1);
+    for (int k = 0; k <= edges; ++k) {
+      const double fraction = turns * k / edges;  // turns completed at node k: φ/(2π)
+      const double phi = 2.0 * std::numbers::pi * fraction;
+      nodes.push_back(center + Vector3(radius * std::cos(phi), radius * std::sin(phi),
+                                       pitch * fraction));
+    }
+  } else {
+    g.fail(g.field("type"),
+           "unknown shape type \"" + type + "\" (expected \"line\" or \"helix\")");
+  }
+  g.finish();
+  for (std::size_t k = 1; k < nodes.size(); ++k) {
+    if (!((nodes[k] - nodes[k - 1]).norm() > 1e-12 * size)) {
+      g.fail(path, "generates coincident nodes " + std::to_string(k - 1) + " and " +
+                       std::to_string(k) + " (zero-length edge)");
+    }
+  }
+  return nodes;
+}
+
+// Indices as written; their range is checked by Model::validate_rod (which names the item).
+std::vector<int> index_list(ObjectReader& r, const std::string& key) {
+  std::vector<int> out;
+  if (!r.has(key)) return out;
+  const json& items = r.array(key);
+  for (std::size_t i = 0; i < items.size(); ++i) {
+    out.push_back(r.to_integer(items[i], item_path(r.field(key), i),
+                               std::numeric_limits<int>::min()));
+  }
+  return out;
+}
+
+RodSpec parse_rod(const json& value, const std::string& path, const std::string& source,
+                  std::map<std::string, std::string>& taken) {
+  ObjectReader r(value, path, source);
+  RodSpec rod;
+  rod.name = r.string("name");
+  claim_name(r, rod.name, r.field("name"), path, taken);
+  const bool has_nodes = r.has("nodes");
+  const bool has_shape = r.has("shape");
+  if (has_nodes && has_shape) {
+    r.fail(path, "gives both \"nodes\" and \"shape\"; give exactly one of them");
+  }
+  if (has_nodes) {
+    const json& nodes = r.array("nodes");
+    for (std::size_t i = 0; i < nodes.size(); ++i) {
+      rod.nodes.push_back(r.to_vector<3>(nodes[i], item_path(r.field("nodes"), i)));
+    }
+  } else if (has_shape) {
+    rod.nodes = rod_shape(r.get("shape"), r.field("shape"), source);
+  } else {
+    r.fail(r.field("nodes"), "is required but missing (give \"nodes\" or a \"shape\")");
+  }
+  rod.mass = r.number("mass");
+  rod.radius = r.number("radius");
+  rod.stretch_stiffness = r.number("stretch_stiffness");
+  rod.shear_stiffness = r.number("shear_stiffness");
+  rod.bending_stiffness = r.vector<3>("bending_stiffness");
+  rod.fixed_nodes = index_list(r, "fixed_nodes");
+  rod.fixed_edges = index_list(r, "fixed_edges");
+  if (r.has("node_forces")) {
+    const json& forces = r.array("node_forces");
+    for (std::size_t i = 0; i < forces.size(); ++i) {
+      ObjectReader f(forces[i], item_path(r.field("node_forces"), i), source);
+      NodeForce force;
+      force.node = f.integer("node", std::numeric_limits<int>::min());
+      force.force = f.vector<3>("force");
+      f.finish();
+      rod.node_forces.push_back(force);
+    }
+  }
+  r.finish();
+  return rod;
 }
 
 Scene parse(const json& root, const std::string& source) {
@@ -206,19 +335,21 @@ Scene parse(const json& root, const std::string& source) {
     s.finish();
   }
 
-  std::map<std::string, int> names;
-  const json& bodies = top.array("bodies");
-  if (bodies.empty()) top.fail("bodies", "must list at least one body");
+  std::map<std::string, int> names;              // body name → index
+  std::map<std::string, std::string> taken;      // body and rod names → owner, e.g. "rods[0]"
+  const bool has_bodies = top.has("bodies");
+  const bool has_rods = top.has("rods");
+  if (!has_bodies && !has_rods) {
+    top.fail("bodies", "is required but missing (a scene needs \"bodies\", \"rods\" or both)");
+  }
+  const json no_items = json::array();
+  const json& bodies = has_bodies ? top.array("bodies") : no_items;
   for (std::size_t i = 0; i < bodies.size(); ++i) {
     ObjectReader b(bodies[i], item_path("bodies", i), source);
     RigidBody body;
     body.name = b.string("name");
-    if (body.name.empty() || body.name == "world") {
-      b.fail(b.field("name"), "must be a non-empty name other than \"world\"");
-    }
-    if (!names.emplace(body.name, static_cast<int>(i)).second) {
-      b.fail(b.field("name"), "repeats the name \"" + body.name + "\"");
-    }
+    claim_name(b, body.name, b.field("name"), item_path("bodies", i), taken);
+    names.emplace(body.name, static_cast<int>(i));
     body.mass = b.number("mass");
     body.inertia = b.inertia("inertia");
     body.position = b.vector<3>("position", Vector3::Zero());
@@ -239,14 +370,25 @@ Scene parse(const json& root, const std::string& source) {
     scene.model.bodies.push_back(body);
   }
 
+  std::set<std::string> rod_names;
+  const json& rods = has_rods ? top.array("rods") : no_items;
+  for (std::size_t i = 0; i < rods.size(); ++i) {
+    scene.model.rods.push_back(parse_rod(rods[i], item_path("rods", i), source, taken));
+    rod_names.insert(scene.model.rods.back().name);
+  }
+  if (bodies.empty() && rods.empty()) {
+    top.fail(has_bodies ? "bodies" : "rods",
+             "the scene must contain at least one body or rod");
+  }
+
   if (top.has("springs")) {
     const json& springs = top.array("springs");
     for (std::size_t i = 0; i < springs.size(); ++i) {
       ObjectReader s(springs[i], item_path("springs", i), source);
       SpringSpec spec;
-      spec.a.body = body_index(s, "body_a", names, true);
+      spec.a.body = body_index(s, "body_a", names, rod_names, true);
       spec.a.point = s.vector<3>("point_a", Vector3::Zero());
-      spec.b.body = body_index(s, "body_b", names, true);
+      spec.b.body = body_index(s, "body_b", names, rod_names, true);
       spec.b.point = s.vector<3>("point_b", Vector3::Zero());
       spec.stiffness = s.number("stiffness");
       if (s.has("rest_length")) {
@@ -269,7 +411,7 @@ Scene parse(const json& root, const std::string& source) {
     for (std::size_t i = 0; i < forces.size(); ++i) {
       ObjectReader f(forces[i], item_path("forces", i), source);
       ForceSpec spec;
-      spec.at.body = body_index(f, "body", names, false);
+      spec.at.body = body_index(f, "body", names, rod_names, false);
       spec.at.point = f.vector<3>("point", Vector3::Zero());
       spec.force = f.vector<3>("force");
       f.finish();
@@ -281,7 +423,7 @@ Scene parse(const json& root, const std::string& source) {
     for (std::size_t i = 0; i < torques.size(); ++i) {
       ObjectReader t(torques[i], item_path("torques", i), source);
       TorqueSpec spec;
-      spec.body = body_index(t, "body", names, false);
+      spec.body = body_index(t, "body", names, rod_names, false);
       spec.torque = t.vector<3>("torque");
       t.finish();
       scene.model.torques.push_back(spec);

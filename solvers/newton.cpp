@@ -1,6 +1,7 @@
 #include "newton.hpp"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <limits>
 
@@ -35,6 +36,9 @@ void StepReport::merge(const StepReport& other) {
   iterations = std::max(iterations, other.iterations);
   regularized_iterations = std::max(regularized_iterations, other.regularized_iterations);
   factorizations += other.factorizations;
+  assemblies += other.assemblies;
+  assembly_seconds += other.assembly_seconds;
+  solve_seconds += other.solve_seconds;
   gradient_norm = std::hypot(gradient_norm, other.gradient_norm);
   step_norm = std::max(step_norm, other.step_norm);
 }
@@ -118,8 +122,12 @@ StepReport Newton<System>::solve(State& q) {
   };
 
   for (;;) {
+    using Clock = std::chrono::steady_clock;
+    const auto t0 = options_.measure_time ? Clock::now() : Clock::time_point{};
     double roundoff = 0.0;
     const double psi = system_.assemble(component_.potential, q, &roundoff);
+    ++report.assemblies;
+    const auto t1 = options_.measure_time ? Clock::now() : Clock::time_point{};
     const Vector& g = system_.gradient();
     report.gradient_norm = g.norm();
     // A NaN or Inf entry makes the sum non-finite (so does an overflow to ±Inf, which is
@@ -130,6 +138,11 @@ StepReport Newton<System>::solve(State& q) {
     bool regularized = false;
     if (!factorize(report, regularized)) return fail(StepStatus::kNonFinite);
     system_.solve(delta_);
+    if (options_.measure_time) {
+      const auto t2 = Clock::now();
+      report.assembly_seconds += std::chrono::duration<double>(t1 - t0).count();
+      report.solve_seconds += std::chrono::duration<double>(t2 - t1).count();
+    }
     if (!std::isfinite(delta_.sum())) return fail(StepStatus::kNonFinite);
     report.step_norm = delta_.template lpNorm<Eigen::Infinity>();
     if (!regularized && report.step_norm <= options_.tolerance) {

@@ -6,6 +6,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
@@ -259,6 +260,136 @@ TEST_F(Cli, OtherBadInputExits2) {
   EXPECT_FALSE(fs::exists(dir_ / "out"));
   // --help is not an error.
   EXPECT_EQ(run({"simulate", "--help"}).exit_code, 0);
+}
+
+std::string cantilever() {
+  return read_file(fs::path(LIEDYN_SOURCE_DIR) / "problems/scenes/cantilever.json");
+}
+
+// Rows of one frame of a rod, by kind ("node" / "edge") and index.
+struct RodFrame {
+  std::vector<std::vector<double>> node, edge;  // columns x, y, z (and qw, qx, qy, qz)
+};
+
+TEST_F(Cli, RodWritesNodeAndEdgeRows) {
+  // The bundled cantilever, shortened: 4 edges (5 nodes), 10 frames.
+  std::string scene = replace_once(cantilever(), "\"frames\": 300", "\"frames\": 10");
+  scene = replace_once(scene, "\"edges\": 20", "\"edges\": 4");
+  scene = replace_once(scene, "\"node\": 20", "\"node\": 4");
+  const Result r = simulate(scene, "out");
+  ASSERT_EQ(r.exit_code, 0) << r.out << r.err;
+  EXPECT_NE(r.out.find("rods 1 (5 nodes)"), std::string::npos) << r.out;
+
+  const Csv trajectory = read_csv(dir_ / "out/trajectory.csv");
+  EXPECT_EQ(trajectory.header, kTrajectoryHeader);
+  constexpr int kNodes = 5, kEdges = 4, kFrames = 10;
+  ASSERT_EQ(trajectory.rows.size(), static_cast<std::size_t>((kFrames + 1) * (kNodes + kEdges)));
+  std::vector<RodFrame> frames(kFrames + 1);
+  for (std::size_t n = 0; n < trajectory.rows.size(); ++n) {
+    const auto& row = trajectory.rows[n];
+    ASSERT_EQ(row.size(), 12u) << "row " << n;
+    // Within a frame: nodes 0…4, then edges 0…3.
+    const int frame = static_cast<int>(n) / (kNodes + kEdges);
+    const int slot = static_cast<int>(n) % (kNodes + kEdges);
+    const bool is_node = slot < kNodes;
+    EXPECT_EQ(std::stoi(row[0]), frame) << "row " << n;
+    EXPECT_NEAR(std::stod(row[1]), 0.01 * frame, 1e-12) << "row " << n;
+    EXPECT_EQ(row[2], "beam") << "row " << n;
+    EXPECT_EQ(row[3], is_node ? "node" : "edge") << "row " << n;
+    EXPECT_EQ(std::stoi(row[4]), is_node ? slot : slot - kNodes) << "row " << n;
+    if (is_node) {
+      for (int c = 8; c < 12; ++c) EXPECT_EQ(row[c], "") << "row " << n << " column " << c;
+      frames[frame].node.push_back({std::stod(row[5]), std::stod(row[6]), std::stod(row[7])});
+    } else {
+      std::vector<double> values;
+      for (int c = 5; c < 12; ++c) values.push_back(std::stod(row[c]));
+      const double norm2 = values[3] * values[3] + values[4] * values[4] +
+                           values[5] * values[5] + values[6] * values[6];
+      EXPECT_NEAR(norm2, 1.0, 1e-12) << "row " << n;
+      EXPECT_GE(values[3], 0.0) << "row " << n;
+      frames[frame].edge.push_back(values);
+    }
+  }
+  for (int k = 0; k <= kFrames; ++k) {
+    const RodFrame& f = frames[k];
+    ASSERT_EQ(f.node.size(), static_cast<std::size_t>(kNodes));
+    ASSERT_EQ(f.edge.size(), static_cast<std::size_t>(kEdges));
+    // Edge rows sit at the midpoints of their nodes.
+    for (int j = 0; j < kEdges; ++j) {
+      for (int c = 0; c < 3; ++c) {
+        EXPECT_NEAR(f.edge[j][c], 0.5 * (f.node[j][c] + f.node[j + 1][c]), 1e-15)
+            << "frame " << k << " edge " << j;
+      }
+    }
+    // Node 0 and edge 0 are clamped: the edge frame takes e_z to the x axis (90° about y).
+    for (int c = 0; c < 3; ++c) EXPECT_EQ(f.node[0][c], 0.0) << "frame " << k;
+    EXPECT_NEAR(f.edge[0][3], std::sqrt(0.5), 1e-15) << "frame " << k;
+    EXPECT_NEAR(f.edge[0][5], std::sqrt(0.5), 1e-15) << "frame " << k;
+  }
+  // Frame 0 is the rest shape along x; the tip load then bends the rod down (−z), in plane.
+  for (int i = 0; i < kNodes; ++i) {
+    EXPECT_NEAR(frames[0].node[i][0], 0.25 * i, 1e-15);
+    EXPECT_EQ(frames[0].node[i][2], 0.0);
+  }
+  EXPECT_LT(frames[kFrames].node[4][2], -1e-4);
+  EXPECT_LT(frames[kFrames].node[4][2], frames[kFrames].node[2][2]);
+  EXPECT_NEAR(frames[kFrames].node[4][1], 0.0, 1e-12);
+
+  const Csv frames_csv = read_csv(dir_ / "out/frames.csv");
+  ASSERT_EQ(frames_csv.rows.size(), static_cast<std::size_t>(kFrames + 1));
+  const std::size_t converged = frames_csv.column("converged");
+  for (const auto& row : frames_csv.rows) EXPECT_EQ(row[converged], "1");
+}
+
+TEST_F(Cli, CantileverExampleConvergesAndSwingsAboutTheStaticDeflection) {
+  const Result r = simulate(cantilever(), "out");
+  ASSERT_EQ(r.exit_code, 0) << r.out << r.err;
+  EXPECT_NE(r.out.find("300 of 300"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("unconverged  0 steps"), std::string::npos) << r.out;
+
+  const Csv frames = read_csv(dir_ / "out/frames.csv");
+  ASSERT_EQ(frames.rows.size(), 301u);
+  const std::size_t converged = frames.column("converged");
+  for (std::size_t k = 0; k < frames.rows.size(); ++k) {
+    EXPECT_EQ(frames.rows[k][converged], "1") << "row " << k;
+  }
+  const Csv trajectory = read_csv(dir_ / "out/trajectory.csv");
+  ASSERT_EQ(trajectory.rows.size(), 301u * (21 + 20));
+  // Tip (node 20) released from rest under a step load P: it overshoots to about twice the
+  // static deflection P L³/(3 EI) = 0.01/(3·0.08) m, less what backward Euler dissipates.
+  double lowest = 0.0;
+  for (const auto& row : trajectory.rows) {
+    if (row[3] == "node" && row[4] == "20") lowest = std::min(lowest, std::stod(row[7]));
+  }
+  const double static_deflection = 0.01 / (3 * 0.08);
+  EXPECT_GT(-lowest, 1.4 * static_deflection);
+  EXPECT_LT(-lowest, 2.05 * static_deflection);
+}
+
+TEST_F(Cli, BadRodExits2) {
+  const Result r = simulate(replace_once(cantilever(), "\"fixed_nodes\": [0]",
+                                         "\"fixed_nodes\": [21]"),
+                            "out");
+  EXPECT_EQ(r.exit_code, 2) << r.out << r.err;
+  EXPECT_NE(r.err.find("scene.json: rods[0].fixed_nodes[0]: "), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(dir_ / "out"));
+}
+
+TEST_F(Cli, BenchReportsIterationCostsWithoutWritingFiles) {
+  write_file(dir_ / "scene.json", cantilever());
+  const Result r = run({"bench", "scene.json", "--repeat", "2", "--json"});
+  EXPECT_EQ(r.exit_code, 0) << r.out << r.err;
+  // One JSON object with the documented keys; the rod of 20 edges clamped at node 0 and
+  // edge 0 has 20 free nodes and 19 free edges: 117 DOFs.
+  for (const char* key : {"\"dofs\": 117", "\"frames\": 300", "\"repeats\": 2",
+                          "\"assembly_us\": ", "\"solve_us\": ", "\"total_seconds\": ",
+                          "\"iterations_per_frame\": ", "\"failed\": false"}) {
+    EXPECT_NE(r.out.find(key), std::string::npos) << key << " missing from " << r.out;
+  }
+  EXPECT_EQ(listing(dir_), std::set<std::string>{"scene.json"});  // no outputs written
+  const Result bad = run({"bench", "missing.json"});
+  EXPECT_EQ(bad.exit_code, 2) << bad.err;
+  EXPECT_NE(bad.err.find("missing.json"), std::string::npos) << bad.err;
 }
 
 // One Newton update per step against a tolerance one update cannot meet: with h = 0.1 s the

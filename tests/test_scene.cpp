@@ -12,6 +12,7 @@
 #include <fstream>
 #include <numbers>
 #include <string>
+#include <vector>
 
 #include "problems/scene.hpp"
 
@@ -495,6 +496,305 @@ TEST(SceneErrors, InvalidJson) {
   // A syntax error says where.
   const SceneError e = rejected(scene(kBody + ","));
   EXPECT_NE(e.reason().find("line 1"), std::string::npos) << e.reason();
+}
+
+// --- Rods ---------------------------------------------------------------------------------
+
+// Members of a valid three-node rod along z (explicit nodes).
+const std::string kRod =
+    R"("name": "r", "nodes": [[0, 0, 0], [0, 0, 0.5], [0, 0, 1]], "mass": 0.3,)"
+    R"( "radius": 0.01, "stretch_stiffness": 2000, "shear_stiffness": 1000,)"
+    R"( "bending_stiffness": [1, 2, 3])";
+// The same rod's members other than its nodes (to combine with a "shape").
+const std::string kRodMaterial =
+    R"("name": "r", "mass": 0.3, "radius": 0.01, "stretch_stiffness": 2000,)"
+    R"( "shear_stiffness": 1000, "bending_stiffness": [1, 2, 3])";
+
+// A scene with one rod (members `rod`), no bodies, and extra top-level members `extra`
+// (ending with ", " when not empty).
+std::string rod_scene(const std::string& rod = kRod, const std::string& extra = "") {
+  return R"({"time_step": 0.01, "frames": 5, )" + extra + R"("rods": [{)" + rod + "}]}";
+}
+
+TEST(SceneRods, RodWithoutBodiesGetsDefaults) {
+  const Scene s = parse_scene(rod_scene(), kSource);
+  EXPECT_TRUE(s.model.bodies.empty());
+  ASSERT_EQ(s.model.rods.size(), 1u);
+  const RodSpec& r = s.model.rods[0];
+  EXPECT_EQ(r.name, "r");
+  ASSERT_EQ(r.nodes.size(), 3u);
+  EXPECT_TRUE(r.nodes[0].isZero(0.0));
+  EXPECT_TRUE(r.nodes[1].isApprox(Vector3(0, 0, 0.5), 0.0));
+  EXPECT_TRUE(r.nodes[2].isApprox(Vector3(0, 0, 1), 0.0));
+  EXPECT_DOUBLE_EQ(r.mass, 0.3);
+  EXPECT_DOUBLE_EQ(r.radius, 0.01);
+  EXPECT_DOUBLE_EQ(r.stretch_stiffness, 2000.0);
+  EXPECT_DOUBLE_EQ(r.shear_stiffness, 1000.0);
+  EXPECT_TRUE(r.bending_stiffness.isApprox(Vector3(1, 2, 3), 0.0));
+  EXPECT_TRUE(r.fixed_nodes.empty());
+  EXPECT_TRUE(r.fixed_edges.empty());
+  EXPECT_TRUE(r.node_forces.empty());
+}
+
+TEST(SceneRods, BodiesAndRodsTogether) {
+  const std::string text = R"({"time_step": 0.01, "frames": 2,
+    "bodies": [{)" + kBody + R"(}],
+    "rods": [{)" + kRod + R"(, "fixed_nodes": [2, 0], "fixed_edges": [1],
+               "node_forces": [{"node": 1, "force": [0.5, 0, -1]},
+                               {"node": 2, "force": [0, 2, 0]}]},
+             {"name": "s", "nodes": [[1, 0, 0], [2, 0, 0]], "mass": 1, "radius": 0.1,
+              "stretch_stiffness": 1, "shear_stiffness": 0, "bending_stiffness": [0, 0, 0]}]})";
+  const Scene s = parse_scene(text, kSource);
+  ASSERT_EQ(s.model.bodies.size(), 1u);
+  ASSERT_EQ(s.model.rods.size(), 2u);
+  const RodSpec& r = s.model.rods[0];
+  EXPECT_EQ(r.fixed_nodes, (std::vector<int>{2, 0}));
+  EXPECT_EQ(r.fixed_edges, (std::vector<int>{1}));
+  ASSERT_EQ(r.node_forces.size(), 2u);
+  EXPECT_EQ(r.node_forces[0].node, 1);
+  EXPECT_TRUE(r.node_forces[0].force.isApprox(Vector3(0.5, 0, -1), 0.0));
+  EXPECT_EQ(r.node_forces[1].node, 2);
+  EXPECT_TRUE(r.node_forces[1].force.isApprox(Vector3(0, 2, 0), 0.0));
+  EXPECT_EQ(s.model.rods[1].name, "s");
+  EXPECT_EQ(s.model.rods[1].node_count(), 2);
+  // State layout: the body first, then rod r's three nodes, then rod s's.
+  EXPECT_EQ(s.model.rod_point(0, 0), 1);
+  EXPECT_EQ(s.model.rod_point(1, 0), 4);
+  EXPECT_EQ(s.model.rod_rotation(1, 0), 3);
+}
+
+TEST(SceneRods, LineGenerator) {
+  const Scene s = parse_scene(
+      rod_scene(kRodMaterial + R"(, "shape": {"type": "line", "start": [1, 2, 3],)"
+                               R"( "end": [1, 0, 5], "edges": 4})"),
+      kSource);
+  ASSERT_EQ(s.model.rods.size(), 1u);
+  const std::vector<Vector3>& nodes = s.model.rods[0].nodes;
+  ASSERT_EQ(nodes.size(), 5u);
+  for (int k = 0; k <= 4; ++k) {
+    EXPECT_TRUE(nodes[k].isApprox(Vector3(1, 2 - 0.5 * k, 3 + 0.5 * k), 1e-15))
+        << k << ": " << nodes[k].transpose();
+  }
+  EXPECT_EQ(nodes.front(), Vector3(1, 2, 3));  // the ends exactly
+  EXPECT_EQ(nodes.back(), Vector3(1, 0, 5));
+}
+
+TEST(SceneRods, HelixGenerator) {
+  const double r = 0.1, p = 0.02, turns = 2.5;
+  const int n = 40;
+  const Vector3 center(1, -1, 0.5);
+  const Scene s = parse_scene(
+      rod_scene(kRodMaterial + R"(, "shape": {"type": "helix", "radius": 0.1, "pitch": 0.02,)"
+                               R"( "turns": 2.5, "edges": 40, "center": [1, -1, 0.5]})"),
+      kSource);
+  const std::vector<Vector3>& nodes = s.model.rods[0].nodes;
+  ASSERT_EQ(nodes.size(), static_cast<std::size_t>(n + 1));
+  for (int k = 0; k <= n; ++k) {
+    const double phi = 2 * std::numbers::pi * turns * k / n;
+    const Vector3 expected =
+        center + Vector3(r * std::cos(phi), r * std::sin(phi), p * phi / (2 * std::numbers::pi));
+    EXPECT_LT((nodes[k] - expected).norm(), 1e-15) << k << ": " << nodes[k].transpose();
+  }
+  // 2.5 turns end half way round, 2.5 pitches up.
+  EXPECT_LT((nodes.back() - Vector3(0.9, -1, 0.55)).norm(), 1e-14) << nodes.back().transpose();
+
+  // The centre defaults to the origin; a quarter turn in two edges.
+  const Scene q = parse_scene(
+      rod_scene(kRodMaterial + R"(, "shape": {"type": "helix", "radius": 2, "pitch": 4,)"
+                               R"( "turns": 0.25, "edges": 2})"),
+      kSource);
+  const std::vector<Vector3>& m = q.model.rods[0].nodes;
+  ASSERT_EQ(m.size(), 3u);
+  EXPECT_LT((m[0] - Vector3(2, 0, 0)).norm(), 1e-15);
+  EXPECT_LT((m[1] - Vector3(std::sqrt(2.0), std::sqrt(2.0), 0.5)).norm(), 1e-15);
+  EXPECT_LT((m[2] - Vector3(0, 2, 1)).norm(), 1e-15);
+}
+
+TEST(SceneRods, LoadsTheCantileverExample) {
+  const Scene s =
+      load_scene(std::filesystem::path(LIEDYN_SOURCE_DIR) / "problems/scenes/cantilever.json");
+  EXPECT_TRUE(s.model.bodies.empty());
+  ASSERT_EQ(s.model.rods.size(), 1u);
+  const RodSpec& r = s.model.rods[0];
+  ASSERT_EQ(r.node_count(), 21);
+  EXPECT_TRUE(r.nodes.back().isApprox(Vector3(1, 0, 0), 0.0));
+  EXPECT_EQ(r.fixed_nodes, std::vector<int>{0});
+  EXPECT_EQ(r.fixed_edges, std::vector<int>{0});
+  ASSERT_EQ(r.node_forces.size(), 1u);
+  EXPECT_EQ(r.node_forces[0].node, 20);
+  EXPECT_TRUE(s.model.gravity.isZero(0.0));
+  EXPECT_DOUBLE_EQ(s.model.time_step, 0.01);
+  EXPECT_EQ(s.frames, 300);
+}
+
+TEST(SceneRodErrors, MissingAndMistypedFields) {
+  expect_rejected(rod_scene(R"("name": "r", "nodes": [[0, 0, 0], [0, 0, 1]], "radius": 0.01,)"
+                            R"( "stretch_stiffness": 1, "shear_stiffness": 1,)"
+                            R"( "bending_stiffness": [1, 1, 1])"),
+                  "rods[0].mass", "missing");
+  expect_rejected(rod_scene(R"("nodes": [[0, 0, 0], [0, 0, 1]], "mass": 1, "radius": 0.01,)"
+                            R"( "stretch_stiffness": 1, "shear_stiffness": 1,)"
+                            R"( "bending_stiffness": [1, 1, 1])"),
+                  "rods[0].name", "missing");
+  expect_rejected(rod_scene(kRodMaterial), "rods[0].nodes", "missing");
+  expect_rejected(rod_scene(kRodMaterial + R"(, "nodes": [[0, 0, 0], [0, 1]])"),
+                  "rods[0].nodes[1]", "3 numbers");
+  expect_rejected(rod_scene(kRodMaterial + R"(, "nodes": [[0, 0, 0], [0, 1, "x"]])"),
+                  "rods[0].nodes[1][2]", "number");
+  expect_rejected(rod_scene(kRodMaterial + R"(, "nodes": {"a": 1})"), "rods[0].nodes", "array");
+  expect_rejected(rod_scene(kRod + R"(, "fixed_nodes": [0.5])"), "rods[0].fixed_nodes[0]",
+                  "integer");
+  expect_rejected(rod_scene(kRod + R"(, "fixed_edges": 0)"), "rods[0].fixed_edges", "array");
+  expect_rejected(rod_scene(kRod + R"(, "node_forces": [{"node": 1}])"),
+                  "rods[0].node_forces[0].force", "missing");
+  expect_rejected(rod_scene(kRod + R"(, "node_forces": [{"force": [0, 0, 1]}])"),
+                  "rods[0].node_forces[0].node", "missing");
+  expect_rejected(
+      R"({"time_step": 0.01, "frames": 5, "rods": [{)" + kRod + R"(, "bending_stiffness": 1}]})",
+      "rods[0].bending_stiffness", "twice");
+  expect_rejected(rod_scene(R"("name": "r", "nodes": [[0, 0, 0], [0, 0, 1]], "mass": 1,)"
+                            R"( "radius": 0.01, "stretch_stiffness": 1, "shear_stiffness": 1,)"
+                            R"( "bending_stiffness": [1, 1])"),
+                  "rods[0].bending_stiffness", "3 numbers");
+}
+
+TEST(SceneRodErrors, NodesAndShapeAreExclusive) {
+  // Both: the rod itself is named (neither member alone is wrong).
+  expect_rejected(rod_scene(kRod + R"(, "shape": {"type": "line", "start": [0, 0, 0],)"
+                                   R"( "end": [1, 0, 0], "edges": 2})"),
+                  "rods[0]", "both");
+}
+
+TEST(SceneRodErrors, PhysicalChecksNameTheRodField) {
+  expect_rejected(rod_scene(kRod + R"(, "fixed_nodes": [3])"), "rods[0].fixed_nodes[0]",
+                  "node 3");
+  expect_rejected(rod_scene(kRod + R"(, "fixed_nodes": [0, -1])"), "rods[0].fixed_nodes[1]",
+                  "node -1");
+  expect_rejected(rod_scene(kRod + R"(, "fixed_nodes": [1, 1])"), "rods[0].fixed_nodes[1]",
+                  "repeats");
+  expect_rejected(rod_scene(kRod + R"(, "fixed_edges": [2])"), "rods[0].fixed_edges[0]",
+                  "edge 2");
+  expect_rejected(rod_scene(kRod + R"(, "node_forces": [{"node": 3, "force": [0, 0, 1]}])"),
+                  "rods[0].node_forces[0].node", "node 3");
+  expect_rejected(rod_scene(R"("name": "r", "nodes": [[0, 0, 0], [0, 0, 1]], "mass": -1,)"
+                            R"( "radius": 0.01, "stretch_stiffness": 1, "shear_stiffness": 1,)"
+                            R"( "bending_stiffness": [1, 1, 1])"),
+                  "rods[0].mass", "positive");
+  expect_rejected(rod_scene(R"("name": "r", "nodes": [[0, 0, 0], [0, 0, 1]], "mass": 1,)"
+                            R"( "radius": 0, "stretch_stiffness": 1, "shear_stiffness": 1,)"
+                            R"( "bending_stiffness": [1, 1, 1])"),
+                  "rods[0].radius", "positive");
+  expect_rejected(rod_scene(R"("name": "r", "nodes": [[0, 0, 0], [0, 0, 1]], "mass": 1,)"
+                            R"( "radius": 0.1, "stretch_stiffness": 1, "shear_stiffness": -1,)"
+                            R"( "bending_stiffness": [1, 1, 1])"),
+                  "rods[0].shear_stiffness", "≥ 0");
+  expect_rejected(rod_scene(R"("name": "r", "nodes": [[0, 0, 0], [0, 0, 1]], "mass": 1,)"
+                            R"( "radius": 0.1, "stretch_stiffness": 1, "shear_stiffness": 1,)"
+                            R"( "bending_stiffness": [1, 1, -1])"),
+                  "rods[0].bending_stiffness[2]", "≥ 0");
+  expect_rejected(rod_scene(kRodMaterial + R"(, "nodes": [[0, 0, 0]])"), "rods[0].nodes",
+                  "at least 2");
+  expect_rejected(rod_scene(kRodMaterial + R"(, "nodes": [[0, 0, 0], [0, 0, 1], [0, 0, 1]])"),
+                  "rods[0].nodes[2]", "coincides");
+  // The second rod is named by its own index.
+  expect_rejected(
+      R"({"time_step": 0.01, "frames": 1, "rods": [{)" + kRod + R"(}, {"name": "t",)" +
+          R"( "nodes": [[0, 0, 0], [1, 0, 0]], "mass": 1, "radius": 0.1, "stretch_stiffness": 1,)"
+          R"( "shear_stiffness": 1, "bending_stiffness": [1, 1, 1], "fixed_edges": [1]}]})",
+      "rods[1].fixed_edges[0]", "edge 1");
+}
+
+TEST(SceneRodErrors, NamesAreSharedWithBodies) {
+  // A rod named like a body.
+  expect_rejected(R"({"time_step": 0.01, "frames": 1, "bodies": [{)" + kBody +
+                      R"(}], "rods": [{"name": "a", "nodes": [[0, 0, 0], [1, 0, 0]], "mass": 1,)"
+                      R"( "radius": 0.1, "stretch_stiffness": 1, "shear_stiffness": 1,)"
+                      R"( "bending_stiffness": [1, 1, 1]}]})",
+                  "rods[0].name", "repeats the name \"a\" of bodies[0]");
+  // Two rods with one name.
+  expect_rejected(R"({"time_step": 0.01, "frames": 1, "rods": [{)" + kRod + "}, {" + kRod + "}]}",
+                  "rods[1].name", "of rods[0]");
+  expect_rejected(rod_scene(R"("name": "world", "nodes": [[0, 0, 0], [1, 0, 0]], "mass": 1,)"
+                            R"( "radius": 0.1, "stretch_stiffness": 1, "shear_stiffness": 1,)"
+                            R"( "bending_stiffness": [1, 1, 1])"),
+                  "rods[0].name", "world");
+  // Springs, forces and torques act on bodies only, and say so when given a rod.
+  expect_rejected(R"({"time_step": 0.01, "frames": 1, "bodies": [{)" + kBody +
+                      R"(}], "rods": [{)" + kRod +
+                      R"(}], "springs": [{"body_a": "a", "body_b": "r", "stiffness": 1}]})",
+                  "springs[0].body_b", "names the rod \"r\"");
+  expect_rejected(rod_scene(kRod, R"("forces": [{"body": "r", "force": [0, 0, 1]}], )"),
+                  "forces[0].body", "node_forces");
+}
+
+TEST(SceneRodErrors, UnknownKeys) {
+  expect_rejected(rod_scene(kRod + R"(, "colour": "red")"), "rods[0].colour", "unknown key");
+  expect_rejected(rod_scene(kRod + R"(, "node_forces": [{"node": 1, "force": [0, 0, 1],)"
+                                   R"( "point": [0, 0, 0]}])"),
+                  "rods[0].node_forces[0].point", "unknown key");
+  expect_rejected(rod_scene(kRodMaterial + R"(, "shape": {"type": "helix", "radius": 1,)"
+                                           R"( "pitch": 1, "turns": 1, "edges": 8,)"
+                                           R"( "axis": [0, 0, 1]})"),
+                  "rods[0].shape.axis", "unknown key");
+  // A helix member in a line shape is unknown there.
+  expect_rejected(rod_scene(kRodMaterial + R"(, "shape": {"type": "line", "start": [0, 0, 0],)"
+                                           R"( "end": [1, 0, 0], "edges": 2, "turns": 3})"),
+                  "rods[0].shape.turns", "unknown key");
+}
+
+TEST(SceneRodErrors, BadShapes) {
+  const auto with_shape = [](const std::string& shape) {
+    return rod_scene(kRodMaterial + R"(, "shape": )" + shape);
+  };
+  expect_rejected(with_shape(R"({"type": "spiral"})"), "rods[0].shape.type", "unknown shape");
+  expect_rejected(with_shape(R"({"start": [0, 0, 0]})"), "rods[0].shape.type", "missing");
+  expect_rejected(with_shape("[1, 2]"), "rods[0].shape", "object");
+  expect_rejected(with_shape(R"({"type": "line", "start": [0, 0, 0], "edges": 2})"),
+                  "rods[0].shape.end", "missing");
+  expect_rejected(with_shape(R"({"type": "line", "start": [0, 0, 0], "end": [1, 0, 0]})"),
+                  "rods[0].shape.edges", "missing");
+  expect_rejected(
+      with_shape(R"({"type": "line", "start": [0, 0, 0], "end": [1, 0, 0], "edges": 0})"),
+      "rods[0].shape.edges", "integer in [1, 1000000]");
+  expect_rejected(
+      with_shape(R"({"type": "line", "start": [0, 0, 0], "end": [1, 0, 0], "edges": 2.5})"),
+      "rods[0].shape.edges", "integer");
+  expect_rejected(
+      with_shape(R"({"type": "line", "start": [0, 0, 0], "end": [1, 0, 0], "edges": 1000001})"),
+      "rods[0].shape.edges", "1000000");
+  expect_rejected(
+      with_shape(R"({"type": "line", "start": [1, 1, 1], "end": [1, 1, 1], "edges": 2})"),
+      "rods[0].shape.end", "differ");
+  expect_rejected(
+      with_shape(R"({"type": "helix", "radius": 0, "pitch": 1, "turns": 1, "edges": 8})"),
+      "rods[0].shape.radius", "positive");
+  expect_rejected(
+      with_shape(R"({"type": "helix", "radius": 1, "pitch": 1, "turns": -1, "edges": 8})"),
+      "rods[0].shape.turns", "positive");
+  expect_rejected(with_shape(R"({"type": "helix", "radius": 1, "turns": 1, "edges": 8})"),
+                  "rods[0].shape.pitch", "missing");
+  // A flat helix with a whole turn per edge puts every node on the same point.
+  expect_rejected(
+      with_shape(R"({"type": "helix", "radius": 1, "pitch": 0, "turns": 2, "edges": 2})"),
+      "rods[0].shape", "coincident");
+  // A flat helix otherwise is a circle (allowed), and a negative pitch winds downwards.
+  EXPECT_NO_THROW(parse_scene(
+      with_shape(R"({"type": "helix", "radius": 1, "pitch": 0, "turns": 0.5, "edges": 8})"),
+      kSource));
+  const Scene down = parse_scene(
+      with_shape(R"({"type": "helix", "radius": 1, "pitch": -2, "turns": 1, "edges": 4})"),
+      kSource);
+  EXPECT_NEAR(down.model.rods[0].nodes.back().z(), -2.0, 1e-15);
+}
+
+TEST(SceneRodErrors, SceneNeedsABodyOrARod) {
+  expect_rejected(R"({"time_step": 0.01, "frames": 1, "rods": []})", "rods", "at least one");
+  expect_rejected(R"({"time_step": 0.01, "frames": 1, "bodies": [], "rods": []})", "bodies",
+                  "at least one body or rod");
+  expect_rejected(R"({"time_step": 0.01, "frames": 1, "rods": {}})", "rods", "array");
+  // Empty bodies are fine next to a rod.
+  EXPECT_NO_THROW(parse_scene(
+      R"({"time_step": 0.01, "frames": 1, "bodies": [], "rods": [{)" + kRod + "}]}", kSource));
 }
 
 class SceneFile : public ::testing::Test {

@@ -1,0 +1,36 @@
+#pragma once
+// `liedyn bench`: runs a scene (no output files) several times and reports the cost of its
+// Newton iterations, split into assembly and linear solve, as paper Table 1 does.
+
+#include <string>
+
+#include "scene.hpp"
+
+namespace liedyn {
+
+struct BenchResult {
+  std::string scene;
+  int dofs = 0;                        // free DOFs over all components
+  int frames = 0;
+  double time_step = 0.0;
+  int repeats = 0;
+  // Medians over the repeats:
+  double total_seconds = 0.0;          // whole simulation
+  double assembly_us = 0.0;            // per assembly of g and H (one per Newton iteration,
+  double solve_us = 0.0;               //   plus the final convergence check of each step);
+                                       //   factorisation + triangular solves per assembly
+  double iterations_per_frame = 0.0;   // Newton updates
+  double assemblies_per_frame = 0.0;
+  int max_iterations_in_frame = 0;
+  int unconverged_steps = 0;           // in the last repeat
+  bool failed = false;                 // a step failed; figures cover the frames before it
+  std::string failure;
+};
+
+// Runs the scene `repeats` times (≥ 1), with timing on.
+BenchResult bench_scene(const Scene& scene, int repeats);
+
+std::string format_bench(const BenchResult& result);
+std::string bench_json(const BenchResult& result);
+
+}  // namespace liedyn
