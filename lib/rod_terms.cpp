@@ -1,6 +1,7 @@
 #include "rod_terms.hpp"
 
 #include "so3.hpp"
+#include "spring.hpp"
 
 namespace liedyn {
 
@@ -10,26 +11,14 @@ Vector3 darboux_vector(const Matrix3& Ra, const Matrix3& Rb, double rest_length)
 
 double RodStretch::evaluate(const State& q, LocalGradient<2>* g, LocalHessian<2>* H) const {
   const Vector3 e = q.points[node1] - q.points[node0];
-  const double L = e.norm();
+  // ½ k_s l (1 − L/l)² = ½ (k_s/l)(L − l)²: a length spring of stiffness k_s/l, whose form
+  // has no cancellation.
   const double k_over_l = stiffness / rest_length;
-  const double stretch = L - rest_length;
-  // ½ k_s l (1 − L/l)² = ½ (k_s/l)(L − l)²: the second form has no cancellation.
-  const double value = 0.5 * k_over_l * stretch * stretch;
-  if (g == nullptr && H == nullptr) return value;
-
-  Vector3 f;  // ∂Ψ/∂e
-  Matrix3 K;  // ∂²Ψ/∂e²
-  if (L > 0.0) {
-    const Vector3 n = e / L;
-    const Matrix3 nn = n * n.transpose();
-    f = k_over_l * stretch * n;
-    K = k_over_l * nn + k_over_l * stretch / L * (Matrix3::Identity() - nn);
-  } else {
-    // Coincident nodes: the direction is undefined and Ψ is stationary along every
-    // direction at first order; use the isotropic limit of the axial stiffness (as Spring).
-    f.setZero();
-    K = k_over_l * Matrix3::Identity();
+  if (g == nullptr && H == nullptr) {
+    const double stretch = e.norm() - rest_length;
+    return 0.5 * k_over_l * stretch * stretch;
   }
+  const auto [value, f, K] = length_spring(e, k_over_l, rest_length);  // ∂Ψ/∂e, ∂²Ψ/∂e²
   if (g != nullptr) {
     g->segment<3>(0) = -f;
     g->segment<3>(3) = f;

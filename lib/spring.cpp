@@ -4,28 +4,29 @@
 
 namespace liedyn {
 
-double Spring::evaluate(const State& q, LocalGradient<4>* g, LocalHessian<4>* H) const {
-  const Vector3 d = b.position(q) - a.position(q);
+LengthSpringDerivatives length_spring(const Vector3& d, double stiffness, double rest_length) {
   const double l = d.norm();
   const double stretch = l - rest_length;
-  if (g == nullptr && H == nullptr) return 0.5 * stiffness * stretch * stretch;
-
-  Vector3 f;  // ∂V/∂d
-  Matrix3 K;  // ∂²V/∂d²
+  LengthSpringDerivatives out{0.5 * stiffness * stretch * stretch, Vector3::Zero(),
+                              stiffness * Matrix3::Identity()};
   if (rest_length == 0.0) {
-    f = stiffness * d;
-    K = stiffness * Matrix3::Identity();
+    out.f = stiffness * d;
   } else if (l > 0.0) {
     const Vector3 n = d / l;
     const Matrix3 nn = n * n.transpose();
-    f = stiffness * stretch * n;
-    K = stiffness * nn + stiffness * stretch / l * (Matrix3::Identity() - nn);
-  } else {
-    // Coincident endpoints with L > 0: the direction is undefined, V is stationary along
-    // every direction at first order; use the isotropic limit of the axial stiffness.
-    f.setZero();
-    K = stiffness * Matrix3::Identity();
+    out.f = stiffness * stretch * n;
+    out.K = stiffness * nn + stiffness * stretch / l * (Matrix3::Identity() - nn);
   }
+  return out;
+}
+
+double Spring::evaluate(const State& q, LocalGradient<4>* g, LocalHessian<4>* H) const {
+  const Vector3 d = b.position(q) - a.position(q);
+  if (g == nullptr && H == nullptr) {
+    const double stretch = d.norm() - rest_length;
+    return 0.5 * stiffness * stretch * stretch;
+  }
+  const auto [value, f, K] = length_spring(d, stiffness, rest_length);  // ∂V/∂d, ∂²V/∂d²
 
   const Vector3 r_a = a.lever(q);
   const Vector3 r_b = b.lever(q);
@@ -40,7 +41,7 @@ double Spring::evaluate(const State& q, LocalGradient<4>* g, LocalHessian<4>* H)
     H->block<3, 3>(3, 3) += rotated_point_curvature(r_a, -f);  // f_a = ∂V/∂p_a = −f
     H->block<3, 3>(9, 9) += rotated_point_curvature(r_b, f);
   }
-  return 0.5 * stiffness * stretch * stretch;
+  return value;
 }
 
 }  // namespace liedyn

@@ -15,6 +15,18 @@
 
 namespace liedyn {
 
+// V(d) = ½ k (‖d‖ − L)² and its derivatives with respect to the vector d:
+//   f = ∂V/∂d = k (l − L) n,   K = ∂²V/∂d² = k n nᵀ + k (l − L)/l (I − n nᵀ),   n = d/l.
+// L = 0 gives exactly f = k d, K = k I. At d = 0 with L > 0 the direction is undefined and V
+// is stationary along every direction at first order: f = 0 and the isotropic limit K = k I.
+// Shared by Spring and the rod's stretch term (lib/rod_terms.hpp).
+struct LengthSpringDerivatives {
+  double value;
+  Vector3 f;
+  Matrix3 K;
+};
+LengthSpringDerivatives length_spring(const Vector3& d, double stiffness, double rest_length);
+
 struct Spring {
   static constexpr int kBlocks = 4;
   std::array<int, kBlocks> offsets{-1, -1, -1, -1};  // x_a, θ_a, x_b, θ_b

@@ -38,6 +38,8 @@
 #include <cmath>
 #include <functional>
 #include <limits>
+#include <numbers>
+#include <random>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -397,6 +399,29 @@ template <class Term>
   r = check_lie_hessian(grad, q, dofs, H, opt.hessian);
   if (!r) return r;
   return check_lie_hessian_from_value(f, q, dofs, H, opt.hessian_from_value);
+}
+
+// ---------------------------------------------------------------------------------------
+// Test points shared by the term suites.
+
+// Rotation angles every term is evaluated at: 0, tiny, the Taylor-branch switch, ordinary,
+// near π and π, near 2π (DESIGN.md: the extremes of the parameterisation).
+inline const std::vector<double> kAngles = {
+    0.0, 1e-9, 1e-4, 1.0, 2.5, std::numbers::pi - 1e-6, std::numbers::pi,
+    2.0 * std::numbers::pi - 1e-3, 2.0 * std::numbers::pi - 1e-6};
+
+inline Vector3 random_unit(std::mt19937& rng) {
+  std::normal_distribution<double> normal;
+  return Vector3(normal(rng), normal(rng), normal(rng)).normalized();
+}
+
+inline Vector3 random_vector(std::mt19937& rng, double size) {
+  std::uniform_real_distribution<double> u(-size, size);
+  return Vector3(u(rng), u(rng), u(rng));
+}
+
+inline Matrix3 rotation_at(double angle, std::mt19937& rng) {
+  return so3::exp(angle * random_unit(rng));
 }
 
 }  // namespace liedyn::fd

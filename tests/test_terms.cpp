@@ -32,24 +32,14 @@
 namespace liedyn {
 namespace {
 
+using fd::kAngles;
+using fd::random_unit;
+using fd::random_vector;
+using fd::rotation_at;
+
 constexpr double kPi = std::numbers::pi;
 constexpr double kEps = std::numeric_limits<double>::epsilon();
 
-// Rotation angles every term is evaluated at (for R, and for R_{k−1}, ΔR_{k−1} where used).
-const std::vector<double> kAngles = {
-    0.0, 1e-9, 1e-4, 1.0, 2.5, kPi - 1e-6, kPi, 2.0 * kPi - 1e-3, 2.0 * kPi - 1e-6};
-
-Vector3 random_unit(std::mt19937& rng) {
-  std::normal_distribution<double> normal;
-  return Vector3(normal(rng), normal(rng), normal(rng)).normalized();
-}
-
-Vector3 random_vector(std::mt19937& rng, double size) {
-  std::uniform_real_distribution<double> u(-size, size);
-  return Vector3(u(rng), u(rng), u(rng));
-}
-
-Matrix3 rotation_at(double angle, std::mt19937& rng) { return so3::exp(angle * random_unit(rng)); }
 
 // A body-frame inertia tensor obeying the triangle inequality (1 + 1.6 > 2.2), rotated.
 Matrix3 body_inertia(double scale, std::mt19937& rng) {
