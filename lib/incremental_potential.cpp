@@ -12,6 +12,12 @@ void IncrementalPotential::begin_step(const State& previous, const Step& previou
   for (auto& t : torques) t.begin_step(previous, previous_step);
 }
 
+void IncrementalPotential::set_load_scale(double lambda) {
+  for (auto& t : gravity) t.scale = lambda;
+  for (auto& t : forces) t.scale = lambda;
+  for (auto& t : torques) t.scale = lambda;
+}
+
 double IncrementalPotential::value(const State& q) const {
   double value = 0.0;
   for_each_term_vector([&](const auto& terms) {
@@ -74,16 +80,18 @@ std::vector<Component> build_components(const Model& model) {
   for (int i = 0; i < n; ++i) {
     const RigidBody& body = model.bodies[i];
     IncrementalPotential& p = components[component_of[i]].potential;
-    TranslationalInertia ti;
-    ti.offsets = {point_offset[i]};
-    ti.point = i;
-    ti.mass_over_h2 = body.mass * inv_h2;
-    p.translational_inertia.push_back(ti);
-    RotationalInertia ri;
-    ri.offsets = {rotation_offset[i]};
-    ri.rotation = i;
-    ri.J_over_h2 = rotational_mass(body.inertia) * inv_h2;
-    p.rotational_inertia.push_back(ri);
+    if (!model.static_equilibrium) {
+      TranslationalInertia ti;
+      ti.offsets = {point_offset[i]};
+      ti.point = i;
+      ti.mass_over_h2 = body.mass * inv_h2;
+      p.translational_inertia.push_back(ti);
+      RotationalInertia ri;
+      ri.offsets = {rotation_offset[i]};
+      ri.rotation = i;
+      ri.J_over_h2 = rotational_mass(body.inertia) * inv_h2;
+      p.rotational_inertia.push_back(ri);
+    }
     if (!model.gravity.isZero(0.0)) {
       Gravity g;
       g.offsets = {point_offset[i]};
@@ -165,21 +173,23 @@ Component build_rod_component(const Model& model, int r) {
   IncrementalPotential& p = c.potential;
   for (int i = 0; i < n; ++i) {
     if (node_fixed[i]) continue;  // a clamped node feels neither inertia nor loads
-    TranslationalInertia ti;
-    ti.offsets = {node_offset[i]};
-    ti.point = model.rod_point(r, i);
-    ti.mass_over_h2 = d.node_mass[i] * inv_h2;
-    p.translational_inertia.push_back(ti);
+    if (!model.static_equilibrium) {
+      TranslationalInertia ti;
+      ti.offsets = {node_offset[i]};
+      ti.point = model.rod_point(r, i);
+      ti.mass_over_h2 = d.node_mass[i] * inv_h2;
+      p.translational_inertia.push_back(ti);
+    }
     if (!model.gravity.isZero(0.0)) {
       Gravity g;
       g.offsets = {node_offset[i]};
-      g.point = ti.point;
+      g.point = model.rod_point(r, i);
       g.weight = d.node_mass[i] * model.gravity;
       p.gravity.push_back(g);
     }
   }
   for (int j = 0; j < edges; ++j) {
-    if (!edge_fixed[j]) {
+    if (!edge_fixed[j] && !model.static_equilibrium) {
       RotationalInertia ri;
       ri.offsets = {edge_offset[j]};
       ri.rotation = model.rod_rotation(r, j);

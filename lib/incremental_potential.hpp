@@ -48,6 +48,9 @@ class IncrementalPotential {
   // Fixes the per-step data (x̃, R̃, R_{k−1}) from the previous state and step.
   void begin_step(const State& previous, const Step& previous_step);
 
+  // Multiplies every load (gravity, forces, torques) by λ (static load stepping).
+  void set_load_scale(double lambda);
+
   // Ψ(q).
   double value(const State& q) const;
 

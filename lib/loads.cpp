@@ -5,14 +5,16 @@
 namespace liedyn {
 
 double Gravity::evaluate(const State& q, LocalGradient<1>* g, LocalHessian<1>* H) const {
-  if (g != nullptr) *g = -weight;
+  const Vector3 w = scale * weight;
+  if (g != nullptr) *g = -w;
   if (H != nullptr) H->setZero();
-  return -weight.dot(q.points[point]);
+  return -w.dot(q.points[point]);
 }
 
 double ConstantForce::evaluate(const State& q, LocalGradient<2>* g, LocalHessian<2>* H) const {
   const Vector3 r = at.lever(q);
-  const Vector3 f = -force;  // ∂V/∂p
+  const Vector3 F = scale * force;
+  const Vector3 f = -F;  // ∂V/∂p
   if (g != nullptr) {
     g->head<3>() = f;
     g->tail<3>() = r.cross(f);  // (22): −(∂V/∂p) hat(p) as a column is r × f
@@ -21,7 +23,7 @@ double ConstantForce::evaluate(const State& q, LocalGradient<2>* g, LocalHessian
     H->setZero();
     H->bottomRightCorner<3, 3>() = rotated_point_curvature(r, f);  // (23), ∂²V/∂p² = 0
   }
-  return -force.dot(at.position(q));
+  return -F.dot(at.position(q));
 }
 
 void ConstantTorque::begin_step(const State& previous, const Step&) {
@@ -30,12 +32,13 @@ void ConstantTorque::begin_step(const State& previous, const Step&) {
 
 double ConstantTorque::evaluate(const State& q, LocalGradient<1>* g, LocalHessian<1>* H) const {
   const Matrix3 P = q.rotations[rotation] * R_previous.transpose();
-  if (g != nullptr) *g = -0.5 * (P.trace() * torque - P.transpose() * torque);
+  const Vector3 tau = scale * torque;
+  if (g != nullptr) *g = -0.5 * (P.trace() * tau - P.transpose() * tau);
   if (H != nullptr) {
-    const Matrix3 T = so3::hat(torque);
+    const Matrix3 T = so3::hat(tau);
     *H = 0.25 * (P * T - T * P.transpose()) - 0.5 * (T * P).trace() * Matrix3::Identity();
   }
-  return -torque.dot(so3::vee(P));
+  return -tau.dot(so3::vee(P));
 }
 
 }  // namespace liedyn

@@ -1,6 +1,8 @@
 #pragma once
 // External loads as potentials: gravity, constant forces at attached points, constant
 // world torques. Values, Lie gradients and Lie Hessians per term (conventions: so3.hpp).
+// Each load is multiplied by `scale` (1 in dynamics; the load factor λ = k/N of load step k
+// in static mode), which enters value, gradient and Hessian linearly.
 
 #include "state.hpp"
 #include "term.hpp"
@@ -13,6 +15,7 @@ struct Gravity {
   std::array<int, kBlocks> offsets{-1};
   int point = -1;
   Vector3 weight = Vector3::Zero();  // m g
+  double scale = 1.0;
 
   double evaluate(const State& q, LocalGradient<1>* g, LocalHessian<1>* H) const;
 };
@@ -25,6 +28,7 @@ struct ConstantForce {
   std::array<int, kBlocks> offsets{-1, -1};
   AttachedPoint at;
   Vector3 force = Vector3::Zero();
+  double scale = 1.0;
 
   double evaluate(const State& q, LocalGradient<2>* g, LocalHessian<2>* H) const;
 };
@@ -42,6 +46,7 @@ struct ConstantTorque {
   std::array<int, kBlocks> offsets{-1};
   int rotation = -1;
   Vector3 torque = Vector3::Zero();
+  double scale = 1.0;
   Matrix3 R_previous = Matrix3::Identity();
 
   void begin_step(const State& previous, const Step& previous_step);

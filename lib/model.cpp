@@ -106,6 +106,38 @@ void Model::validate() const {
     require_finite(torques[i].torque, index_field("torques", i, "torque"));
   }
   for (std::size_t r = 0; r < rods.size(); ++r) validate_rod(rods[r], index_field("rods", r, ""));
+  if (static_equilibrium) validate_anchoring();
+}
+
+void Model::validate_anchoring() const {
+  if (load_steps < 1) throw ModelError("frames", "static mode needs at least one load step");
+  for (std::size_t r = 0; r < rods.size(); ++r) {
+    if (rods[r].fixed_nodes.empty()) {
+      throw ModelError(index_field("rods", r, "fixed_nodes"),
+                       "static mode needs at least one clamped node (a free rod has no "
+                       "equilibrium under load)");
+    }
+  }
+  // Bodies: every group joined by springs needs a spring to a world anchor.
+  std::vector<int> parent(bodies.size());
+  for (std::size_t i = 0; i < parent.size(); ++i) parent[i] = static_cast<int>(i);
+  const auto root = [&](int i) {
+    while (parent[i] != i) i = parent[i] = parent[parent[i]];
+    return i;
+  };
+  for (const SpringSpec& s : springs) {
+    if (s.a.body >= 0 && s.b.body >= 0) parent[root(s.a.body)] = root(s.b.body);
+  }
+  std::vector<bool> anchored(bodies.size(), false);
+  for (const SpringSpec& s : springs) {
+    if (s.a.body < 0 || s.b.body < 0) anchored[root(std::max(s.a.body, s.b.body))] = true;
+  }
+  for (std::size_t i = 0; i < bodies.size(); ++i) {
+    if (!anchored[root(static_cast<int>(i))]) {
+      throw ModelError(index_field("bodies", i, ""),
+                       "static mode needs every body connected by springs to a world anchor");
+    }
+  }
 }
 
 void Model::validate_rod(const RodSpec& rod, const std::string& path) {

@@ -65,6 +65,13 @@ struct Model {
   std::vector<TorqueSpec> torques;
   std::vector<RodSpec> rods;
 
+  // Static equilibria instead of dynamics ("mode": "static"): no inertia terms, and step k
+  // minimises the potential energy with every load (gravity, forces, torques) scaled by
+  // λ_k = min(k / load_steps, 1). Each part of the model must be anchored (a clamped rod
+  // node, a spring chain to a world anchor): free motion has no equilibrium.
+  bool static_equilibrium = false;
+  int load_steps = 1;
+
   // Index in State::points of a rod's node, and in State::rotations of a rod's edge.
   int rod_point(int rod, int node) const;
   int rod_rotation(int rod, int edge) const;
@@ -75,6 +82,8 @@ struct Model {
   void validate() const;
   // The rod checks of validate(); `path` prefixes field names (e.g. "rods[0]").
   static void validate_rod(const RodSpec& rod, const std::string& path);
+  // The static-mode checks of validate().
+  void validate_anchoring() const;
 
   // State q_0 and step Δq_0 = (h v_0, exp(h ω_0)) (DESIGN.md §3); rods start at rest in
   // their rest shape, with parallel-transported edge frames.

@@ -1,5 +1,6 @@
 #include "scene.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <functional>
@@ -310,6 +311,12 @@ Scene parse(const json& root, const std::string& source) {
   if (scene.model.time_step <= 0.0) top.fail("time_step", "must be positive");
   scene.frames = top.integer("frames", 0);
   scene.model.gravity = top.vector<3>("gravity", Vector3::Zero());
+  const std::string mode = top.string("mode", "dynamic");
+  if (mode != "dynamic" && mode != "static") {
+    top.fail("mode", "must be \"dynamic\" or \"static\" (got \"" + mode + "\")");
+  }
+  scene.model.static_equilibrium = mode == "static";
+  scene.model.load_steps = std::max(scene.frames, 1);
 
   if (top.has("solver")) {
     ObjectReader s(top.get("solver"), "solver", source);

@@ -1,5 +1,7 @@
 #include "simulator.hpp"
 
+#include <algorithm>
+
 #include "../lib/so3.hpp"
 
 namespace liedyn {
@@ -11,6 +13,10 @@ Simulator::Simulator(Model model, const NewtonOptions& options)
   for (const RodSpec& rod : model_.rods) rods_.push_back(discretize(rod));
   state_ = model_.initial_state();
   step_ = model_.initial_step();
+  if (model_.static_equilibrium) {  // equilibria have no velocities
+    for (Vector3& dx : step_.points) dx.setZero();
+    for (Matrix3& dR : step_.rotations) dR.setIdentity();
+  }
   previous_ = state_;
   previous_step_ = step_;
   for (Component& c : build_components(model_)) {
@@ -27,17 +33,25 @@ Simulator::Simulator(Model model, const NewtonOptions& options)
 StepReport Simulator::step() {
   previous_ = state_;  // same sizes: copies without allocating
   previous_step_ = step_;
-  for (std::size_t i = 0; i < state_.points.size(); ++i) {
-    state_.points[i] = previous_.points[i] + step_.points[i];
+  // Dynamics starts Newton from the extrapolation (x + Δx, ΔR R); a static load step from
+  // the previous equilibrium, with the loads of this step.
+  const bool dynamic = !model_.static_equilibrium;
+  if (dynamic) {
+    for (std::size_t i = 0; i < state_.points.size(); ++i) {
+      state_.points[i] = previous_.points[i] + step_.points[i];
+    }
+    for (std::size_t i = 0; i < state_.rotations.size(); ++i) {
+      state_.rotations[i] = so3::orthonormalize(step_.rotations[i] * previous_.rotations[i]);
+    }
   }
-  for (std::size_t i = 0; i < state_.rotations.size(); ++i) {
-    state_.rotations[i] = so3::orthonormalize(step_.rotations[i] * previous_.rotations[i]);
-  }
+  const double load_scale =
+      dynamic ? 1.0 : std::min(1.0, double(frame_ + 1) / double(model_.load_steps));
 
   StepReport report;
   auto run = [&](auto& solvers) {
     for (auto& solver : solvers) {
       solver.component().potential.begin_step(previous_, previous_step_);
+      if (!dynamic) solver.component().potential.set_load_scale(load_scale);
       report.merge(solver.solve(state_));
     }
   };
@@ -49,11 +63,14 @@ StepReport Simulator::step() {
     state_ = previous_;
     return report;
   }
+  // The step; a static sequence of equilibria has none (zero velocities and kinetic energy).
   for (std::size_t i = 0; i < state_.points.size(); ++i) {
-    step_.points[i] = state_.points[i] - previous_.points[i];
+    step_.points[i] = dynamic ? Vector3(state_.points[i] - previous_.points[i]) : Vector3::Zero();
   }
   for (std::size_t i = 0; i < state_.rotations.size(); ++i) {
-    step_.rotations[i] = so3::orthonormalize(state_.rotations[i] * previous_.rotations[i].transpose());
+    step_.rotations[i] =
+        dynamic ? so3::orthonormalize(state_.rotations[i] * previous_.rotations[i].transpose())
+                : Matrix3::Identity();
   }
   ++frame_;
   return report;

@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <numbers>
@@ -199,6 +200,97 @@ TEST(RodMechanics, FreeRodUnderGravityFallsFreely) {
   const double h = model.time_step;
   const Vector3 expected = c0 + model.gravity * h * h * steps * (steps + 1) / 2.0;
   EXPECT_LT((centre() - expected).norm(), 1e-9);
+}
+
+// Static mode: no inertia, loads ramped over the load steps. In the linear regime each load
+// step's tip deflection is λ_k times the discrete prediction of the dynamic test above.
+TEST(RodStatics, CantileverLoadStepsFollowTheLinearPrediction) {
+  const double L = 1.0, EI = 1.0, F = 1e-3, kx = 1e5;
+  const int edges = 20, load_steps = 4;
+  Model model;
+  model.static_equilibrium = true;
+  model.load_steps = load_steps;
+  RodSpec rod = straight_rod(edges, L);
+  rod.bending_stiffness = Vector3(EI, EI, EI);
+  rod.shear_stiffness = kx;
+  rod.fixed_nodes = {0};
+  rod.fixed_edges = {0};
+  rod.node_forces = {{edges, Vector3(0.0, 0.0, -F)}};
+  model.rods.push_back(rod);
+  NewtonOptions options;
+  options.tolerance = 1e-12;
+  Simulator sim(model, options);
+  const double n = edges;
+  const double full = F * L * L * L / (3.0 * EI) * (1.0 - 1.0 / n) * (1.0 - 0.5 / n) +
+                      2.0 * F * L / kx;
+  for (int k = 1; k <= load_steps + 1; ++k) {  // one step past the ramp: λ stays 1
+    const StepReport r = sim.step();
+    ASSERT_TRUE(r.converged()) << "load step " << k << ": " << to_string(r.status);
+    const double lambda = std::min(1.0, double(k) / load_steps);
+    const double tip = -sim.state().points[model.rod_point(0, edges)].z();
+    // Non-linearity: O((λ F L²/EI)²) = 1e-6 relative; tolerance 1e-5.
+    EXPECT_NEAR(tip / (lambda * full), 1.0, 1e-5) << "load step " << k;
+    EXPECT_EQ(sim.kinetic_energy(), 0.0);  // equilibria have no velocity
+  }
+}
+
+TEST(RodStatics, LargeDeflectionStaticEqualsTheDynamicRestState) {
+  // The same minimiser reached two ways: load steps without inertia, and backward Euler
+  // dissipating until rest (F L²/EI = 2, dead load).
+  const double L = 1.0, EI = 1.0, F = 2.0;
+  const int edges = 20;
+  auto cantilever = [&](bool statics) {
+    Model model;
+    model.time_step = 0.05;
+    model.static_equilibrium = statics;
+    model.load_steps = 10;
+    RodSpec rod = straight_rod(edges, L);
+    rod.bending_stiffness = Vector3(EI, EI, EI);
+    rod.fixed_nodes = {0};
+    rod.fixed_edges = {0};
+    rod.node_forces = {{edges, Vector3(0.0, 0.0, -F)}};
+    model.rods.push_back(rod);
+    return model;
+  };
+  NewtonOptions options;
+  options.tolerance = 1e-10;
+  options.max_iterations = 200;
+  Simulator statics(cantilever(true), options);
+  for (int k = 0; k < 10; ++k) ASSERT_TRUE(statics.step().converged()) << "load step " << k;
+  Simulator dynamics(cantilever(false), options);
+  for (int k = 0; k < 600; ++k) ASSERT_TRUE(dynamics.step().state_updated());
+  ASSERT_LT(dynamics.kinetic_energy(), 1e-16);
+  const int tip = cantilever(true).rod_point(0, edges);
+  // Both stop within the Newton tolerance (1e-10 m per DOF, per step) of the minimiser; the
+  // dynamic run's residual motion (kinetic energy < 1e-16 J) is below 1e-8 m.
+  EXPECT_LT((statics.state().points[tip] - dynamics.state().points[tip]).norm(), 1e-7);
+  EXPECT_GT(-statics.state().points[tip].z(), 0.4);  // a large deflection indeed
+}
+
+TEST(RodStatics, UnanchoredPartsAreRejected) {
+  Model model;
+  model.static_equilibrium = true;
+  model.rods.push_back(straight_rod(4, 1.0));
+  try {
+    model.validate();
+    FAIL() << "accepted a free rod in static mode";
+  } catch (const ModelError& e) {
+    EXPECT_EQ(e.field(), "rods[0].fixed_nodes");
+  }
+  model.rods[0].fixed_nodes = {0};
+  RigidBody body;
+  model.bodies.push_back(body);
+  try {
+    model.validate();
+    FAIL() << "accepted a free body in static mode";
+  } catch (const ModelError& e) {
+    EXPECT_EQ(e.field(), "bodies[0]");
+  }
+  SpringSpec anchor;
+  anchor.b.body = 0;
+  anchor.stiffness = 10.0;
+  model.springs.push_back(anchor);
+  EXPECT_NO_THROW(model.validate());
 }
 
 }  // namespace

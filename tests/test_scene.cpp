@@ -479,6 +479,20 @@ TEST(SceneErrors, BadFrames) {
   EXPECT_EQ(parse_scene(with_frames("0"), kSource).frames, 0);
 }
 
+TEST(SceneParse, StaticModeMakesFramesLoadSteps) {
+  const Scene s = parse_scene(
+      R"({"mode": "static", "time_step": 0.01, "frames": 7, "rods": [{"name": "r",)"
+      R"( "nodes": [[0,0,0],[1,0,0]], "mass": 1, "radius": 0.01, "stretch_stiffness": 1,)"
+      R"( "shear_stiffness": 1, "bending_stiffness": [1,1,1], "fixed_nodes": [0]}]})",
+      kSource);
+  EXPECT_TRUE(s.model.static_equilibrium);
+  EXPECT_EQ(s.model.load_steps, 7);
+  EXPECT_FALSE(parse_scene(scene(), kSource).model.static_equilibrium);  // default: dynamic
+  expect_rejected(scene(kBody, R"("mode": "quasistatic", )"), "mode", "static");
+  // A free body has no equilibrium.
+  expect_rejected(scene(kBody, R"("mode": "static", )"), "bodies[0]", "world anchor");
+}
+
 TEST(SceneErrors, NonPositiveTimeStep) {
   for (const char* h : {"0", "-0.01", "-0"}) {
     expect_rejected(
