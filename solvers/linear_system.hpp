@@ -69,7 +69,8 @@ class SparseSystem {
   bool factorize(double mu);
   void solve(Vector& delta);
 
-  // Non-zeros stored (lower triangle) once the pattern is known; 0 before the first assembly.
+  // Non-zeros stored (upper triangle of the block-reordered matrix) once the pattern is
+  // known; 0 before the first assembly.
   long stored_nonzeros() const;
 
  private:

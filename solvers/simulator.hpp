@@ -1,13 +1,14 @@
 #pragma once
 // Forward simulation of a Model by backward Euler: each step minimises the incremental
-// potential of every independent component with DenseNewton (paper §4).
+// potential of every independent component with Newton (dense or sparse, newton.hpp) (§4);
+// in static mode each step is a load step without inertia (Model::static_equilibrium).
 //
 //   q_k = argmin Ψ(q; q_{k−1}, Δq_{k−1}),  starting from the extrapolation
 //   x = x_{k−1} + Δx_{k−1},  R = ΔR_{k−1} R_{k−1};  then Δx_k = x_k − x_{k−1}, ΔR_k = R_k R_{k−1}ᵀ.
 //
 // Reported quantities (DESIGN.md §3): v_k = Δx_k/h, ω_k = log(ΔR_k)/h (world frame);
-// kinetic energy ½ m‖v‖² + ½ ωᵀ (R I_b Rᵀ) ω; angular momentum about the world origin
-// Σ m x × v + R I_b Rᵀ ω.
+// kinetic energy Σ ½ m‖v‖² + ½ ωᵀ (R I_b Rᵀ) ω and angular momentum about the world origin
+// Σ m x × v + R I_b Rᵀ ω, over bodies and over rods' lumped node masses and edge inertias.
 
 #include <vector>
 
