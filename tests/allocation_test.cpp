@@ -21,6 +21,7 @@
 #include <Eigen/Core>
 
 #include "solvers/simulator.hpp"
+#include "models.hpp"
 
 namespace {
 
@@ -383,35 +384,8 @@ TEST(Allocation, LoadedBodyStepDoesNotAllocate) {
   expect_no_allocation(run_counted(sim, kSteps), kSteps);
 }
 
-// Bodies 0..n−1 in a row along x, consecutive ones joined by springs between body points,
-// so that all of them form one component: DenseNewton<Eigen::Dynamic>.
-Model spring_chain(int n) {
-  Model model;
-  model.time_step = 0.01;
-  model.gravity = Vector3(0.0, 0.0, -9.81);
-  for (int i = 0; i < n; ++i) {
-    RigidBody b = butterfly_bolt();
-    b.name = "body" + std::to_string(i);
-    b.position = Vector3(1.0 * i, 0.0, 0.0);
-    b.angular_velocity = Vector3(0.1 * i, 2.0, 0.01);
-    model.bodies.push_back(b);
-  }
-  SpringSpec anchor;
-  anchor.a = BodyPoint{-1, Vector3(0.0, 0.0, 1.0)};
-  anchor.b = BodyPoint{0, Vector3(0.0, 0.0, 0.1)};
-  anchor.stiffness = 100.0;
-  anchor.rest_length = 0.9;
-  model.springs.push_back(anchor);
-  for (int i = 0; i + 1 < n; ++i) {
-    SpringSpec s;
-    s.a = BodyPoint{i, Vector3(0.2, 0.0, 0.0)};
-    s.b = BodyPoint{i + 1, Vector3(-0.2, 0.05, 0.0)};
-    s.stiffness = 50.0;
-    s.rest_length = 0.6;
-    model.springs.push_back(s);
-  }
-  return model;
-}
+// n bodies joined by springs into one component (tests/models.hpp).
+using liedyn::test_models::spring_chain;
 
 // (c) Three bodies coupled by springs: the dynamic-size dense path (18 DOFs).
 static_assert(18 <= Simulator::kDenseLimit);

@@ -19,6 +19,7 @@
 #include "lib/incremental_potential.hpp"
 #include "lib/so3.hpp"
 #include "solvers/simulator.hpp"
+#include "models.hpp"
 
 namespace {
 
@@ -289,34 +290,7 @@ BENCHMARK(BM_Step_HeavyTop);
 // Dense against sparse (CHOLMOD) linear algebra for n bodies in a chain of springs: one
 // Newton iteration (assembly + factorisation + solve) at a converged iterate, as in
 // BM_NewtonIteration. Picks Simulator::kDenseLimit.
-Model spring_chain(int n) {
-  Model model;
-  model.time_step = 0.01;
-  model.gravity = Vector3(0.0, 0.0, -9.81);
-  for (int i = 0; i < n; ++i) {
-    RigidBody b;
-    b.name = "link" + std::to_string(i);
-    b.inertia = Vector3(0.02, 0.03, 0.04).asDiagonal();
-    b.position = Vector3(0.3 * i, 0.0, 0.0);
-    b.angular_velocity = Vector3(0.5, -1.0, 2.0);
-    model.bodies.push_back(b);
-  }
-  SpringSpec anchor;
-  anchor.a = BodyPoint{-1, Vector3(-0.2, 0.0, 0.0)};
-  anchor.b = BodyPoint{0, Vector3(-0.1, 0.0, 0.0)};
-  anchor.stiffness = 1e3;
-  anchor.rest_length = 0.1;
-  model.springs.push_back(anchor);
-  for (int i = 0; i + 1 < n; ++i) {
-    SpringSpec s;
-    s.a = BodyPoint{i, Vector3(0.1, 0.0, 0.0)};
-    s.b = BodyPoint{i + 1, Vector3(-0.1, 0.0, 0.0)};
-    s.stiffness = 1e3;
-    s.rest_length = 0.1;
-    model.springs.push_back(s);
-  }
-  return model;
-}
+using liedyn::test_models::spring_chain;
 
 template <class System>
 void BM_ChainIteration(benchmark::State& state) {
