@@ -106,7 +106,33 @@ void Model::validate() const {
     require_finite(torques[i].torque, index_field("torques", i, "torque"));
   }
   for (std::size_t r = 0; r < rods.size(); ++r) validate_rod(rods[r], index_field("rods", r, ""));
+  if (!static_equilibrium) validate_motion_speeds();
   if (static_equilibrium) validate_anchoring();
+}
+
+void Model::validate_motion_speeds() const {
+  // As for body spins: a prescribed rotation of π or more per time step would alias in the
+  // reported angular velocities (log(ΔR)/h).
+  for (std::size_t r = 0; r < rods.size(); ++r) {
+    for (std::size_t m = 0; m < rods[r].prescribed_motions.size(); ++m) {
+      const std::vector<Keyframe>& keys = rods[r].prescribed_motions[m].keyframes;
+      for (std::size_t k = 0; k < keys.size(); ++k) {
+        const Keyframe before = k == 0 ? Keyframe{} : keys[k - 1];
+        const double per_step = (keys[k].rotation - before.rotation).norm() * time_step /
+                                (keys[k].time - before.time);
+        if (per_step >= std::numbers::pi) {
+          std::ostringstream os;
+          os << "rotates the clamped items by " << per_step
+             << " rad per time step, which must be below π (reduce time_step or slow the "
+                "motion)";
+          throw ModelError(index_field("rods", r, "") + "." +
+                               index_field("prescribed_motions", m, "") + "." +
+                               index_field("keyframes", k, "rotation"),
+                           os.str());
+        }
+      }
+    }
+  }
 }
 
 void Model::validate_anchoring() const {
@@ -143,12 +169,23 @@ void Model::validate_anchoring() const {
 void Model::validate_rod(const RodSpec& rod, const std::string& path) {
   const auto field = [&](const std::string& member) { return path + "." + member; };
   if (rod.nodes.size() < 2) throw ModelError(field("nodes"), "must list at least 2 nodes");
-  for (std::size_t i = 0; i < rod.nodes.size(); ++i) {
-    require_finite(rod.nodes[i], field("nodes") + "[" + std::to_string(i) + "]");
-    if (i > 0 && !((rod.nodes[i] - rod.nodes[i - 1]).norm() > 0.0)) {
-      throw ModelError(field("nodes") + "[" + std::to_string(i) + "]",
-                       "coincides with the previous node (zero-length edge)");
+  const auto check_polyline = [&](const std::vector<Vector3>& nodes, const std::string& member) {
+    for (std::size_t i = 0; i < nodes.size(); ++i) {
+      require_finite(nodes[i], field(member) + "[" + std::to_string(i) + "]");
+      if (i > 0 && !((nodes[i] - nodes[i - 1]).norm() > 0.0)) {
+        throw ModelError(field(member) + "[" + std::to_string(i) + "]",
+                         "coincides with the previous node (zero-length edge)");
+      }
     }
+  };
+  check_polyline(rod.nodes, "nodes");
+  if (!rod.rest_nodes.empty()) {
+    if (rod.rest_nodes.size() != rod.nodes.size()) {
+      throw ModelError(field("rest_nodes"),
+                       "has " + std::to_string(rod.rest_nodes.size()) +
+                           " nodes, but the initial shape has " + std::to_string(rod.nodes.size()));
+    }
+    check_polyline(rod.rest_nodes, "rest_nodes");
   }
   const auto positive = [&](double value, const std::string& member) {
     if (!std::isfinite(value) || value <= 0.0) {
@@ -188,6 +225,62 @@ void Model::validate_rod(const RodSpec& rod, const std::string& path) {
                                         ", but the rod has " + std::to_string(rod.node_count()));
     }
     require_finite(rod.node_forces[k].force, f + ".force");
+  }
+  validate_motions(rod, path);
+}
+
+void Model::validate_motions(const RodSpec& rod, const std::string& path) {
+  // Each moved node or edge must be clamped (a DOF cannot also be prescribed) and moved by
+  // one motion only.
+  std::vector<bool> clamped_node(rod.node_count(), false), clamped_edge(rod.edge_count(), false);
+  for (int i : rod.fixed_nodes) clamped_node[i] = true;
+  for (int j : rod.fixed_edges) clamped_edge[j] = true;
+  std::vector<bool> moved_node(rod.node_count(), false), moved_edge(rod.edge_count(), false);
+  for (std::size_t m = 0; m < rod.prescribed_motions.size(); ++m) {
+    const PrescribedMotion& motion = rod.prescribed_motions[m];
+    const std::string f = path + "." + index_field("prescribed_motions", m, "");
+    const auto check = [&](const std::vector<int>& items, const std::vector<bool>& clamped,
+                           std::vector<bool>& moved, const std::string& member,
+                           const std::string& what) {
+      for (std::size_t k = 0; k < items.size(); ++k) {
+        const int i = items[k];
+        const std::string item = f + "." + index_field(member, k, "");
+        if (i < 0 || i >= static_cast<int>(clamped.size())) {
+          throw ModelError(item, "refers to " + what + " " + std::to_string(i) +
+                                     ", but the rod has " + std::to_string(clamped.size()));
+        }
+        if (!clamped[i]) {
+          throw ModelError(item, what + " " + std::to_string(i) + " is not in fixed_" + what +
+                                     "s: only clamped " + what + "s can be moved");
+        }
+        if (moved[i]) {
+          throw ModelError(item, what + " " + std::to_string(i) + " is moved twice (by this " +
+                                     "or an earlier motion)");
+        }
+        moved[i] = true;
+      }
+    };
+    check(motion.nodes, clamped_node, moved_node, "nodes", "node");
+    check(motion.edges, clamped_edge, moved_edge, "edges", "edge");
+    if (motion.nodes.empty() && motion.edges.empty()) {
+      throw ModelError(f + ".nodes", "a motion must move at least one node or edge");
+    }
+    require_finite(motion.center, f + ".center");
+    if (motion.keyframes.empty()) throw ModelError(f + ".keyframes", "must list at least one keyframe");
+    double previous = 0.0;
+    for (std::size_t k = 0; k < motion.keyframes.size(); ++k) {
+      const Keyframe& key = motion.keyframes[k];
+      const std::string kf = f + "." + index_field("keyframes", k, "");
+      if (!std::isfinite(key.time) || key.time <= previous) {
+        throw ModelError(kf + ".time",
+                         k == 0 ? "must be a finite time after 0 (the motion starts from the "
+                                  "initial pose at t = 0)"
+                                : "must be finite and later than the previous keyframe's");
+      }
+      previous = key.time;
+      require_finite(key.translation, kf + ".translation");
+      require_finite(key.rotation, kf + ".rotation");
+    }
   }
 }
 

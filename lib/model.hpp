@@ -67,7 +67,8 @@ struct Model {
 
   // Static equilibria instead of dynamics ("mode": "static"): no inertia terms, and step k
   // minimises the potential energy with every load (gravity, forces, torques) scaled by
-  // λ_k = min(k / load_steps, 1). Each part of the model must be anchored (a clamped rod
+  // λ_k = min(k / load_steps, 1), and prescribed motions followed to λ_k of their
+  // duration (prescribed_motion.hpp). Each part of the model must be anchored (a clamped rod
   // node, a spring chain to a world anchor): free motion has no equilibrium.
   bool static_equilibrium = false;
   int load_steps = 1;
@@ -82,11 +83,15 @@ struct Model {
   void validate() const;
   // The rod checks of validate(); `path` prefixes field names (e.g. "rods[0]").
   static void validate_rod(const RodSpec& rod, const std::string& path);
+  // The prescribed-motion checks of validate_rod (indices, clamping, keyframe order).
+  static void validate_motions(const RodSpec& rod, const std::string& path);
+  // Dynamic mode: prescribed rotations below π per time step.
+  void validate_motion_speeds() const;
   // The static-mode checks of validate().
   void validate_anchoring() const;
 
   // State q_0 and step Δq_0 = (h v_0, exp(h ω_0)) (DESIGN.md §3); rods start at rest in
-  // their rest shape, with parallel-transported edge frames.
+  // their initial shape, with parallel-transported edge frames.
   State initial_state() const;
   Step initial_step() const;
 };

@@ -21,13 +21,27 @@ Matrix3 minimal_rotation(const Vector3& a, const Vector3& b) {
   return so3::exp(std::atan2(s, c) / s * axis);
 }
 
+std::vector<Matrix3> parallel_transport_frames(const std::vector<Vector3>& nodes) {
+  std::vector<Matrix3> frames;
+  Vector3 previous_tangent = Vector3::UnitZ();
+  Matrix3 frame = Matrix3::Identity();
+  for (std::size_t j = 0; j + 1 < nodes.size(); ++j) {
+    const Vector3 tangent = (nodes[j + 1] - nodes[j]).normalized();
+    frame = so3::orthonormalize(minimal_rotation(previous_tangent, tangent) * frame);
+    frames.push_back(frame);
+    previous_tangent = tangent;
+  }
+  return frames;
+}
+
 RodDiscretization discretize(const RodSpec& rod) {
   RodDiscretization d;
+  const std::vector<Vector3>& rest = rod.rest_shape();
   const int n = rod.node_count();
   const int edges = rod.edge_count();
   double total_length = 0.0;
   for (int j = 0; j < edges; ++j) {
-    d.rest_length.push_back((rod.nodes[j + 1] - rod.nodes[j]).norm());
+    d.rest_length.push_back((rest[j + 1] - rest[j]).norm());
     total_length += d.rest_length.back();
   }
   d.node_mass.assign(n, 0.0);
@@ -40,18 +54,13 @@ RodDiscretization discretize(const RodSpec& rod) {
     const double transverse = m * (3.0 * r2 + l * l) / 12.0;
     d.edge_inertia.push_back(Vector3(transverse, transverse, 0.5 * m * r2).asDiagonal());
   }
-  Vector3 previous_tangent = Vector3::UnitZ();
-  Matrix3 frame = Matrix3::Identity();
-  for (int j = 0; j < edges; ++j) {
-    const Vector3 tangent = (rod.nodes[j + 1] - rod.nodes[j]) / d.rest_length[j];
-    frame = so3::orthonormalize(minimal_rotation(previous_tangent, tangent) * frame);
-    d.frames.push_back(frame);
-    previous_tangent = tangent;
-  }
+  d.frames = parallel_transport_frames(rod.nodes);
+  const std::vector<Matrix3> rest_frames =
+      rod.rest_nodes.empty() ? d.frames : parallel_transport_frames(rest);
   for (int i = 1; i + 1 < n; ++i) {
     const double l = 0.5 * (d.rest_length[i - 1] + d.rest_length[i]);
     d.voronoi_length.push_back(l);
-    d.rest_darboux.push_back(darboux_vector(d.frames[i - 1], d.frames[i], l));
+    d.rest_darboux.push_back(darboux_vector(rest_frames[i - 1], rest_frames[i], l));
   }
   return d;
 }

@@ -6,13 +6,17 @@
 // m_j = m l_j / Σl is split equally between its two nodes; each edge's rotation carries the
 // rotational inertia of a solid cylinder of radius r and length l_j about its centre,
 // I_b = diag(m_j(3r² + l_j²)/12, m_j(3r² + l_j²)/12, m_j r²/2) in the edge frame.
-// Rest shape: the initial one (edge lengths l_j; Darboux vectors ω̄ from the initial frames).
-// Initial frames: R_0 is the minimal rotation taking e_z to the first edge's direction, and
-// R_j = rot(t_{j−1} → t_j) R_{j−1} (parallel transport: no twist between edges).
+// Rest shape: `rest_nodes` if given, else the initial nodes. It gives the edge rest lengths
+// l_j (and with them the lumped masses) and the rest Darboux vectors ω̄, from its frames.
+// Frames, of the rest shape and of the initial shape alike: R_0 is the minimal rotation
+// taking e_z to the first edge's direction, and R_j = rot(t_{j−1} → t_j) R_{j−1} (parallel
+// transport: no twist between edges). A rest shape other than the initial one is how a
+// naturally curved rod starts straightened (the helical perversion, paper Fig. 5).
 
 #include <string>
 #include <vector>
 
+#include "prescribed_motion.hpp"
 #include "state.hpp"
 
 namespace liedyn {
@@ -24,7 +28,8 @@ struct NodeForce {
 
 struct RodSpec {
   std::string name;
-  std::vector<Vector3> nodes;          // initial (= rest) node positions, at least 2
+  std::vector<Vector3> nodes;          // initial node positions, at least 2
+  std::vector<Vector3> rest_nodes;     // rest shape, same count; empty: the initial nodes
   double mass = 0.0;                   // total, kg, > 0
   double radius = 0.0;                 // m, > 0 (edge rotational inertia)
   double stretch_stiffness = 0.0;      // k_s, N: Ψ_s = ½ k_s l (1 − ‖e‖/l)² per edge
@@ -33,6 +38,9 @@ struct RodSpec {
   std::vector<int> fixed_nodes;        // clamped positions
   std::vector<int> fixed_edges;        // clamped rotations
   std::vector<NodeForce> node_forces;  // constant world forces on nodes
+  std::vector<PrescribedMotion> prescribed_motions;  // of clamped nodes and edges
+
+  const std::vector<Vector3>& rest_shape() const { return rest_nodes.empty() ? nodes : rest_nodes; }
 
   int node_count() const { return static_cast<int>(nodes.size()); }
   int edge_count() const { return node_count() - 1; }
@@ -45,12 +53,16 @@ struct RodDiscretization {
   std::vector<Matrix3> edge_inertia;       // body-frame inertia tensor per edge
   std::vector<Matrix3> frames;             // initial edge rotations (parallel transport)
   std::vector<double> voronoi_length;      // per interior node i = 1…n−2: ½(l_{i−1} + l_i)
-  std::vector<Vector3> rest_darboux;       // per interior node, from the initial frames
+  std::vector<Vector3> rest_darboux;       // per interior node, from the rest frames
 };
 
 // Minimal rotation taking unit vector a to unit vector b (a half turn about an axis
 // perpendicular to a when b = −a).
 Matrix3 minimal_rotation(const Vector3& a, const Vector3& b);
+
+// Edge frames of a polyline by parallel transport, starting from the minimal rotation of
+// e_z onto the first edge.
+std::vector<Matrix3> parallel_transport_frames(const std::vector<Vector3>& nodes);
 
 // Lumped masses, rest lengths, edge inertias, parallel-transported frames and rest Darboux
 // vectors of a validated rod.

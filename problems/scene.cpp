@@ -259,6 +259,49 @@ std::vector<int> index_list(ObjectReader& r, const std::string& key) {
   return out;
 }
 
+// A prescribed motion of `rod`'s clamped nodes and edges (docs/scene-format.md#rods). The
+// pivot defaults to the centroid of the moved nodes, or of the moved edges' midpoints.
+PrescribedMotion parse_motion(const json& value, const std::string& path,
+                              const std::string& source, const RodSpec& rod) {
+  ObjectReader m(value, path, source);
+  PrescribedMotion motion;
+  motion.nodes = index_list(m, "nodes");
+  motion.edges = index_list(m, "edges");
+  if (motion.nodes.empty() && motion.edges.empty()) {
+    m.fail(m.field("nodes"), "a motion must move at least one node or edge (give \"nodes\", "
+                             "\"edges\" or both)");
+  }
+  if (m.has("center")) {
+    motion.center = m.vector<3>("center");
+  } else {
+    // Indices are range-checked by Model::validate_rod; skip bad ones here.
+    Vector3 sum = Vector3::Zero();
+    int count = 0;
+    const auto add = [&](int i, int j) {
+      if (i < 0 || j >= rod.node_count()) return;
+      sum += 0.5 * (rod.nodes[i] + rod.nodes[j]);
+      ++count;
+    };
+    for (int i : motion.nodes) add(i, i);
+    if (motion.nodes.empty()) {
+      for (int j : motion.edges) add(j, j + 1);
+    }
+    if (count > 0) motion.center = sum / count;
+  }
+  const json& keys = m.array("keyframes");
+  for (std::size_t k = 0; k < keys.size(); ++k) {
+    ObjectReader f(keys[k], item_path(m.field("keyframes"), k), source);
+    Keyframe key;
+    key.time = f.number("time");
+    key.translation = f.vector<3>("translation", Vector3::Zero());
+    key.rotation = f.vector<3>("rotation", Vector3::Zero());
+    f.finish();
+    motion.keyframes.push_back(key);
+  }
+  m.finish();
+  return motion;
+}
+
 RodSpec parse_rod(const json& value, const std::string& path, const std::string& source,
                   std::map<std::string, std::string>& taken) {
   ObjectReader r(value, path, source);
@@ -280,6 +323,23 @@ RodSpec parse_rod(const json& value, const std::string& path, const std::string&
   } else {
     r.fail(r.field("nodes"), "is required but missing (give \"nodes\" or a \"shape\")");
   }
+  // Optional rest shape, in the same two forms.
+  if (r.has("rest_nodes") && r.has("rest_shape")) {
+    r.fail(path, "gives both \"rest_nodes\" and \"rest_shape\"; give at most one of them");
+  }
+  if (r.has("rest_nodes")) {
+    const json& nodes = r.array("rest_nodes");
+    for (std::size_t i = 0; i < nodes.size(); ++i) {
+      rod.rest_nodes.push_back(r.to_vector<3>(nodes[i], item_path(r.field("rest_nodes"), i)));
+    }
+  } else if (r.has("rest_shape")) {
+    rod.rest_nodes = rod_shape(r.get("rest_shape"), r.field("rest_shape"), source);
+  }
+  if (!rod.rest_nodes.empty() && rod.rest_nodes.size() != rod.nodes.size()) {
+    r.fail(r.field(r.has("rest_shape") ? "rest_shape" : "rest_nodes"),
+           "has " + std::to_string(rod.rest_nodes.size()) + " nodes, but the initial shape has " +
+               std::to_string(rod.nodes.size()));
+  }
   rod.mass = r.number("mass");
   rod.radius = r.number("radius");
   rod.stretch_stiffness = r.number("stretch_stiffness");
@@ -296,6 +356,13 @@ RodSpec parse_rod(const json& value, const std::string& path, const std::string&
       force.force = f.vector<3>("force");
       f.finish();
       rod.node_forces.push_back(force);
+    }
+  }
+  if (r.has("prescribed_motions")) {
+    const json& motions = r.array("prescribed_motions");
+    for (std::size_t i = 0; i < motions.size(); ++i) {
+      rod.prescribed_motions.push_back(
+          parse_motion(motions[i], item_path(r.field("prescribed_motions"), i), source, rod));
     }
   }
   r.finish();

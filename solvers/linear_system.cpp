@@ -74,6 +74,16 @@ void cholesky_fixed_solve(const Eigen::Matrix<double, N, N>& F,
 
 #undef LIEDYN_UNROLL
 
+// A sink that records the block positions of one assembly: the pattern.
+struct BlockRecorder {
+  std::vector<std::pair<int, int>> blocks;
+  void clear() { blocks.clear(); }
+  template <class Block>
+  void add(int row, int column, const Block&) {
+    blocks.emplace_back(row, column);
+  }
+};
+
 }  // namespace
 
 // ---------------------------------------------------------------------------------------
@@ -159,17 +169,6 @@ struct SparseSystem::Cholmod {
   Cholmod(const Cholmod&) = delete;
   Cholmod& operator=(const Cholmod&) = delete;
 
-  // Records the blocks of one assembly, then builds A's pattern, the scatter indices and
-  // the symbolic factorisation.
-  struct Recorder {
-    std::vector<std::pair<int, int>> blocks;
-    void clear() { blocks.clear(); }
-    template <class Block>
-    void add(int row, int column, const Block&) {
-      blocks.emplace_back(row, column);
-    }
-  };
-
   // A fill-reducing order of the blocks: CHOLMOD's default ordering (AMD, or METIS where it
   // does better) of the block graph.
   std::vector<int> block_order(const std::vector<std::pair<int, int>>& blocks, int nb) {
@@ -207,6 +206,8 @@ struct SparseSystem::Cholmod {
     return position;
   }
 
+  // Builds A's pattern, the scatter indices and the symbolic factorisation (which leaves
+  // the factorisation's flop count in common.fl).
   void build(const std::vector<std::pair<int, int>>& blocks) {
     const int n = dofs;
     const int nb = n / 3;
@@ -281,39 +282,95 @@ struct SparseSystem::Cholmod {
   };
 };
 
-SparseSystem::SparseSystem(const Component& component)
-    : g_(component.dofs), cholmod_(std::make_unique<Cholmod>(component.dofs)) {}
+// The sink of every banded assembly: adds the lower-triangle part of each block to the band
+// (the block's transpose arrives through the symmetric add() call).
+struct SparseSystem::BandScatter {
+  BandedCholesky& band;
+  void clear() { band.set_zero(); }
+  template <class Block>
+  void add(int row, int column, const Block& block) {
+    if (row < column) return;
+    double* a = band.values();
+    const int stride = band.bandwidth() + 1;
+    for (int c = 0; c < 3; ++c) {
+      const int j = column + c;
+      double* entries = a + j * stride - j;  // entries[i] = A_ij
+      for (int r = row == column ? c : 0; r < 3; ++r) entries[row + r] += block(r, c);
+    }
+  }
+};
+
+SparseSystem::SparseSystem(const Component& component, Factorization factorization)
+    : g_(component.dofs),
+      factorization_(factorization),
+      cholmod_(std::make_unique<Cholmod>(component.dofs)) {}
 SparseSystem::SparseSystem(SparseSystem&&) noexcept = default;
 SparseSystem& SparseSystem::operator=(SparseSystem&&) noexcept = default;
 SparseSystem::~SparseSystem() = default;
 
+void SparseSystem::build(const std::vector<std::pair<int, int>>& blocks) {
+  const int n = static_cast<int>(g_.size());
+  int bandwidth = 0;
+  for (const auto& [r, c] : blocks) bandwidth = std::max(bandwidth, r - c + 2);
+  bandwidth = std::min(bandwidth, n - 1);
+  if (factorization_ != Factorization::kBanded) cholmod_->build(blocks);
+  if (factorization_ == Factorization::kUndecided) {
+    double band_flops = 0.0;  // counted as CHOLMOD counts: Σ_j (non-zeros in column j of L)²
+    for (int j = 0; j < n; ++j) {
+      const double column = std::min(bandwidth, n - 1 - j) + 1.0;
+      band_flops += column * column;
+    }
+    factorization_ = band_flops <= kBandedFlopAdvantage * cholmod_->common.fl
+                         ? Factorization::kBanded
+                         : Factorization::kCholmod;
+  }
+  if (factorization_ == Factorization::kBanded) {
+    cholmod_.reset();
+    band_.resize(n, bandwidth);
+  }
+  built_ = true;
+}
+
 double SparseSystem::assemble(const IncrementalPotential& potential, const State& q,
                               double* roundoff) {
-  Cholmod& c = *cholmod_;
-  if (c.A == nullptr) {  // first use: the pattern, from the blocks one assembly visits
-    Cholmod::Recorder recorder;
+  if (!built_) {  // first use: the pattern
+    BlockRecorder recorder;
     potential.assemble_into(q, g_, recorder);
-    c.build(recorder.blocks);
+    build(recorder.blocks);
   }
-  Cholmod::Scatter scatter{c};
+  if (factorization_ == Factorization::kBanded) {
+    BandScatter scatter{band_};
+    return potential.assemble_into(q, g_, scatter, roundoff);
+  }
+  Cholmod::Scatter scatter{*cholmod_};
   return potential.assemble_into(q, g_, scatter, roundoff);
 }
 
 bool SparseSystem::hessian_finite() const {
-  const Cholmod& c = *cholmod_;
-  const auto* x = static_cast<const double*>(c.A->x);
-  const int nnz = static_cast<const int*>(c.A->p)[c.dofs];
-  double sum = 0.0;
-  for (int k = 0; k < nnz; ++k) sum += x[k];
-  return std::isfinite(sum);
+  const double* x = nullptr;
+  long count = stored_nonzeros();
+  if (factorization_ == Factorization::kBanded) {
+    x = band_.values();
+  } else {
+    x = static_cast<const double*>(cholmod_->A->x);
+  }
+  // One sum (Eigen's, vectorised with independent partial sums): a NaN or Inf entry makes
+  // it non-finite.
+  return std::isfinite(Eigen::Map<const Eigen::VectorXd>(x, count).sum());
 }
 
 double SparseSystem::hessian_scale() const {
+  double scale = 0.0;
+  if (factorization_ == Factorization::kBanded) {
+    for (int j = 0; j < band_.size(); ++j) {
+      scale = std::max(scale, std::abs(band_.values()[band_.index(j, j)]));
+    }
+    return scale;
+  }
   const Cholmod& c = *cholmod_;
   const auto* p = static_cast<const int*>(c.A->p);
   const auto* i = static_cast<const int*>(c.A->i);
   const auto* x = static_cast<const double*>(c.A->x);
-  double scale = 0.0;
   for (int col = 0; col < c.dofs; ++col) {
     for (int k = p[col]; k < p[col + 1]; ++k) {
       if (i[k] == col) scale = std::max(scale, std::abs(x[k]));
@@ -323,6 +380,7 @@ double SparseSystem::hessian_scale() const {
 }
 
 bool SparseSystem::factorize(double mu) {
+  if (factorization_ == Factorization::kBanded) return band_.factorize(mu);
   Cholmod& c = *cholmod_;
   double beta[2] = {mu, 0.0};  // factorise A + βI
   const int ok = cholmod_factorize_p(c.A, beta, nullptr, 0, c.L, &c.common);
@@ -331,6 +389,11 @@ bool SparseSystem::factorize(double mu) {
 }
 
 void SparseSystem::solve(Vector& delta) {
+  if (factorization_ == Factorization::kBanded) {
+    delta = -g_;
+    band_.solve(delta.data());
+    return;
+  }
   // Triangular solves with the simplicial LLᵀ factor of P (H + μI) Pᵀ (natural ordering:
   // the permutation P of the blocks is ours). Written out because cholmod_solve2 reallocates
   // its workspace at every call in this version.
@@ -357,8 +420,15 @@ void SparseSystem::solve(Vector& delta) {
 }
 
 long SparseSystem::stored_nonzeros() const {
-  const Cholmod& c = *cholmod_;
-  return c.A == nullptr ? 0 : static_cast<const int*>(c.A->p)[c.dofs];
+  switch (factorization()) {
+    case Factorization::kUndecided:
+      return 0;
+    case Factorization::kBanded:
+      return static_cast<long>(band_.value_count());
+    case Factorization::kCholmod:
+      break;
+  }
+  return static_cast<const int*>(cholmod_->A->p)[cholmod_->dofs];
 }
 
 }  // namespace liedyn

@@ -12,6 +12,7 @@ Simulator::Simulator(Model model, const NewtonOptions& options)
   options_.validate();
   for (const RodSpec& rod : model_.rods) rods_.push_back(discretize(rod));
   state_ = model_.initial_state();
+  initial_ = state_;
   step_ = model_.initial_step();
   if (model_.static_equilibrium) {  // equilibria have no velocities
     for (Vector3& dx : step_.points) dx.setZero();
@@ -46,6 +47,7 @@ StepReport Simulator::step() {
   }
   const double load_scale =
       dynamic ? 1.0 : std::min(1.0, double(frame_ + 1) / double(model_.load_steps));
+  apply_prescribed_motions(load_scale);
 
   StepReport report;
   auto run = [&](auto& solvers) {
@@ -74,6 +76,25 @@ StepReport Simulator::step() {
   }
   ++frame_;
   return report;
+}
+
+void Simulator::apply_prescribed_motions(double load_scale) {
+  for (std::size_t r = 0; r < model_.rods.size(); ++r) {
+    const int rod = static_cast<int>(r);
+    for (const PrescribedMotion& motion : model_.rods[r].prescribed_motions) {
+      const double time = model_.static_equilibrium ? load_scale * motion.duration()
+                                                    : (frame_ + 1) * model_.time_step;
+      const RigidTransform T = motion.at(time);
+      for (int node : motion.nodes) {
+        const int i = model_.rod_point(rod, node);
+        state_.points[i] = motion.move_point(T, initial_.points[i]);
+      }
+      for (int edge : motion.edges) {
+        const int j = model_.rod_rotation(rod, edge);
+        state_.rotations[j] = so3::orthonormalize(T.rotation * initial_.rotations[j]);
+      }
+    }
+  }
 }
 
 Vector3 Simulator::linear_velocity(int point) const {

@@ -2,6 +2,7 @@
 // Forward simulation of a Model by backward Euler: each step minimises the incremental
 // potential of every independent component with Newton (dense or sparse, newton.hpp) (§4);
 // in static mode each step is a load step without inertia (Model::static_equilibrium).
+// Clamped rod nodes and edges with a prescribed motion are moved before each step.
 //
 //   q_k = argmin Ψ(q; q_{k−1}, Δq_{k−1}),  starting from the extrapolation
 //   x = x_{k−1} + Δx_{k−1},  R = ΔR_{k−1} R_{k−1};  then Δx_k = x_k − x_{k−1}, ΔR_k = R_k R_{k−1}ᵀ.
@@ -51,8 +52,13 @@ class Simulator {
   template <class Function>
   void for_each_mass(Function&& f) const;
 
+  // Moves the clamped nodes and edges of prescribed motions to their place at the end of
+  // the coming step (time (frame + 1) h, or λ of the motion in static mode).
+  void apply_prescribed_motions(double load_scale);
+
   Model model_;
   std::vector<RodDiscretization> rods_;
+  State initial_;  // q_0: where prescribed motions start from
   NewtonOptions options_;
   State state_, previous_;
   Step step_, previous_step_;

@@ -1,6 +1,6 @@
-// Newton over the three linear systems (solvers/linear_system.hpp): the sparse CHOLMOD
-// system must give the same iterates as the dense one, regularise the same way, and be
-// chosen by the simulator for large coupled components.
+// Newton over the three linear systems (solvers/linear_system.hpp): the sparse system, with
+// either of its factorisations (banded, CHOLMOD), must give the same iterates as the dense
+// one, regularise the same way, and be chosen by the simulator for large coupled components.
 
 #include <gtest/gtest.h>
 
@@ -11,11 +11,16 @@
 namespace liedyn {
 namespace {
 
-// A chain of n spinning bodies, each joined to the next by a spring between body points,
-// the first hung from a world anchor; gravity on. `rest_scale` multiplies the initial
-// lengths: rest_scale > 1 makes the springs start compressed, and a compressed spring's
-// Hessian is indefinite (forcing regularisation at large stiffness).
-Model chain(int n, double stiffness, double rest_scale) {
+// How the bodies of the test models are joined: each to the next (a band in body order:
+// the sparse system factorises it banded), or each to the first (a star: no narrow band in
+// body order, CHOLMOD's fill-reducing order wins).
+enum class Topology { kChain, kStar };
+
+// n spinning bodies joined by springs between body points, the first hung from a world
+// anchor; gravity on. `rest_scale` multiplies the initial lengths: rest_scale > 1 makes the
+// springs start compressed, and a compressed spring's Hessian is indefinite (forcing
+// regularisation at large stiffness).
+Model chain(int n, double stiffness, double rest_scale, Topology topology = Topology::kChain) {
   Model model;
   model.time_step = 0.01;
   model.gravity = Vector3(0.0, 0.0, -9.81);
@@ -41,15 +46,27 @@ Model chain(int n, double stiffness, double rest_scale) {
   model.springs.push_back(anchor);
   for (int i = 0; i + 1 < n; ++i) {
     SpringSpec s;
-    s.a = {i, Vector3(0.1, 0.02, 0.0)};
+    s.a = {topology == Topology::kChain ? i : 0, Vector3(0.1, 0.02, 0.0)};
     s.b = {i + 1, Vector3(-0.1, 0.0, 0.01)};
     s.stiffness = stiffness;
     s.rest_length =
-        rest_scale * (world_point(i + 1, s.b.point) - world_point(i, s.a.point)).norm();
+        rest_scale * (world_point(i + 1, s.b.point) - world_point(s.a.body, s.a.point)).norm();
     model.springs.push_back(s);
   }
   return model;
 }
+
+// The factorisation the sparse system picks for the single component of `model`.
+SparseSystem::Factorization factorization_of(const Model& model) {
+  std::vector<Component> components = build_components(model);
+  SparseNewton newton(std::move(components.front()), NewtonOptions{});
+  State q = model.initial_state();
+  newton.component().potential.begin_step(q, model.initial_step());
+  newton.solve(q);
+  return newton.system().factorization();
+}
+
+constexpr Topology kTopologies[] = {Topology::kChain, Topology::kStar};
 
 // Runs `steps` steps of the single component of `model` with Newton<System>, recording the
 // state and the reports.
@@ -94,55 +111,80 @@ double max_difference(const std::vector<State>& a, const std::vector<State>& b) 
   return d;
 }
 
-TEST(SparseNewton, MatchesDenseNewtonOnASpringChain) {
-  const Model model = chain(12, 2e3, 1.0);
-  NewtonOptions options;
-  options.tolerance = 1e-11;
-  const auto [dense_states, dense_reports] = run<DenseSystem<Eigen::Dynamic>>(model, 50, options);
-  const auto [sparse_states, sparse_reports] = run<SparseSystem>(model, 50, options);
-  ASSERT_EQ(dense_states.size(), 50u);
-  ASSERT_EQ(sparse_states.size(), 50u);
-  // Both converge every step to ‖δ‖∞ ≤ 1e-11 from the same start, so the trajectories
-  // agree to a small multiple of the tolerance (different orderings change only round-off).
-  EXPECT_LT(max_difference(dense_states, sparse_states), 1e-9);
-  for (std::size_t k = 0; k < sparse_reports.size(); ++k) {
-    EXPECT_TRUE(sparse_reports[k].converged()) << "step " << k;
-    EXPECT_EQ(sparse_reports[k].iterations, dense_reports[k].iterations) << "step " << k;
+TEST(SparseNewton, FactorisesAChainBandedAndAStarWithCholmod) {
+  EXPECT_EQ(factorization_of(chain(12, 2e3, 1.0, Topology::kChain)),
+            SparseSystem::Factorization::kBanded);
+  EXPECT_EQ(factorization_of(chain(12, 2e3, 1.0, Topology::kStar)),
+            SparseSystem::Factorization::kCholmod);
+}
+
+TEST(SparseNewton, MatchesDenseNewtonOnSpringNetworks) {
+  for (const Topology topology : kTopologies) {
+    SCOPED_TRACE(topology == Topology::kChain ? "chain (banded)" : "star (CHOLMOD)");
+    const Model model = chain(12, 2e3, 1.0, topology);
+    NewtonOptions options;
+    options.tolerance = 1e-11;
+    const auto [dense_states, dense_reports] =
+        run<DenseSystem<Eigen::Dynamic>>(model, 50, options);
+    const auto [sparse_states, sparse_reports] = run<SparseSystem>(model, 50, options);
+    ASSERT_EQ(dense_states.size(), 50u);
+    ASSERT_EQ(sparse_states.size(), 50u);
+    // Both converge every step to ‖δ‖∞ ≤ 1e-11 from the same start, so the trajectories
+    // agree to a small multiple of the tolerance (different orderings change only round-off).
+    EXPECT_LT(max_difference(dense_states, sparse_states), 1e-9);
+    for (std::size_t k = 0; k < sparse_reports.size(); ++k) {
+      EXPECT_TRUE(sparse_reports[k].converged()) << "step " << k;
+      EXPECT_EQ(sparse_reports[k].iterations, dense_reports[k].iterations) << "step " << k;
+    }
+    // The bodies really moved (the comparison is not between two resting states).
+    EXPECT_GT((sparse_states.back().points[5] - model.bodies[5].position).norm(), 1e-3);
   }
-  // The chain really moved (the comparison is not between two resting states).
-  EXPECT_GT((sparse_states.back().points[5] - model.bodies[5].position).norm(), 1e-3);
 }
 
 TEST(SparseNewton, RegularisesIndefiniteHessiansLikeTheDensePath) {
-  // Stiff springs compressed to 60 % of their rest length: indefinite spring Hessians.
-  const Model model = chain(10, 1e6, 1.0 / 0.6);
-  NewtonOptions options;
-  options.tolerance = 1e-10;
-  const auto [dense_states, dense_reports] = run<DenseSystem<Eigen::Dynamic>>(model, 20, options);
-  const auto [sparse_states, sparse_reports] = run<SparseSystem>(model, 20, options);
-  int regularized = 0;
-  for (const StepReport& r : sparse_reports) regularized += r.regularized_iterations;
-  EXPECT_GT(regularized, 0) << "the test must exercise the regularised path";
-  ASSERT_EQ(sparse_reports.size(), dense_reports.size());
-  for (std::size_t k = 0; k < sparse_reports.size(); ++k) {
-    EXPECT_EQ(sparse_reports[k].status, dense_reports[k].status) << "step " << k;
-    EXPECT_EQ(sparse_reports[k].regularized_iterations, dense_reports[k].regularized_iterations)
-        << "step " << k;
+  for (const Topology topology : kTopologies) {
+    SCOPED_TRACE(topology == Topology::kChain ? "chain (banded)" : "star (CHOLMOD)");
+    // Stiff springs compressed to 60 % of their rest length: indefinite spring Hessians.
+    const Model model = chain(10, 1e6, 1.0 / 0.6, topology);
+    NewtonOptions options;
+    options.tolerance = 1e-10;
+    const auto [dense_states, dense_reports] =
+        run<DenseSystem<Eigen::Dynamic>>(model, 20, options);
+    const auto [sparse_states, sparse_reports] = run<SparseSystem>(model, 20, options);
+    int regularized = 0;
+    for (const StepReport& r : sparse_reports) regularized += r.regularized_iterations;
+    EXPECT_GT(regularized, 0) << "the test must exercise the regularised path";
+    ASSERT_EQ(sparse_reports.size(), dense_reports.size());
+    for (std::size_t k = 0; k < sparse_reports.size(); ++k) {
+      EXPECT_EQ(sparse_reports[k].status, dense_reports[k].status) << "step " << k;
+      EXPECT_EQ(sparse_reports[k].regularized_iterations, dense_reports[k].regularized_iterations)
+          << "step " << k;
+    }
+    EXPECT_LT(max_difference(dense_states, sparse_states), 1e-8);
   }
-  EXPECT_LT(max_difference(dense_states, sparse_states), 1e-8);
 }
 
-TEST(SparseNewton, PatternHoldsOnlyTheLowerTriangleOfCoupledBlocks) {
+TEST(SparseNewton, StoresTheLowerBandOfAChainAndTheUpperTriangleOfAStar) {
   const int n = 9;
-  std::vector<Component> components = build_components(chain(n, 1e3, 1.0));
-  SparseNewton newton(std::move(components.front()), NewtonOptions{});
-  EXPECT_EQ(newton.system().stored_nonzeros(), 0);  // before the first assembly
-  State q = chain(n, 1e3, 1.0).initial_state();
-  newton.component().potential.begin_step(q, chain(n, 1e3, 1.0).initial_step());
-  newton.solve(q);
-  // Per body the [x, θ] blocks form a dense 6×6 on the diagonal: 3 lower 3×3 blocks.
-  // Each spring between bodies i and i+1 couples their 2×2 blocks: 4 lower 3×3 blocks.
-  EXPECT_EQ(newton.system().stored_nonzeros(), 9 * (3 * n + 4 * (n - 1)));
+  for (const Topology topology : kTopologies) {
+    SCOPED_TRACE(topology == Topology::kChain ? "chain (banded)" : "star (CHOLMOD)");
+    const Model model = chain(n, 1e3, 1.0, topology);
+    std::vector<Component> components = build_components(model);
+    SparseNewton newton(std::move(components.front()), NewtonOptions{});
+    EXPECT_EQ(newton.system().stored_nonzeros(), 0);  // before the first assembly
+    State q = model.initial_state();
+    newton.component().potential.begin_step(q, model.initial_step());
+    newton.solve(q);
+    if (topology == Topology::kChain) {
+      // Bodies are [x, θ] blocks in order; a spring joins body i's θ to body i+1's x and θ:
+      // half-bandwidth 6 + 5 = 11, stored as 12 entries per column.
+      EXPECT_EQ(newton.system().stored_nonzeros(), 6 * n * 12);
+    } else {
+      // Per body the [x, θ] blocks form a dense 6×6 on the diagonal: 3 stored 3×3 blocks.
+      // Each spring couples the 2×2 blocks of its two bodies: 4 stored 3×3 blocks.
+      EXPECT_EQ(newton.system().stored_nonzeros(), 9 * (3 * n + 4 * (n - 1)));
+    }
+  }
 }
 
 TEST(Simulator, UsesTheSparseSystemBeyondTheDenseLimitWithTheSameResult) {
