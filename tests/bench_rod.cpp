@@ -21,7 +21,7 @@ using liedyn::NewtonOptions;
 using liedyn::SparseSystem;
 using liedyn::State;
 
-const char* const kScene = LIEDYN_SOURCE_DIR "/problems/scenes/helix_rod.json";
+const char* const kScene = LIEDYN_SOURCE_DIR "/problems/scenes/helix_perversion.json";
 
 // The rod's component at the start of its first step (iterate = extrapolated state).
 struct RodProblem {

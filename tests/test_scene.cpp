@@ -801,6 +801,80 @@ TEST(SceneRodErrors, BadShapes) {
   EXPECT_NEAR(down.model.rods[0].nodes.back().z(), -2.0, 1e-15);
 }
 
+TEST(SceneRods, RestShapeAndPrescribedMotions) {
+  const Scene s = parse_scene(
+      rod_scene(kRod + R"(, "rest_nodes": [[0, 0, 0], [0, 0.5, 0], [0, 1, 0]],)"
+                       R"( "fixed_nodes": [0, 2], "fixed_edges": [0, 1],)"
+                       R"( "prescribed_motions": [)"
+                       R"(  {"nodes": [2], "edges": [1], "keyframes": [)"
+                       R"(    {"time": 1, "translation": [0, 0, -0.5]},)"
+                       R"(    {"time": 2.5, "translation": [0, 0, -0.2], "rotation": [0, 0, 7]}]},)"
+                       R"(  {"edges": [0], "center": [1, 2, 3],)"
+                       R"(   "keyframes": [{"time": 0.5, "rotation": [0.1, 0, 0]}]}])"),
+      kSource);
+  const RodSpec& r = s.model.rods[0];
+  ASSERT_EQ(r.rest_nodes.size(), 3u);
+  EXPECT_EQ(r.rest_nodes[1], Vector3(0.0, 0.5, 0.0));
+  ASSERT_EQ(r.prescribed_motions.size(), 2u);
+  const PrescribedMotion& top = r.prescribed_motions[0];
+  EXPECT_EQ(top.nodes, std::vector<int>{2});
+  EXPECT_EQ(top.edges, std::vector<int>{1});
+  EXPECT_EQ(top.center, Vector3(0.0, 0.0, 1.0));  // default: centroid of the moved nodes
+  ASSERT_EQ(top.keyframes.size(), 2u);
+  EXPECT_EQ(top.keyframes[0].time, 1.0);
+  EXPECT_EQ(top.keyframes[0].translation, Vector3(0.0, 0.0, -0.5));
+  EXPECT_EQ(top.keyframes[0].rotation, Vector3::Zero());  // default
+  EXPECT_EQ(top.keyframes[1].rotation, Vector3(0.0, 0.0, 7.0));
+  const PrescribedMotion& base = r.prescribed_motions[1];
+  EXPECT_TRUE(base.nodes.empty());
+  EXPECT_EQ(base.center, Vector3(1.0, 2.0, 3.0));
+  // Without nodes, the default pivot is the centroid of the moved edges' midpoints.
+  const Scene e = parse_scene(
+      rod_scene(kRod + R"(, "fixed_edges": [1], "prescribed_motions": [)"
+                       R"({"edges": [1], "keyframes": [{"time": 1, "rotation": [0, 0, 1]}]}])"),
+      kSource);
+  EXPECT_EQ(e.model.rods[0].prescribed_motions[0].center, Vector3(0.0, 0.0, 0.75));
+  // A rest shape from a generator.
+  const Scene g = parse_scene(
+      rod_scene(kRod + R"(, "rest_shape": {"type": "line", "start": [0, 0, 0],)"
+                       R"( "end": [2, 0, 0], "edges": 2})"),
+      kSource);
+  EXPECT_EQ(g.model.rods[0].rest_nodes[2], Vector3(2.0, 0.0, 0.0));
+}
+
+TEST(SceneRodErrors, BadRestShapesAndMotions) {
+  expect_rejected(rod_scene(kRod + R"(, "rest_nodes": [[0, 0, 0], [0, 0, 1]])"),
+                  "rods[0].rest_nodes", "has 2 nodes, but the initial shape has 3");
+  expect_rejected(rod_scene(kRod + R"(, "rest_shape": {"type": "line", "start": [0, 0, 0],)"
+                                   R"( "end": [2, 0, 0], "edges": 5})"),
+                  "rods[0].rest_shape", "has 6 nodes");
+  expect_rejected(rod_scene(kRod + R"(, "rest_nodes": [[0, 0, 0], [0, 0, 0], [0, 0, 1]])"),
+                  "rods[0].rest_nodes[1]", "coincides");
+  expect_rejected(rod_scene(kRod + R"(, "rest_nodes": [], "rest_shape": {})"), "rods[0]",
+                  "both");
+  const std::string clamped = kRod + R"(, "fixed_nodes": [2], "fixed_edges": [1], )";
+  expect_rejected(rod_scene(clamped + R"("prescribed_motions": [{"nodes": [1],)"
+                                      R"( "keyframes": [{"time": 1}]}])"),
+                  "rods[0].prescribed_motions[0].nodes[0]", "not in fixed_nodes");
+  expect_rejected(rod_scene(clamped + R"("prescribed_motions": [{"keyframes": [{"time": 1}]}])"),
+                  "rods[0].prescribed_motions[0].nodes", "at least one node or edge");
+  expect_rejected(rod_scene(clamped + R"("prescribed_motions": [{"nodes": [2],)"
+                                      R"( "keyframes": []}])"),
+                  "rods[0].prescribed_motions[0].keyframes", "at least one keyframe");
+  expect_rejected(rod_scene(clamped + R"("prescribed_motions": [{"nodes": [2], "keyframes":)"
+                                      R"( [{"time": 2}, {"time": 2}]}])"),
+                  "rods[0].prescribed_motions[0].keyframes[1].time", "later than");
+  expect_rejected(rod_scene(clamped + R"("prescribed_motions": [{"nodes": [2], "keyframes":)"
+                                      R"( [{"time": 1, "translation": [0, 1]}]}])"),
+                  "rods[0].prescribed_motions[0].keyframes[0].translation", "3");
+  expect_rejected(rod_scene(clamped + R"("prescribed_motions": [{"nodes": [2], "keyframes":)"
+                                      R"( [{"time": 1, "rotatoin": [0, 0, 1]}]}])"),
+                  "rods[0].prescribed_motions[0].keyframes[0].rotatoin", "unknown");
+  expect_rejected(rod_scene(clamped + R"("prescribed_motions": [{"edges": [1], "keyframes":)"
+                                      R"( [{"time": 0.01, "rotation": [0, 0, 4]}]}])"),
+                  "rods[0].prescribed_motions[0].keyframes[0].rotation", "below π");
+}
+
 TEST(SceneRodErrors, SceneNeedsABodyOrARod) {
   expect_rejected(R"({"time_step": 0.01, "frames": 1, "rods": []})", "rods", "at least one");
   expect_rejected(R"({"time_step": 0.01, "frames": 1, "bodies": [], "rods": []})", "bodies",
