@@ -79,6 +79,8 @@ std::string format_bench(const BenchResult& r) {
      << " assemblies per frame (iterations + convergence checks)\n";
   os << "assembly     " << r.assembly_us << " µs per assembly\n";
   os << "solve        " << r.solve_us << " µs per factorisation + solve\n";
+  os << "iteration    " << r.assembly_us + r.solve_us
+     << " µs per Newton iteration (assembly + solve; the line search not included)\n";
   os << "total        " << r.total_seconds << " s\n";
   if (r.unconverged_steps > 0) os << "unconverged  " << r.unconverged_steps << " steps\n";
   if (r.failed) os << "FAILED       " << r.failure << "\n";
@@ -96,7 +98,8 @@ std::string bench_json(const BenchResult& r) {
   os << "{\"scene\": \"" << escaped << "\", \"dofs\": " << r.dofs << ", \"frames\": " << r.frames
      << ", \"time_step\": " << r.time_step << ", \"repeats\": " << r.repeats
      << ", \"total_seconds\": " << r.total_seconds << ", \"assembly_us\": " << r.assembly_us
-     << ", \"solve_us\": " << r.solve_us << ", \"iterations_per_frame\": "
+     << ", \"solve_us\": " << r.solve_us
+     << ", \"iteration_us\": " << r.assembly_us + r.solve_us << ", \"iterations_per_frame\": "
      << r.iterations_per_frame << ", \"assemblies_per_frame\": " << r.assemblies_per_frame
      << ", \"max_iterations_in_frame\": " << r.max_iterations_in_frame
      << ", \"unconverged_steps\": " << r.unconverged_steps

@@ -382,7 +382,8 @@ TEST_F(Cli, BenchReportsIterationCostsWithoutWritingFiles) {
   // One JSON object with the documented keys; the rod of 20 edges clamped at node 0 and
   // edge 0 has 20 free nodes and 19 free edges: 117 DOFs.
   for (const char* key : {"\"dofs\": 117", "\"frames\": 300", "\"repeats\": 2",
-                          "\"assembly_us\": ", "\"solve_us\": ", "\"total_seconds\": ",
+                          "\"assembly_us\": ", "\"solve_us\": ", "\"iteration_us\": ",
+                          "\"total_seconds\": ",
                           "\"iterations_per_frame\": ", "\"failed\": false"}) {
     EXPECT_NE(r.out.find(key), std::string::npos) << key << " missing from " << r.out;
   }
