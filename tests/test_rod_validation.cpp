@@ -28,30 +28,17 @@
 #include <numbers>
 #include <vector>
 
+#include "rod_models.hpp"
 #include "solvers/simulator.hpp"
 
 namespace liedyn {
 namespace {
 
-RodSpec uniform_rod(int edges, double length, double mass, double radius, double ks, double kx,
-                    double EI) {
-  RodSpec rod;
-  rod.name = "rod";
-  for (int i = 0; i <= edges; ++i) rod.nodes.push_back(Vector3(length * i / edges, 0.0, 0.0));
-  rod.mass = mass;
-  rod.radius = radius;
-  rod.stretch_stiffness = ks;
-  rod.shear_stiffness = kx;
-  rod.bending_stiffness = Vector3(EI, EI, EI);
-  return rod;
-}
-
-NewtonOptions newton(double tolerance, int max_iterations = 50) {
-  NewtonOptions options;
-  options.tolerance = tolerance;  // on the Newton step, metres and radians
-  options.max_iterations = max_iterations;
-  return options;
-}
+using test_models::cantilever_beta1;
+using test_models::elastica_tip;
+using test_models::newton;
+using test_models::Tip;
+using test_models::uniform_rod;
 
 // Takes `steps` steps, every one of which must converge.
 void run(Simulator& sim, int steps) {
@@ -65,47 +52,8 @@ void run(Simulator& sim, int steps) {
 // 1. Large-deflection cantilever (elastica)
 // ---------------------------------------------------------------------------------------
 
-struct Tip {
-  double x = 0.0;  // along the undeformed rod
-  double y = 0.0;  // deflection, along the load
-};
-
-// Elastica: an inextensible, unshearable rod of length L clamped horizontally at s = 0 under
-// a dead tip load F perpendicular to the undeformed rod. θ(s) is the tangent angle towards
-// the load; the bending moment at s is F (x(L) − x(s)), so EI θ' = F (x(L) − x(s)) and
-//   θ'' = −p cos θ,  p = F/EI,   θ(0) = 0,  θ'(L) = 0,   x' = cos θ,  y' = sin θ.
-// Shooting on κ₀ = θ'(0) = p x(L) ∈ [0, pL]: θ'(L) = κ₀ − p ∫cos θ is < 0 at κ₀ = 0 and ≥ 0 at
-// κ₀ = pL, so bisection brackets the root. RK4 with 4000 steps: global error O((L/4000)⁴),
-// at rounding level (for p L = 2 the tip changes by < 3e-14 from 1000 to 4000 steps).
-Tip elastica_tip(double p, double L) {
-  const int steps = 4000;
-  const double ds = L / steps;
-  auto integrate = [&](double kappa0, Tip* tip) {
-    Eigen::Vector4d u(0.0, kappa0, 0.0, 0.0);  // θ, θ', x, y
-    auto f = [&](const Eigen::Vector4d& v) {
-      return Eigen::Vector4d(v[1], -p * std::cos(v[0]), std::cos(v[0]), std::sin(v[0]));
-    };
-    for (int k = 0; k < steps; ++k) {
-      const Eigen::Vector4d k1 = f(u);
-      const Eigen::Vector4d k2 = f(u + 0.5 * ds * k1);
-      const Eigen::Vector4d k3 = f(u + 0.5 * ds * k2);
-      const Eigen::Vector4d k4 = f(u + ds * k3);
-      u += ds / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4);
-    }
-    if (tip) *tip = Tip{u[2], u[3]};
-    return u[1];  // θ'(L)
-  };
-  double lo = 0.0, hi = p * L;
-  for (int it = 0; it < 200 && hi - lo > 1e-15 * p * L; ++it) {
-    const double mid = 0.5 * (lo + hi);
-    (integrate(mid, nullptr) < 0.0 ? lo : hi) = mid;
-  }
-  Tip tip;
-  integrate(0.5 * (lo + hi), &tip);
-  return tip;
-}
-
-// The same elastica in closed form. EI θ'²/2 = F (sin θ_L − sin θ) (first integral, θ'(L) = 0);
+// The elastica of test_models::elastica_tip (shooting + RK4) in closed form.
+// EI θ'²/2 = F (sin θ_L − sin θ) (first integral, θ'(L) = 0);
 // substituting 1 + sin θ = 2k² sin²φ, k² = (1 + sin θ_L)/2, gives dθ/√(sin θ_L − sin θ) =
 // √2 dφ/√(1 − k² sin²φ), hence
 //   √p L = K(k) − F(k, φ₁),   sin φ₁ = 1/(k√2)            (θ = 0 at the clamp),
@@ -246,17 +194,6 @@ TEST(RodValidation, LargeDeflectionCantileverMatchesTheElastica) {
 // ---------------------------------------------------------------------------------------
 // 2. First bending mode of a cantilever
 // ---------------------------------------------------------------------------------------
-
-// Smallest root of cos β cosh β = −1 (clamped–free beam): β₁ = 1.8751040687…
-double cantilever_beta1() {
-  double beta = 1.875;
-  for (int it = 0; it < 20; ++it) {  // Newton on f(β) = cos β cosh β + 1
-    const double f = std::cos(beta) * std::cosh(beta) + 1.0;
-    const double df = -std::sin(beta) * std::cosh(beta) + std::cos(beta) * std::sinh(beta);
-    beta -= f / df;
-  }
-  return beta;
-}
 
 struct ChainModes {
   double omega1 = 0.0;      // lowest angular frequency, rad/s
