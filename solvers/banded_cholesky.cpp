@@ -1,4 +1,5 @@
 #include "banded_cholesky.hpp"
+#include "unroll.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -31,13 +32,6 @@ namespace {
 // bandwidth, 22 µs in this form.
 //
 // Layout: column j of l holds D_j, then L_{j+1,j} … L_{j+b,j} (unit diagonal implied).
-#if defined(__clang__)
-#define LIEDYN_UNROLL _Pragma("unroll")
-#elif defined(__GNUC__)
-#define LIEDYN_UNROLL _Pragma("GCC unroll 16")
-#else
-#define LIEDYN_UNROLL
-#endif
 
 }  // namespace
 
@@ -136,7 +130,6 @@ void BandedCholesky::solve_band(double* x) const {
   for (; j >= 0; --j) unrolled ? backward(j, kB) : backward(j, b);
 }
 
-#undef LIEDYN_UNROLL
 
 // Rods have b = 8, chains of rigid bodies b = 11: compiled in; other bandwidths run the
 // same code with runtime trip counts.

@@ -1,4 +1,5 @@
 #include "linear_system.hpp"
+#include "unroll.hpp"
 
 #include <suitesparse/cholmod.h>
 
@@ -14,15 +15,6 @@ namespace liedyn {
 
 namespace {
 
-// Full unrolling of the fixed-size loops below (their bounds are compile-time constants,
-// but GCC does not unroll the triangular nests by itself; unrolled, they run ~2× faster).
-#if defined(__clang__)
-#define LIEDYN_UNROLL _Pragma("unroll")
-#elif defined(__GNUC__)
-#define LIEDYN_UNROLL _Pragma("GCC unroll 16")
-#else
-#define LIEDYN_UNROLL
-#endif
 
 // Cholesky factorisation A + μI = L Lᵀ of a small fixed-size matrix. F receives L's strict
 // lower triangle and, on its diagonal, the reciprocals 1/L_jj (so that the solve needs no
@@ -72,7 +64,6 @@ void cholesky_fixed_solve(const Eigen::Matrix<double, N, N>& F,
   }
 }
 
-#undef LIEDYN_UNROLL
 
 // A sink that records the block positions of one assembly: the pattern.
 struct BlockRecorder {

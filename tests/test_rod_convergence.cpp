@@ -56,11 +56,7 @@
 namespace liedyn {
 namespace {
 
-using test_models::cantilever_beta1;
-using test_models::elastica_tip;
-using test_models::newton;
-using test_models::Tip;
-using test_models::uniform_rod;
+using namespace test_models;  // rod_models.hpp
 
 const std::vector<int> kEdges{4, 8, 16, 32, 64};  // each twice the previous
 

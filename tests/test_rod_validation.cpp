@@ -34,11 +34,7 @@
 namespace liedyn {
 namespace {
 
-using test_models::cantilever_beta1;
-using test_models::elastica_tip;
-using test_models::newton;
-using test_models::Tip;
-using test_models::uniform_rod;
+using namespace test_models;  // rod_models.hpp
 
 // Takes `steps` steps, every one of which must converge.
 void run(Simulator& sim, int steps) {
