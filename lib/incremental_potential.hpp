@@ -12,6 +12,8 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <type_traits>
+#include <utility>
 #include <vector>
 
 #include "inertia.hpp"
@@ -76,6 +78,20 @@ class IncrementalPotential {
   template <class Vector, class Sink>
   double assemble_into(const State& q, Vector& g, Sink& sink, double* roundoff = nullptr) const;
 
+  // The building block of assemble_into, for assembly in parallel: the terms of one part,
+  // the slice [n·index/count, n·(index + 1)/count) of each term vector (n its length), are
+  // added into g and the sink, which are NOT cleared first, in the same order as in
+  // assemble_into. Returns their Σ Ψ_t and adds their part of the round-off sum above to
+  // *magnitude (if non-null), with s = roundoff_position_scale(q).
+  struct Part {
+    int index = 0;
+    int count = 1;
+  };
+  template <class Vector, class Sink>
+  double add_terms(const State& q, Vector& g, Sink& sink, Part part, double position_scale,
+                   double* magnitude) const;
+  static double roundoff_position_scale(const State& q);
+
   // Potential energy (gravity, constant forces, springs, rod elasticity):
   // what frames.csv reports. Inertia and torque terms are not energies of the state.
   double potential_energy(const State& q) const;
@@ -119,46 +135,64 @@ std::vector<Component> build_components(const Model& model);
 Component build_rod_component(const Model& model, int r);
 
 // ---------------------------------------------------------------------------------------
+// Calls f(std::integral_constant<int, i>{}) for i = 0, …, N − 1, unrolled at compile time.
+template <int N, class Function>
+inline void static_for(Function&& f) {
+  [&]<int... I>(std::integer_sequence<int, I...>) {
+    (f(std::integral_constant<int, I>{}), ...);
+  }(std::make_integer_sequence<int, N>{});
+}
+
 template <class Vector, class Sink>
 double IncrementalPotential::assemble_into(const State& q, Vector& g, Sink& sink,
                                            double* roundoff) const {
   g.setZero();
   sink.clear();
-  double value = 0.0;
   double magnitude = 0.0;  // the Σ above
-  double position_scale = 1.0;
-  if (roundoff != nullptr) {
-    for (const Vector3& x : q.points) {
-      position_scale = std::max(position_scale, 1.0 + x.cwiseAbs().maxCoeff());
-    }
-  }
+  const double position_scale = roundoff != nullptr ? roundoff_position_scale(q) : 1.0;
+  const double value =
+      add_terms(q, g, sink, Part{}, position_scale, roundoff != nullptr ? &magnitude : nullptr);
+  if (roundoff != nullptr) *roundoff = std::numeric_limits<double>::epsilon() * magnitude;
+  return value;
+}
+
+template <class Vector, class Sink>
+double IncrementalPotential::add_terms(const State& q, Vector& g, Sink& sink, Part part,
+                                       double position_scale, double* magnitude) const {
+  double value = 0.0;
+  double roundoff_sum = 0.0;  // kept local: *magnitude could alias g
   for_each_term_vector([&](const auto& terms) {
     using Term = typename std::decay_t<decltype(terms)>::value_type;
     constexpr int B = Term::kBlocks;
     LocalGradient<B> g_local;
     LocalHessian<B> H_local;
-    for (const Term& term : terms) {
+    const std::size_t n = terms.size();
+    const std::size_t end = n * (part.index + 1) / part.count;
+    for (std::size_t t = n * part.index / part.count; t < end; ++t) {
+      const Term& term = terms[t];
       const double term_value = term.evaluate(q, &g_local, &H_local);
       value += term_value;
-      if (roundoff != nullptr) {
+      if (magnitude != nullptr) {
         const double ambient_gradient =
             std::sqrt(2.0 * std::abs(term_value) * H_local.diagonal().cwiseAbs().sum());
-        magnitude += std::abs(term_value) +
-                     (g_local.template lpNorm<1>() + ambient_gradient) * position_scale;
+        roundoff_sum += std::abs(term_value) +
+                        (g_local.template lpNorm<1>() + ambient_gradient) * position_scale;
       }
-      for (int i = 0; i < B; ++i) {
+      // Unrolled at compile time, so that each block's place in H_local is a constant and an
+      // inlined sink sees which blocks are diagonal (i = j).
+      static_for<B>([&](auto i) {
         const int oi = term.offsets[i];
-        if (oi < 0) continue;
+        if (oi < 0) return;
         g.template segment<3>(oi) += g_local.template segment<3>(3 * i);
-        for (int j = 0; j < B; ++j) {
+        static_for<B>([&](auto j) {
           const int oj = term.offsets[j];
-          if (oj < 0) continue;
+          if (oj < 0) return;
           sink.add(oi, oj, H_local.template block<3, 3>(3 * i, 3 * j));
-        }
-      }
+        });
+      });
     }
   });
-  if (roundoff != nullptr) *roundoff = std::numeric_limits<double>::epsilon() * magnitude;
+  if (magnitude != nullptr) *magnitude += roundoff_sum;
   return value;
 }
 

@@ -5,8 +5,22 @@
 
 namespace liedyn {
 
+namespace {
+
+// vee(R_aᵀ R_b)/l, shared by darboux_vector and RodBendTwist (see the former).
+inline Vector3 darboux(const Matrix3& Ra, const Matrix3& Rb, double rest_length) {
+  // vee(Q) = ½ (Q₃₂ − Q₂₃, Q₁₃ − Q₃₁, Q₂₁ − Q₁₂),  Q_ij = a_i · b_j  (a_i, b_j the columns
+  // of R_a, R_b): six dot products rather than the whole of R_aᵀ R_b. Q_ij − Q_ji is then
+  // exactly 0 when R_a = R_b, and RodBendTwist computes ω here too, so Δω = 0 exactly at
+  // the rest shape.
+  const auto Q = [&](int i, int j) { return Ra.col(i).dot(Rb.col(j)); };
+  return (0.5 / rest_length) * Vector3(Q(2, 1) - Q(1, 2), Q(0, 2) - Q(2, 0), Q(1, 0) - Q(0, 1));
+}
+
+}  // namespace
+
 Vector3 darboux_vector(const Matrix3& Ra, const Matrix3& Rb, double rest_length) {
-  return so3::vee(Ra.transpose() * Rb) / rest_length;
+  return darboux(Ra, Rb, rest_length);
 }
 
 double RodStretch::evaluate(const State& q, LocalGradient<2>* g, LocalHessian<2>* H) const {
@@ -51,20 +65,20 @@ double RodShear::evaluate(const State& q, LocalGradient<3>* g, LocalHessian<3>* 
 
   const double a = d.dot(t);
   const Vector3 Pt = t - a * d;  // P t,  P = I − d dᵀ
+  const Vector3 txd = t.cross(d);
   if (g != nullptr) {
     const Vector3 g_e = -c / L * Pt;  // ∂Ψ/∂e = −c P t / L
     g->segment<3>(0) = -g_e;
     g->segment<3>(3) = g_e;
-    g->segment<3>(6) = -c * t.cross(d);  // DΨ/DR = −c t × d
+    g->segment<3>(6) = -c * txd;  // DΨ/DR = −c t × d
   }
   if (H != nullptr) {
     const Matrix3 dt = d * t.transpose();
     const Matrix3 dtS = dt + dt.transpose();  // d tᵀ + t dᵀ (exactly symmetric)
-    const Matrix3 P = Matrix3::Identity() - d * d.transpose();
     // ∂²Ψ/∂e² = c [d tᵀ + t dᵀ + a (I − 3 d dᵀ)] / L²
     const Matrix3 H_ee = c / (L * L) * (dtS + a * (Matrix3::Identity() - 3.0 * d * d.transpose()));
-    // ∂²Ψ/∂θ∂e = −c hat(t) P / L
-    const Matrix3 H_te = -c / L * so3::hat(t) * P;
+    // ∂²Ψ/∂θ∂e = −c hat(t) P / L = −c [hat(t) − (t × d) dᵀ] / L
+    const Matrix3 H_te = -c / L * (so3::hat(t) - txd * d.transpose());
     // D²Ψ/DR² = −c [½ (d tᵀ + t dᵀ) − a I]
     const Matrix3 H_tt = -c * (0.5 * dtS - a * Matrix3::Identity());
     H->block<3, 3>(0, 0) = H_ee;
@@ -83,8 +97,7 @@ double RodShear::evaluate(const State& q, LocalGradient<3>* g, LocalHessian<3>* 
 double RodBendTwist::evaluate(const State& q, LocalGradient<2>* g, LocalHessian<2>* H) const {
   const Matrix3& Ra = q.rotations[edge0];
   const Matrix3& Rb = q.rotations[edge1];
-  const Vector3 omega = darboux_vector(Ra, Rb, rest_length);
-  const Vector3 dw = omega - rest_darboux;
+  const Vector3 dw = darboux(Ra, Rb, rest_length) - rest_darboux;  // Δω = ω − ω̄
   const Vector3 Kdw = stiffness.cwiseProduct(dw);
   const double value = 0.5 * rest_length * dw.dot(Kdw);
   if (g == nullptr && H == nullptr) return value;
@@ -98,10 +111,18 @@ double RodBendTwist::evaluate(const State& q, LocalGradient<2>* g, LocalHessian<
     g->segment<3>(3) = Gtm;
   }
   if (H != nullptr) {
-    const Matrix3 RaG = Ra.transpose() * G;  // l ∂ω/∂β
-    Matrix3 S = RaG.transpose() * stiffness.asDiagonal() * RaG / rest_length;
-    S = 0.5 * (S + S.transpose()).eval();  // Gᵀ R_a K R_aᵀ G / l, symmetric up to round-off
-    const Matrix3 N = -C * so3::hat(m);
+    // S = Gᵀ R_a K R_aᵀ G / l = W (K/l) Wᵀ,  W = Gᵀ R_a = (l ∂ω/∂β)ᵀ: each entry on and
+    // below the diagonal once, mirrored above (exactly symmetric, and cheaper than a
+    // product followed by ½ (S + Sᵀ)).
+    const Matrix3 W = G.transpose() * Ra;
+    const Matrix3 WK = W * ((1.0 / rest_length) * stiffness).asDiagonal();
+    Matrix3 S;
+    for (int j = 0; j < 3; ++j) {
+      for (int i = j; i < 3; ++i) S(i, j) = S(j, i) = WK.row(i).dot(W.row(j));
+    }
+    // N = −C hat(m): row k of C hat(m) is (row k of C) × m, so row k of N is m × (row k of C).
+    Matrix3 N;
+    for (int k = 0; k < 3; ++k) N.row(k) = m.cross(C.row(k).transpose()).transpose();
     const double mc = m.dot(so3::vee(C));
     const Matrix3 diag = S + 0.25 * (N + N.transpose()) - mc * Matrix3::Identity();
     const Matrix3 mixed = -S - 0.5 * N + mc * Matrix3::Identity();

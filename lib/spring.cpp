@@ -4,22 +4,6 @@
 
 namespace liedyn {
 
-LengthSpringDerivatives length_spring(const Vector3& d, double stiffness, double rest_length) {
-  const double l = d.norm();
-  const double stretch = l - rest_length;
-  LengthSpringDerivatives out{0.5 * stiffness * stretch * stretch, Vector3::Zero(),
-                              stiffness * Matrix3::Identity()};
-  if (rest_length == 0.0) {
-    out.f = stiffness * d;
-  } else if (l > 0.0) {
-    const Vector3 n = d / l;
-    const Matrix3 nn = n * n.transpose();
-    out.f = stiffness * stretch * n;
-    out.K = stiffness * nn + stiffness * stretch / l * (Matrix3::Identity() - nn);
-  }
-  return out;
-}
-
 double Spring::evaluate(const State& q, LocalGradient<4>* g, LocalHessian<4>* H) const {
   const Vector3 d = b.position(q) - a.position(q);
   if (g == nullptr && H == nullptr) {

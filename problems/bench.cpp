@@ -9,15 +9,42 @@
 #include "../solvers/simulator.hpp"
 
 namespace liedyn {
-namespace {
-
 double median(std::vector<double> v) {
   std::sort(v.begin(), v.end());
   const std::size_t n = v.size();
   return n % 2 == 1 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
 }
 
-}  // namespace
+double TimedRun::assembly_us() const {
+  return 1e6 * sum.assembly_seconds / std::max(sum.assemblies, 1);
+}
+double TimedRun::solve_us() const { return 1e6 * sum.solve_seconds / std::max(sum.assemblies, 1); }
+
+TimedRun time_scene(const Scene& scene, NewtonOptions options, std::vector<State>* trajectory) {
+  options.measure_time = true;
+  TimedRun run;
+  Simulator sim(scene.model, options);
+  const auto start = std::chrono::steady_clock::now();
+  for (int k = 1; k <= scene.frames; ++k) {
+    const StepReport report = sim.step();
+    if (!report.state_updated()) {
+      run.failed = true;
+      run.failure = "step " + std::to_string(k) + " failed: " + to_string(report.status);
+      break;
+    }
+    ++run.frames;
+    run.sum.iterations += report.iterations;
+    run.sum.assemblies += report.assemblies;
+    run.sum.assembly_seconds += report.assembly_seconds;
+    run.sum.solve_seconds += report.solve_seconds;
+    run.max_iterations_in_frame = std::max(run.max_iterations_in_frame, report.iterations);
+    if (!report.converged()) ++run.unconverged_steps;
+    if (trajectory != nullptr) trajectory->push_back(sim.state());
+  }
+  run.total_seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return run;
+}
 
 BenchResult bench_scene(const Scene& scene, int repeats) {
   BenchResult result;
@@ -27,37 +54,18 @@ BenchResult bench_scene(const Scene& scene, int repeats) {
   result.repeats = std::max(repeats, 1);
   for (const Component& c : build_components(scene.model)) result.dofs += c.dofs;
 
-  NewtonOptions options = scene.solver;
-  options.measure_time = true;
   std::vector<double> total, assembly, solve, iterations, assemblies;
   for (int r = 0; r < result.repeats; ++r) {
-    Simulator sim(scene.model, options);
-    StepReport sum;
-    int frames = 0, unconverged = 0, max_iterations = 0;
-    const auto start = std::chrono::steady_clock::now();
-    for (int k = 1; k <= scene.frames; ++k) {
-      const StepReport report = sim.step();
-      if (!report.state_updated()) {
-        result.failed = true;
-        result.failure = "step " + std::to_string(k) + " failed: " + to_string(report.status);
-        break;
-      }
-      ++frames;
-      sum.iterations += report.iterations;
-      sum.assemblies += report.assemblies;
-      sum.assembly_seconds += report.assembly_seconds;
-      sum.solve_seconds += report.solve_seconds;
-      max_iterations = std::max(max_iterations, report.iterations);
-      if (!report.converged()) ++unconverged;
-    }
-    total.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
-    const double n_assemblies = std::max(sum.assemblies, 1);
-    assembly.push_back(1e6 * sum.assembly_seconds / n_assemblies);
-    solve.push_back(1e6 * sum.solve_seconds / n_assemblies);
-    iterations.push_back(frames > 0 ? double(sum.iterations) / frames : 0.0);
-    assemblies.push_back(frames > 0 ? double(sum.assemblies) / frames : 0.0);
-    result.max_iterations_in_frame = max_iterations;
-    result.unconverged_steps = unconverged;
+    const TimedRun run = time_scene(scene, scene.solver, nullptr);
+    total.push_back(run.total_seconds);
+    assembly.push_back(run.assembly_us());
+    solve.push_back(run.solve_us());
+    iterations.push_back(run.frames > 0 ? double(run.sum.iterations) / run.frames : 0.0);
+    assemblies.push_back(run.frames > 0 ? double(run.sum.assemblies) / run.frames : 0.0);
+    result.max_iterations_in_frame = run.max_iterations_in_frame;
+    result.unconverged_steps = run.unconverged_steps;
+    result.failed = run.failed;
+    result.failure = run.failure;
     if (result.failed) break;
   }
   result.total_seconds = median(total);

@@ -3,6 +3,7 @@
 // Newton iterations, split into assembly and linear solve, as paper Table 1 does.
 
 #include <string>
+#include <vector>
 
 #include "scene.hpp"
 
@@ -26,6 +27,24 @@ struct BenchResult {
   bool failed = false;                 // a step failed; figures cover the frames before it
   std::string failure;
 };
+
+// The median of a non-empty list.
+double median(std::vector<double> values);
+
+// One timed run of a scene with the given solver options (measure_time is forced on);
+// `trajectory`, if non-null, receives the state after every completed frame.
+struct TimedRun {
+  double total_seconds = 0.0;
+  int frames = 0;  // completed
+  StepReport sum;  // iterations, assemblies and seconds summed over frames
+  int max_iterations_in_frame = 0;
+  int unconverged_steps = 0;
+  bool failed = false;
+  std::string failure;
+  double assembly_us() const;  // per assembly
+  double solve_us() const;     // per factorisation + solve
+};
+TimedRun time_scene(const Scene& scene, NewtonOptions options, std::vector<State>* trajectory);
 
 // Runs the scene `repeats` times (≥ 1), with timing on.
 BenchResult bench_scene(const Scene& scene, int repeats);

@@ -1,6 +1,8 @@
 // liedyn — command-line driver.
 //   liedyn simulate SCENE.json --out DIR [--allow-unconverged] [--quiet]
 //   liedyn bench SCENE.json [--repeat N] [--json]     (cost per Newton iteration; no files)
+//   liedyn compare SCENE.json --rotations lie,rotvec,quat [--csv | --json] [--repeat N]
+//                  [--frames-csv FILE] [--condition-every N]
 // Exit status: 0 success; 2 bad input (scene or options), nothing written; 3 some steps ended
 // at max_iterations (outputs written; --allow-unconverged makes this 0); 4 a step failed
 // (outputs written up to it); 1 other errors (I/O).
@@ -9,6 +11,8 @@
 #include <iostream>
 
 #include "bench.hpp"
+#include "compare.hpp"
+#include "output.hpp"
 #include "run.hpp"
 
 int main(int argc, char** argv) {
@@ -33,6 +37,30 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   bench->add_flag("--json", json, "Print one JSON object instead of text");
 
+  std::vector<std::string> rotation_names{"lie", "rotvec", "quat"};
+  bool csv = false;
+  std::string frames_csv;
+  int condition_every = 0;
+  CLI::App* compare =
+      app.add_subcommand("compare", "Run a scene under several rotation parameterisations");
+  compare->add_option("scene", scene_file, "Scene file (JSON)")->required();
+  compare->add_option("--rotations", rotation_names, "Parameterisations (the first is the reference)")
+      ->delimiter(',')
+      ->capture_default_str();
+  int compare_repeats = 3;
+  compare->add_option("--repeat", compare_repeats, "Timed runs per parameterisation (medians)")
+      ->check(CLI::Range(1, 1000))
+      ->capture_default_str();
+  auto* compare_csv_flag = compare->add_flag("--csv", csv, "Print CSV instead of a table");
+  compare->add_flag("--json", json, "Print one JSON object instead of a table")
+      ->excludes(compare_csv_flag);
+  compare->add_option("--frames-csv", frames_csv,
+                      "Also write per-frame iterations, gradient norms and condition numbers");
+  compare->add_option("--condition-every", condition_every,
+                      "Condition number every N frames (0: every frame up to 300 DOFs, else ~20 "
+                      "frames)")
+      ->check(CLI::NonNegativeNumber);
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -42,6 +70,37 @@ int main(int argc, char** argv) {
 
   try {
     const liedyn::Scene scene = liedyn::load_scene(scene_file);
+    if (compare->parsed()) {
+      liedyn::CompareOptions options;
+      options.condition_every = condition_every;
+      options.repeats = compare_repeats;
+      for (const std::string& name : rotation_names) {
+        const auto rotation = liedyn::parse_rotation(name);
+        if (!rotation) {
+          std::cerr << "liedyn: --rotations: unknown parameterisation \"" << name
+                    << "\" (expected lie, rotvec or quat)\n";
+          return 2;
+        }
+        options.rotations.push_back(*rotation);
+      }
+      const std::vector<liedyn::CompareRow> rows = liedyn::compare_rotations(scene, options);
+      if (!frames_csv.empty()) {
+        liedyn::AtomicFile file(frames_csv);
+        file.stream() << liedyn::compare_frames_csv(rows);
+        file.commit();
+      }
+      std::cout << (json  ? liedyn::compare_json(scene, rows)
+                    : csv ? liedyn::compare_csv(rows)
+                          : liedyn::format_compare(scene, rows));
+      for (const liedyn::CompareRow& row : rows) {
+        if (row.failed) {
+          std::cerr << "liedyn: " << liedyn::to_string(row.rotation) << ": " << row.failure
+                    << "\n";
+          return 4;
+        }
+      }
+      return 0;
+    }
     if (bench->parsed()) {
       const liedyn::BenchResult result = liedyn::bench_scene(scene, repeats);
       std::cout << (json ? liedyn::bench_json(result) : liedyn::format_bench(result));

@@ -395,17 +395,20 @@ Scene parse(const json& root, const std::string& source) {
       s.fail("solver.backend", "unknown backend \"" + backend + "\" (expected \"newton\")");
     }
     const std::string rotation = s.string("rotation", "lie");
-    if (rotation == "rotvec" || rotation == "quat") {
-      s.fail("solver.rotation", "\"" + rotation +
-                                    "\" is not available yet (only \"lie\" is implemented)");
-    } else if (rotation != "lie") {
+    if (const auto parsed = parse_rotation(rotation)) {
+      scene.solver.rotation = *parsed;
+    } else {
       s.fail("solver.rotation", "unknown rotation parameterisation \"" + rotation +
-                                    "\" (expected \"lie\")");
+                                    "\" (expected \"lie\", \"rotvec\" or \"quat\")");
     }
     scene.solver.tolerance = s.number("tolerance", scene.solver.tolerance);
     if (s.has("max_iterations")) scene.solver.max_iterations = s.integer("max_iterations", 1);
     scene.solver.armijo = s.number("armijo", scene.solver.armijo);
     scene.solver.min_step_length = s.number("min_step_length", scene.solver.min_step_length);
+    if (s.has("assembly_threads")) {
+      scene.solver.assembly_threads =
+          s.integer("assembly_threads", 0, NewtonOptions::kMaxAssemblyThreads);
+    }
     s.finish();
   }
 

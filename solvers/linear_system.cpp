@@ -1,6 +1,7 @@
 #include "linear_system.hpp"
 #include "unroll.hpp"
 
+#include <omp.h>
 #include <suitesparse/cholmod.h>
 
 #include <algorithm>
@@ -273,28 +274,87 @@ struct SparseSystem::Cholmod {
   };
 };
 
-// The sink of every banded assembly: adds the lower-triangle part of each block to the band
-// (the block's transpose arrives through the symmetric add() call).
+namespace {
+
+// Adds the lower-triangle part of a 3×3 block at (row, column), row ≥ column, into a band
+// stored in BandedCholesky's layout (stride = half-bandwidth + 1).
+template <class Block>
+inline void add_to_band(double* a, int stride, int row, int column, const Block& block) {
+  // Two loops with constant bounds rather than one starting at (row == column ? c : 0): the
+  // compiler unrolls both, and for a diagonal block of an unrolled term loop it knows which
+  // one runs.
+  if (row == column) {
+    for (int c = 0; c < 3; ++c) {
+      double* entries = a + (column + c) * (stride - 1);  // entries[i] = A_ij, j = column + c
+      for (int r = c; r < 3; ++r) entries[row + r] += block(r, c);
+    }
+  } else {
+    for (int c = 0; c < 3; ++c) {
+      double* entries = a + (column + c) * (stride - 1);
+      for (int r = 0; r < 3; ++r) entries[row + r] += block(r, c);
+    }
+  }
+}
+
+}  // namespace
+
+// The sink of every serial banded assembly: adds the lower-triangle part of each block to
+// the band (the block's transpose arrives through the symmetric add() call).
 struct SparseSystem::BandScatter {
   BandedCholesky& band;
   void clear() { band.set_zero(); }
   template <class Block>
   void add(int row, int column, const Block& block) {
     if (row < column) return;
-    double* a = band.values();
-    const int stride = band.bandwidth() + 1;
-    for (int c = 0; c < 3; ++c) {
-      const int j = column + c;
-      double* entries = a + j * stride - j;  // entries[i] = A_ij
-      for (int r = row == column ? c : 0; r < 3; ++r) entries[row + r] += block(r, c);
-    }
+    add_to_band(band.values(), band.bandwidth() + 1, row, column, block);
   }
 };
 
-SparseSystem::SparseSystem(const Component& component, Factorization factorization)
+// Parallel banded assembly: part k of the terms (IncrementalPotential::Part) runs on thread
+// k. A column block of the band written by one part only is written in place; one written by
+// several parts is written into each part's private copy of the band, and the copies are
+// summed into the band after the join. A rod numbered along its length shares only the few
+// column blocks where its parts meet. Part 0 adds its gradient into g, the others into
+// private vectors, also summed after the join.
+//
+// Each part zeroes what it writes, on its own thread: zeroed by the main thread, the other
+// part's columns would have to move between the cores' caches before every write (measured
+// on the 957-DOF helix: the second part then took twice as long as the first).
+struct SparseSystem::ParallelAssembly {
+  int parts = 1;
+  std::vector<char> shared;         // per DOF, set at a block's first column: written by > 1 part
+  std::vector<int> shared_columns;  // the first columns of the shared column blocks
+  std::vector<std::vector<std::pair<int, int>>> own_ranges;  // per part: band entries [b, e)
+                                                             // written in place
+  std::vector<std::vector<double>> band;  // per part: a private band (shared columns only used)
+  std::vector<Eigen::VectorXd> g;         // per part (part 0 uses the system's g)
+  std::vector<double> value, magnitude;   // per part: Σ Ψ_t and the round-off sum
+
+  // The sink of part k.
+  struct Scatter {
+    double* band;
+    double* own;
+    const char* shared;
+    int stride;
+    void clear() {}
+    template <class Block>
+    void add(int row, int column, const Block& block) {
+      if (row < column) return;
+      add_to_band(shared[column] ? own : band, stride, row, column, block);
+    }
+  };
+};
+
+SparseSystem::SparseSystem(const Component& component, Factorization factorization,
+                           int assembly_threads)
     : g_(component.dofs),
       factorization_(factorization),
-      cholmod_(std::make_unique<Cholmod>(component.dofs)) {}
+      cholmod_(std::make_unique<Cholmod>(component.dofs)),
+      assembly_threads_(assembly_threads) {
+  if (assembly_threads < 0) {
+    throw std::invalid_argument("SparseSystem: assembly_threads must be >= 0");
+  }
+}
 SparseSystem::SparseSystem(SparseSystem&&) noexcept = default;
 SparseSystem& SparseSystem::operator=(SparseSystem&&) noexcept = default;
 SparseSystem::~SparseSystem() = default;
@@ -323,19 +383,120 @@ void SparseSystem::build(const std::vector<std::pair<int, int>>& blocks) {
 }
 
 double SparseSystem::assemble(const IncrementalPotential& potential, const State& q,
-                              double* roundoff) {
+                              double* roundoff, const RotationVectorChart* chart) {
   if (!built_) {  // first use: the pattern
     BlockRecorder recorder;
-    potential.assemble_into(q, g_, recorder);
+    assemble_charted(potential, q, g_, recorder, nullptr, chart);
     build(recorder.blocks);
+    if (factorization_ == Factorization::kBanded) split_assembly(potential, q);
   }
+  if (parallel_ != nullptr) return assemble_in_parts(potential, q, roundoff, chart);
   if (factorization_ == Factorization::kBanded) {
     BandScatter scatter{band_};
-    return potential.assemble_into(q, g_, scatter, roundoff);
+    return assemble_charted(potential, q, g_, scatter, roundoff, chart);
   }
   Cholmod::Scatter scatter{*cholmod_};
-  return potential.assemble_into(q, g_, scatter, roundoff);
+  return assemble_charted(potential, q, g_, scatter, roundoff, chart);
 }
+
+void SparseSystem::split_assembly(const IncrementalPotential& potential, const State& q) {
+  const int n = static_cast<int>(g_.size());
+  int parts = assembly_threads_;
+  if (parts == 0) {
+    parts = n >= kParallelAssemblyMinDofs && omp_get_max_threads() >= 2 ? 2 : 1;
+  }
+  if (parts == 1) return;
+  auto p = std::make_unique<ParallelAssembly>();
+  p->parts = parts;
+  p->shared.assign(n, 0);
+  std::vector<int> writer(n, -1);  // the part that writes a column block, if only one
+  BlockRecorder recorder;
+  for (int k = 0; k < parts; ++k) {
+    recorder.clear();
+    potential.add_terms(q, g_, recorder, IncrementalPotential::Part{k, parts}, 1.0, nullptr);
+    for (const auto& [row, column] : recorder.blocks) {
+      if (row < column) continue;  // not stored
+      if (writer[column] < 0) writer[column] = k;
+      if (writer[column] != k && !p->shared[column]) {
+        p->shared[column] = 1;
+        p->shared_columns.push_back(column);
+      }
+    }
+  }
+  // Runs of consecutive column blocks that one part writes in place. Columns nobody writes
+  // stay at the zero resize() gave them (the factorisation does not overwrite the band).
+  const int stride = band_.bandwidth() + 1;
+  p->own_ranges.assign(parts, {});
+  for (int column = 0; column < n; column += 3) {
+    const int k = writer[column];
+    if (k < 0 || p->shared[column]) continue;
+    auto& ranges = p->own_ranges[k];
+    if (!ranges.empty() && ranges.back().second == column * stride) {
+      ranges.back().second += 3 * stride;
+    } else {
+      ranges.emplace_back(column * stride, (column + 3) * stride);
+    }
+  }
+  p->band.assign(parts, std::vector<double>(band_.value_count(), 0.0));
+  p->g.assign(parts, Eigen::VectorXd::Zero(n));
+  p->value.assign(parts, 0.0);
+  p->magnitude.assign(parts, 0.0);
+  parallel_ = std::move(p);
+}
+
+double SparseSystem::assemble_in_parts(const IncrementalPotential& potential, const State& q,
+                                       double* roundoff, const RotationVectorChart* chart) {
+  ParallelAssembly& p = *parallel_;
+  const int stride = band_.bandwidth() + 1;
+  const double position_scale =
+      roundoff != nullptr ? IncrementalPotential::roundoff_position_scale(q) : 1.0;
+  double* a = band_.values();
+#pragma omp parallel num_threads(p.parts)
+  {
+    // Fewer threads than parts (OpenMP may give fewer): each thread takes several parts.
+    for (int k = omp_get_thread_num(); k < p.parts; k += omp_get_num_threads()) {
+      Eigen::VectorXd& g = k == 0 ? g_ : p.g[k];
+      g.setZero();
+      for (const auto& [begin, end] : p.own_ranges[k]) std::fill(a + begin, a + end, 0.0);
+      double* own = p.band[k].data();
+      for (int column : p.shared_columns) {
+        std::fill(own + column * stride, own + (column + 3) * stride, 0.0);
+      }
+      ParallelAssembly::Scatter sink{a, own, p.shared.data(), stride};
+      const IncrementalPotential::Part part{k, p.parts};
+      double* magnitude = roundoff != nullptr ? &p.magnitude[k] : nullptr;
+      p.magnitude[k] = 0.0;
+      if (chart != nullptr) {
+        ChartSink<ParallelAssembly::Scatter> charted{sink, *chart};
+        p.value[k] = potential.add_terms(q, g, charted, part, position_scale, magnitude);
+      } else {
+        p.value[k] = potential.add_terms(q, g, sink, part, position_scale, magnitude);
+      }
+    }
+  }
+  double value = p.value[0];
+  double magnitude = p.magnitude[0];
+  for (int k = 1; k < p.parts; ++k) {
+    value += p.value[k];
+    magnitude += p.magnitude[k];
+    g_ += p.g[k];
+  }
+  for (int column : p.shared_columns) {
+    std::fill(a + column * stride, a + (column + 3) * stride, 0.0);
+    for (int k = 0; k < p.parts; ++k) {
+      const double* own = p.band[k].data();
+      for (int e = column * stride; e < (column + 3) * stride; ++e) a[e] += own[e];
+    }
+  }
+  if (chart != nullptr) {
+    BandScatter scatter{band_};
+    chart->finish(g_, scatter);
+  }
+  if (roundoff != nullptr) *roundoff = std::numeric_limits<double>::epsilon() * magnitude;
+  return value;
+}
+
+int SparseSystem::assembly_parts() const { return parallel_ != nullptr ? parallel_->parts : 1; }
 
 bool SparseSystem::hessian_finite() const {
   const double* x = nullptr;
@@ -368,6 +529,33 @@ double SparseSystem::hessian_scale() const {
     }
   }
   return scale;
+}
+
+void SparseSystem::dense_hessian(Eigen::MatrixXd& H) const {
+  const int n = static_cast<int>(g_.size());
+  H.setZero(n, n);
+  if (factorization_ == Factorization::kBanded) {
+    for (int j = 0; j < n; ++j) {
+      for (int i = j; i <= std::min(n - 1, j + band_.bandwidth()); ++i) {
+        H(i, j) = H(j, i) = band_.values()[band_.index(i, j)];
+      }
+    }
+    return;
+  }
+  // A holds the upper triangle of P H Pᵀ: map its rows and columns back through P.
+  const Cholmod& c = *cholmod_;
+  std::vector<int> original(n);
+  for (int block = 0; block < n / 3; ++block) {
+    for (int r = 0; r < 3; ++r) original[3 * c.block_position[block] + r] = 3 * block + r;
+  }
+  const auto* p = static_cast<const int*>(c.A->p);
+  const auto* i = static_cast<const int*>(c.A->i);
+  const auto* x = static_cast<const double*>(c.A->x);
+  for (int col = 0; col < n; ++col) {
+    for (int k = p[col]; k < p[col + 1]; ++k) {
+      H(original[i[k]], original[col]) = H(original[col], original[i[k]]) = x[k];
+    }
+  }
 }
 
 bool SparseSystem::factorize(double mu) {

@@ -17,18 +17,21 @@
 //
 // Interface used by Newton<System>:
 //   using Vector;                                   // tangent vector type
-//   double assemble(potential, q, double* roundoff);  // Ψ(q); fills g and H
+//   double assemble(potential, q, double* roundoff, chart);  // Ψ(q); fills g and H, in the
+//                                                   // rotation-vector chart if non-null
 //   const Vector& gradient() const;
 //   bool hessian_finite() const;
 //   double hessian_scale() const;                   // max |H_ii|
 //   bool factorize(double mu);                      // H + μI positive definite?
 //   void solve(Vector& delta) ;                     // δ = −(H + μI)⁻¹ g, last factorisation
+//   void dense_hessian(Eigen::MatrixXd& H) const;   // H, dense and symmetric (for analysis)
 
 #include <Eigen/Cholesky>
 #include <Eigen/Core>
 #include <memory>
 
 #include "../lib/incremental_potential.hpp"
+#include "../manifolds/rotation_chart.hpp"
 #include "banded_cholesky.hpp"
 
 namespace liedyn {
@@ -41,14 +44,17 @@ class DenseSystem {
 
   explicit DenseSystem(const Component& component);
 
-  double assemble(const IncrementalPotential& potential, const State& q, double* roundoff) {
-    return potential.assemble(q, g_, H_, roundoff);
+  double assemble(const IncrementalPotential& potential, const State& q, double* roundoff,
+                  const RotationVectorChart* chart = nullptr) {
+    DenseHessianSink<Matrix> sink{H_};
+    return assemble_charted(potential, q, g_, sink, roundoff, chart);
   }
   const Vector& gradient() const { return g_; }
   bool hessian_finite() const;
   double hessian_scale() const;
   bool factorize(double mu);
   void solve(Vector& delta);
+  void dense_hessian(Eigen::MatrixXd& H) const { H = H_; }
 
  private:
   Vector g_;
@@ -71,30 +77,49 @@ class SparseSystem {
   // CHOLMOD.)
   static constexpr double kBandedFlopAdvantage = 4.0;
 
+  // Banded assembly on several threads (OpenMP) pays from about this many DOFs on: below,
+  // the fork and join cost more than half an assembly saves. See assembly_threads.
+  static constexpr int kParallelAssemblyMinDofs = 300;
+
   // `factorization` = kUndecided: chosen at the first assembly as described above; kBanded
   // or kCholmod: imposed (to compare the two, in tests and benchmarks).
+  // `assembly_threads` (≥ 0): the banded system is assembled in that many parts, each a slice
+  // of every term vector, on as many OpenMP threads; 0 chooses: 2 when the component has at
+  // least kParallelAssemblyMinDofs DOFs and OpenMP may use 2 threads (omp_get_max_threads,
+  // i.e. OMP_NUM_THREADS or the number of processors), else 1. The CHOLMOD path assembles
+  // on one thread: its scatter follows the order of the blocks.
   explicit SparseSystem(const Component& component,
-                        Factorization factorization = Factorization::kUndecided);
+                        Factorization factorization = Factorization::kUndecided,
+                        int assembly_threads = 1);
   SparseSystem(SparseSystem&&) noexcept;
   SparseSystem& operator=(SparseSystem&&) noexcept;
   ~SparseSystem();
 
-  double assemble(const IncrementalPotential& potential, const State& q, double* roundoff);
+  double assemble(const IncrementalPotential& potential, const State& q, double* roundoff,
+                  const RotationVectorChart* chart = nullptr);
   const Vector& gradient() const { return g_; }
   bool hessian_finite() const;
   double hessian_scale() const;
   bool factorize(double mu);
   void solve(Vector& delta);
+  void dense_hessian(Eigen::MatrixXd& H) const;
 
   // Known after the first assembly (kUndecided before).
   Factorization factorization() const { return built_ ? factorization_ : Factorization::kUndecided; }
   // Non-zeros stored: the lower band (banded) or the upper triangle of the block-reordered
   // matrix (CHOLMOD); 0 before the first assembly.
   long stored_nonzeros() const;
+  // Parts the assembly is split into (1: serial); known after the first assembly.
+  int assembly_parts() const;
 
  private:
   struct Cholmod;  // CHOLMOD objects, kept out of this header
   struct BandScatter;
+  struct ParallelAssembly;  // per-part buffers of the parallel banded assembly
+  // After build(), banded only: sets up parallel_ if the assembly is to be split.
+  void split_assembly(const IncrementalPotential& potential, const State& q);
+  double assemble_in_parts(const IncrementalPotential& potential, const State& q,
+                           double* roundoff, const RotationVectorChart* chart);
   // The pattern, from the blocks of one assembly; chooses the factorisation if not imposed.
   void build(const std::vector<std::pair<int, int>>& blocks);
 
@@ -103,6 +128,8 @@ class SparseSystem {
   bool built_ = false;  // pattern known (after the first assembly)
   BandedCholesky band_;
   std::unique_ptr<Cholmod> cholmod_;  // null when the banded factorisation is used
+  int assembly_threads_ = 1;          // as requested (0: automatic)
+  std::unique_ptr<ParallelAssembly> parallel_;  // null when assembling serially
 };
 
 extern template class DenseSystem<6>;

@@ -1,9 +1,12 @@
 #include "newton.hpp"
 
+#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <string>
+#include <type_traits>
 
 #include "../lib/so3.hpp"
 
@@ -18,6 +21,27 @@ void NewtonOptions::validate() const {
   if (!(min_step_length > 0.0 && min_step_length < 1.0)) {
     throw ModelError("solver.min_step_length", "must be in (0, 1)");
   }
+  if (assembly_threads < 0 || assembly_threads > kMaxAssemblyThreads) {
+    throw ModelError("solver.assembly_threads",
+                     "must be in [0, " + std::to_string(kMaxAssemblyThreads) + "] (0: automatic)");
+  }
+}
+
+const char* to_string(RotationParameterization rotation) {
+  switch (rotation) {
+    case RotationParameterization::kLie: return "lie";
+    case RotationParameterization::kRotationVector: return "rotvec";
+    case RotationParameterization::kQuaternion: return "quat";
+  }
+  return "unknown";
+}
+
+std::optional<RotationParameterization> parse_rotation(std::string_view name) {
+  for (const auto r : {RotationParameterization::kLie, RotationParameterization::kRotationVector,
+                       RotationParameterization::kQuaternion}) {
+    if (name == to_string(r)) return r;
+  }
+  return std::nullopt;
 }
 
 const char* to_string(StepStatus status) {
@@ -41,18 +65,58 @@ void StepReport::merge(const StepReport& other) {
   solve_seconds += other.solve_seconds;
   gradient_norm = std::hypot(gradient_norm, other.gradient_norm);
   step_norm = std::max(step_norm, other.step_norm);
+  // std::fmax ignores a NaN operand: a component without the figure does not erase another's.
+  first_gradient_norm = std::fmax(first_gradient_norm, other.first_gradient_norm);
+  second_gradient_norm = std::fmax(second_gradient_norm, other.second_gradient_norm);
+  first_hessian_condition = std::fmax(first_hessian_condition, other.first_hessian_condition);
 }
+
+namespace {
+
+template <class System>
+System make_system(const Component& component, const NewtonOptions& options) {
+  if constexpr (std::is_same_v<System, SparseSystem>) {
+    return SparseSystem(component, SparseSystem::Factorization::kUndecided,
+                        options.assembly_threads);
+  } else {
+    return System(component);
+  }
+}
+
+}  // namespace
 
 template <class System>
 Newton<System>::Newton(Component component, const NewtonOptions& options)
     : component_(std::move(component)),
       options_(options),
-      system_(component_),
+      system_(make_system<System>(component_, options)),
       delta_(component_.dofs),
       saved_points_(component_.points.size()),
       entry_points_(component_.points.size()),
       saved_rotations_(component_.rotations.size()),
-      entry_rotations_(component_.rotations.size()) {}
+      entry_rotations_(component_.rotations.size()) {
+  const std::size_t n = component_.rotations.size();
+  if (options_.rotation == RotationParameterization::kRotationVector) {
+    chart_ = RotationVectorChart(component_);
+    saved_rotation_vectors_.resize(n);
+  } else if (options_.rotation == RotationParameterization::kQuaternion) {
+    quaternions_.resize(n);
+    saved_quaternions_.resize(n);
+  }
+}
+
+template <class System>
+void Newton<System>::enter_parameterization(State& q) {
+  for (std::size_t i = 0; i < component_.rotations.size(); ++i) {
+    Matrix3& R = q.rotations[component_.rotations[i].index];
+    if (options_.rotation == RotationParameterization::kRotationVector) {
+      R = chart_.set(i, so3::log(R));
+    } else if (options_.rotation == RotationParameterization::kQuaternion) {
+      quaternions_[i] = quat::from_rotation(R);
+      R = quat::rotation(quaternions_[i]);
+    }
+  }
+}
 
 template <class System>
 void Newton<System>::save(const State& q) {
@@ -62,29 +126,65 @@ void Newton<System>::save(const State& q) {
   for (std::size_t i = 0; i < component_.rotations.size(); ++i) {
     saved_rotations_[i] = q.rotations[component_.rotations[i].index];
   }
+  for (std::size_t i = 0; i < saved_rotation_vectors_.size(); ++i) {
+    saved_rotation_vectors_[i] = chart_.r(i);
+  }
+  for (std::size_t i = 0; i < saved_quaternions_.size(); ++i) {
+    saved_quaternions_[i] = quaternions_[i];
+  }
 }
 
 template <class System>
-void Newton<System>::restore(State& q) const {
+void Newton<System>::restore(State& q) {
   for (std::size_t i = 0; i < component_.points.size(); ++i) {
     q.points[component_.points[i].index] = saved_points_[i];
   }
   for (std::size_t i = 0; i < component_.rotations.size(); ++i) {
     q.rotations[component_.rotations[i].index] = saved_rotations_[i];
   }
+  for (std::size_t i = 0; i < saved_rotation_vectors_.size(); ++i) {
+    chart_.set(i, saved_rotation_vectors_[i]);
+  }
+  for (std::size_t i = 0; i < saved_quaternions_.size(); ++i) {
+    quaternions_[i] = saved_quaternions_[i];
+  }
 }
 
 template <class System>
-void Newton<System>::retract(State& q, double alpha) const {
+void Newton<System>::retract(State& q, double alpha) {
   for (const DofBlock& b : component_.points) {
     q.points[b.index] += alpha * delta_.template segment<3>(b.offset);
   }
-  for (const DofBlock& b : component_.rotations) {
+  for (std::size_t i = 0; i < component_.rotations.size(); ++i) {
+    const DofBlock& b = component_.rotations[i];
+    const Vector3 step = alpha * delta_.template segment<3>(b.offset);
     Matrix3& R = q.rotations[b.index];
-    R = so3::orthonormalize(so3::exp(alpha * delta_.template segment<3>(b.offset)) * R);
+    switch (options_.rotation) {
+      case RotationParameterization::kLie:
+        R = so3::orthonormalize(so3::exp(step) * R);
+        break;
+      case RotationParameterization::kRotationVector:
+        R = chart_.set(i, chart_.r(i) + step);
+        break;
+      case RotationParameterization::kQuaternion:
+        quaternions_[i] = quat::retract(quaternions_[i], step);
+        R = quat::rotation(quaternions_[i]);
+        break;
+    }
   }
 }
 
+
+template <class System>
+double Newton<System>::hessian_condition() const {
+  Eigen::MatrixXd H;
+  system_.dense_hessian(H);
+  const Eigen::VectorXd magnitudes =
+      Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(H, Eigen::EigenvaluesOnly)
+          .eigenvalues()
+          .cwiseAbs();
+  return magnitudes.maxCoeff() / magnitudes.minCoeff();
+}
 
 template <class System>
 bool Newton<System>::factorize(StepReport& report, bool& regularized) {
@@ -121,15 +221,24 @@ StepReport Newton<System>::solve(State& q) {
     return report;
   };
 
+  enter_parameterization(q);
+  const RotationVectorChart* chart =
+      options_.rotation == RotationParameterization::kRotationVector ? &chart_ : nullptr;
   for (;;) {
     using Clock = std::chrono::steady_clock;
     const auto t0 = options_.measure_time ? Clock::now() : Clock::time_point{};
     double roundoff = 0.0;
-    const double psi = system_.assemble(component_.potential, q, &roundoff);
+    const double psi = system_.assemble(component_.potential, q, &roundoff, chart);
     ++report.assemblies;
     const auto t1 = options_.measure_time ? Clock::now() : Clock::time_point{};
     const Vector& g = system_.gradient();
     report.gradient_norm = g.norm();
+    if (report.assemblies == 1) {
+      report.first_gradient_norm = report.gradient_norm;
+      if (options_.measure_condition) report.first_hessian_condition = hessian_condition();
+    } else if (report.assemblies == 2) {
+      report.second_gradient_norm = report.gradient_norm;
+    }
     // A NaN or Inf entry makes the sum non-finite (so does an overflow to ±Inf, which is
     // as unusable); one sum is much cheaper than testing all entries.
     if (!std::isfinite(psi + g.sum()) || !system_.hessian_finite()) {

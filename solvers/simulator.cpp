@@ -31,6 +31,12 @@ Simulator::Simulator(Model model, const NewtonOptions& options)
   }
 }
 
+void Simulator::set_measure_condition(bool on) {
+  for (auto& s : single_bodies_) s.set_measure_condition(on);
+  for (auto& s : coupled_bodies_) s.set_measure_condition(on);
+  for (auto& s : sparse_components_) s.set_measure_condition(on);
+}
+
 StepReport Simulator::step() {
   previous_ = state_;  // same sizes: copies without allocating
   previous_step_ = step_;

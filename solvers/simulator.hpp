@@ -42,6 +42,9 @@ class Simulator {
   // State::rotations[rotation]; for body i both indices are i (see Model for rods).
   Vector3 linear_velocity(int point) const;
   Vector3 angular_velocity(int rotation) const;
+  // NewtonOptions::measure_condition for the next steps (sampling an expensive diagnostic).
+  void set_measure_condition(bool on);
+
   double kinetic_energy() const;
   double potential_energy() const;  // conservative loads (IncrementalPotential::potential_energy)
   Vector3 angular_momentum() const;

@@ -410,8 +410,9 @@ TEST(Allocation, TwentyCoupledBodiesSparseStepDoesNotAllocate) {
 }
 
 // (f) A clamped Cosserat rod (40 edges, 237 DOFs) bending under gravity: the sparse path
-// with rod terms.
-TEST(Allocation, ClampedRodStepDoesNotAllocate) {
+// with rod terms, assembled on one thread and in two parts on two (OpenMP's team is created
+// at the first step and reused).
+Model clamped_rod() {
   Model model;
   model.time_step = 0.01;
   model.gravity = Vector3(0.0, 0.0, -9.81);
@@ -426,8 +427,17 @@ TEST(Allocation, ClampedRodStepDoesNotAllocate) {
   rod.fixed_nodes = {0};
   rod.fixed_edges = {0};
   model.rods.push_back(rod);
-  Simulator sim(model, NewtonOptions{});
-  expect_no_allocation(run_counted(sim, kSteps), kSteps);
+  return model;
+}
+
+TEST(Allocation, ClampedRodStepDoesNotAllocate) {
+  for (const int threads : {1, 2}) {
+    SCOPED_TRACE(threads);
+    NewtonOptions options;
+    options.assembly_threads = threads;
+    Simulator sim(clamped_rod(), options);
+    expect_no_allocation(run_counted(sim, kSteps), kSteps);
+  }
 }
 
 // Mixed: a free body and a coupled pair in one simulator (both solver vectors).

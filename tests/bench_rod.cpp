@@ -4,6 +4,9 @@
 // matrix; one whole Newton iteration; one whole simulator step. The paper's anchor (laptop,
 // single thread): 608 µs assembly + 191 µs solve per iteration.
 //
+// Assembly, Newton iteration and step run with 1 and 2 assembly threads (the argument); their
+// times are wall-clock (UseRealTime), as CPU time would count one thread only.
+//
 // Run in Release (see bench_newton.cpp):
 //   ./build-bench/tests/liedyn_bench --benchmark_filter=Rod --benchmark_repetitions=5
 
@@ -39,7 +42,8 @@ struct RodProblem {
 
 void BM_Rod_Assemble(benchmark::State& state) {
   RodProblem p;
-  SparseSystem system(p.component);
+  SparseSystem system(p.component, SparseSystem::Factorization::kUndecided,
+                      static_cast<int>(state.range(0)));
   double roundoff = 0.0;
   for (auto _ : state) {
     benchmark::DoNotOptimize(p.q);
@@ -48,8 +52,9 @@ void BM_Rod_Assemble(benchmark::State& state) {
     benchmark::ClobberMemory();
   }
   state.counters["dofs"] = p.component.dofs;
+  state.counters["parts"] = system.assembly_parts();
 }
-BENCHMARK(BM_Rod_Assemble)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_Rod_Assemble)->Arg(1)->Arg(2)->UseRealTime()->Unit(benchmark::kMicrosecond);
 
 // Factorisation of H + μI (μ = 0) and the two triangular solves, with the factorisation the
 // sparse system picks for a rod (banded) and with CHOLMOD imposed.
@@ -80,7 +85,9 @@ BENCHMARK_TEMPLATE(BM_Rod_FactorizeSolve, SparseSystem::Factorization::kCholmod)
 // factorises, solves, finds ‖δ‖∞ ≤ tolerance and returns.
 void BM_Rod_NewtonIteration(benchmark::State& state) {
   RodProblem p;
-  liedyn::SparseNewton newton(std::move(p.component), NewtonOptions{});
+  NewtonOptions options;
+  options.assembly_threads = static_cast<int>(state.range(0));
+  liedyn::SparseNewton newton(std::move(p.component), options);
   if (!newton.solve(p.q).converged()) state.SkipWithError("first solve did not converge");
   for (auto _ : state) {
     const liedyn::StepReport r = newton.solve(p.q);
@@ -88,11 +95,12 @@ void BM_Rod_NewtonIteration(benchmark::State& state) {
     benchmark::ClobberMemory();
   }
 }
-BENCHMARK(BM_Rod_NewtonIteration)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_Rod_NewtonIteration)->Arg(1)->Arg(2)->UseRealTime()->Unit(benchmark::kMicrosecond);
 
 // Whole simulator steps of the scene (they continue its trajectory across iterations).
 void BM_Rod_Step(benchmark::State& state) {
-  const liedyn::Scene scene = liedyn::load_scene(kScene);
+  liedyn::Scene scene = liedyn::load_scene(kScene);
+  scene.solver.assembly_threads = static_cast<int>(state.range(0));
   liedyn::Simulator sim(scene.model, scene.solver);
   long iterations = 0, not_converged = 0;
   for (auto _ : state) {
@@ -106,6 +114,6 @@ void BM_Rod_Step(benchmark::State& state) {
       Counter(static_cast<double>(iterations), Counter::kAvgIterations);
   if (not_converged > 0) state.SkipWithError("a step did not converge");
 }
-BENCHMARK(BM_Rod_Step)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_Rod_Step)->Arg(1)->Arg(2)->UseRealTime()->Unit(benchmark::kMicrosecond);
 
 }  // namespace

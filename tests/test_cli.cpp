@@ -393,6 +393,43 @@ TEST_F(Cli, BenchReportsIterationCostsWithoutWritingFiles) {
   EXPECT_NE(bad.err.find("missing.json"), std::string::npos) << bad.err;
 }
 
+TEST_F(Cli, CompareRunsEachParameterisationAndWritesPerFrameSeries) {
+  write_file(dir_ / "scene.json", replace_once(butterfly_bolt(), "\"frames\": 1000",
+                                               "\"frames\": 50"));
+  const Result r = run({"compare", "scene.json", "--rotations", "lie,rotvec,quat", "--csv",
+                        "--repeat", "1", "--frames-csv", "frames.csv"});
+  ASSERT_EQ(r.exit_code, 0) << r.out << r.err;
+  write_file(dir_ / "compare.csv", r.out);
+  const Csv table = read_csv(dir_ / "compare.csv");
+  ASSERT_EQ(table.rows.size(), 3u);
+  const std::size_t rotation = table.column("rotation"), frames = table.column("frames");
+  const std::size_t deviation = table.column("max_rotation_deviation");
+  const std::size_t condition = table.column("condition_mean");
+  const char* names[] = {"lie", "rotvec", "quat"};
+  for (std::size_t i = 0; i < 3; ++i) {
+    EXPECT_EQ(table.rows[i][rotation], names[i]);
+    EXPECT_EQ(table.rows[i][frames], "50");
+    // Every frame of a 6-DOF body is sampled; the Hessian is positive definite.
+    EXPECT_GE(std::stod(table.rows[i][condition]), 1.0);
+    // Converged steps agree with the reference (tolerance 1e-9 rad per step).
+    EXPECT_LT(std::stod(table.rows[i][deviation]), 1e-6) << names[i];
+  }
+  EXPECT_EQ(table.rows[0][deviation], "0");  // the reference itself
+  const Csv series = read_csv(dir_ / "frames.csv");
+  EXPECT_EQ(series.header,
+            "rotation,frame,iterations,first_gradient_norm,second_gradient_norm,"
+            "residual_reduction,condition");
+  EXPECT_EQ(series.rows.size(), 150u);
+
+  const Result json = run({"compare", "scene.json", "--rotations", "quat,lie", "--json",
+                           "--repeat", "1"});
+  ASSERT_EQ(json.exit_code, 0) << json.err;
+  EXPECT_NE(json.out.find("\"reference\": \"quat\""), std::string::npos) << json.out;
+  const Result unknown = run({"compare", "scene.json", "--rotations", "lie,euler"});
+  EXPECT_EQ(unknown.exit_code, 2);
+  EXPECT_NE(unknown.err.find("euler"), std::string::npos) << unknown.err;
+}
+
 // One Newton update per step against a tolerance one update cannot meet: with h = 0.1 s the
 // first update leaves a Newton step of ~1e-7 rad (with h = 0.01 s it is already ~1e-16).
 std::string unconverged_scene() {

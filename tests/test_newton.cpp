@@ -3,10 +3,12 @@
 // one, regularise the same way, and be chosen by the simulator for large coupled components.
 
 #include <gtest/gtest.h>
+#include <omp.h>
 
 #include "lib/so3.hpp"
 #include "solvers/newton.hpp"
 #include "solvers/simulator.hpp"
+#include "rod_models.hpp"
 
 namespace liedyn {
 namespace {
@@ -202,6 +204,101 @@ TEST(Simulator, UsesTheSparseSystemBeyondTheDenseLimitWithTheSameResult) {
   }
   const auto [dense_states, dense_reports] = run<DenseSystem<Eigen::Dynamic>>(model, 30, options);
   EXPECT_LT(max_difference(simulated, dense_states), 1e-9);
+}
+
+// Assembly in parts (SparseSystem's assembly_threads) must give the serial system up to the
+// order of the sums: the same Ψ, gradient and Newton step to round-off, on a body chain (each
+// part a run of bodies and springs) and on a rod (a run of nodes and edges).
+void expect_parallel_assembly_matches_serial(const Model& model) {
+  std::vector<Component> components = build_components(model);
+  ASSERT_EQ(components.size(), 1u);
+  Component& c = components.front();
+  State q = model.initial_state();
+  const Step dq = model.initial_step();
+  c.potential.begin_step(q, dq);
+  for (std::size_t i = 0; i < q.points.size(); ++i) q.points[i] += 3.0 * dq.points[i];
+  for (std::size_t i = 0; i < q.rotations.size(); ++i) {
+    q.rotations[i] = dq.rotations[i] * dq.rotations[i] * dq.rotations[i] * q.rotations[i];
+  }
+  SparseSystem serial(c, SparseSystem::Factorization::kBanded, 1);
+  double serial_roundoff = 0.0;
+  const double psi = serial.assemble(c.potential, q, &serial_roundoff);
+  ASSERT_TRUE(serial.factorize(0.0));
+  Eigen::VectorXd serial_delta(c.dofs);
+  serial.solve(serial_delta);
+  EXPECT_EQ(serial.assembly_parts(), 1);
+  for (const int parts : {2, 3, 4}) {
+    SCOPED_TRACE(parts);
+    SparseSystem split(c, SparseSystem::Factorization::kBanded, parts);
+    double roundoff = 0.0;
+    const double value = split.assemble(c.potential, q, &roundoff);
+    EXPECT_EQ(split.assembly_parts(), parts);
+    EXPECT_NEAR(value, psi, 1e-13 * std::abs(psi));
+    EXPECT_NEAR(roundoff, serial_roundoff, 1e-12 * serial_roundoff);
+    const double g_scale = serial.gradient().cwiseAbs().maxCoeff();
+    EXPECT_LT((split.gradient() - serial.gradient()).cwiseAbs().maxCoeff(), 1e-13 * g_scale);
+    ASSERT_TRUE(split.factorize(0.0));
+    Eigen::VectorXd delta(c.dofs);
+    split.solve(delta);
+    EXPECT_LT((delta - serial_delta).cwiseAbs().maxCoeff(),
+              1e-9 * serial_delta.cwiseAbs().maxCoeff());
+    // A second assembly (the buffers are reused, not re-zeroed by construction) agrees too.
+    EXPECT_NEAR(split.assemble(c.potential, q, &roundoff), psi, 1e-13 * std::abs(psi));
+    EXPECT_LT((split.gradient() - serial.gradient()).cwiseAbs().maxCoeff(), 1e-13 * g_scale);
+  }
+}
+
+TEST(SparseSystem, ParallelAssemblyMatchesSerialOnABodyChain) {
+  expect_parallel_assembly_matches_serial(chain(30, 2e3, 1.1));
+}
+
+TEST(SparseSystem, ParallelAssemblyMatchesSerialOnARod) {
+  Model model;
+  model.time_step = 0.01;
+  model.gravity = Vector3(0.0, 0.0, -9.81);
+  RodSpec rod = test_models::uniform_rod(50, 1.0, 0.2, 0.01, 1e4, 1e4, 0.05);
+  for (std::size_t i = 0; i < rod.nodes.size(); ++i) {
+    rod.nodes[i].z() = 0.1 * std::sin(0.3 * i);  // curved: non-zero rest Darboux vectors
+  }
+  rod.fixed_nodes = {0};
+  rod.fixed_edges = {0};
+  model.rods.push_back(rod);
+  expect_parallel_assembly_matches_serial(model);
+}
+
+TEST(SparseSystem, AutomaticAssemblyThreadsDependOnSizeAndFactorisation) {
+  auto parts = [](const Model& model, int threads) {
+    std::vector<Component> components = build_components(model);
+    SparseSystem system(components.front(), SparseSystem::Factorization::kUndecided, threads);
+    State q = model.initial_state();
+    components.front().potential.begin_step(q, model.initial_step());
+    system.assemble(components.front().potential, q, nullptr);
+    return system.assembly_parts();
+  };
+  const Model small = chain(12, 2e3, 1.0);  // 72 DOFs
+  const Model large = chain(60, 2e3, 1.0);  // 360 DOFs
+  static_assert(6 * 12 < SparseSystem::kParallelAssemblyMinDofs);
+  static_assert(6 * 60 >= SparseSystem::kParallelAssemblyMinDofs);
+  EXPECT_EQ(parts(small, 0), 1);
+  EXPECT_EQ(parts(large, 0), omp_get_max_threads() >= 2 ? 2 : 1);
+  EXPECT_EQ(parts(small, 2), 2);  // imposed
+  // CHOLMOD's scatter follows the block order: a star assembles on one thread.
+  EXPECT_EQ(parts(chain(60, 2e3, 1.0, Topology::kStar), 2), 1);
+  EXPECT_THROW(SparseSystem(build_components(small).front(),
+                            SparseSystem::Factorization::kUndecided, -1),
+               std::invalid_argument);
+}
+
+TEST(SparseNewton, TrajectoryDoesNotDependOnAssemblyThreads) {
+  const Model model = chain(12, 2e3, 1.0);
+  NewtonOptions options;
+  options.tolerance = 1e-11;
+  options.assembly_threads = 1;
+  const auto [serial_states, serial_reports] = run<SparseSystem>(model, 30, options);
+  options.assembly_threads = 2;
+  const auto [split_states, split_reports] = run<SparseSystem>(model, 30, options);
+  ASSERT_EQ(serial_states.size(), 30u);
+  EXPECT_LT(max_difference(serial_states, split_states), 1e-9);
 }
 
 }  // namespace

@@ -437,15 +437,24 @@ TEST(SceneErrors, UnavailableAndUnknownSolverChoices) {
     expect_rejected(scene(kBody, std::string(R"("solver": {"backend": ")") + backend + "\"}, "),
                     "solver.backend", "not available yet");
   }
-  for (const char* rotation : {"rotvec", "quat"}) {
-    expect_rejected(scene(kBody, std::string(R"("solver": {"rotation": ")") + rotation + "\"}, "),
-                    "solver.rotation", "not available yet");
-  }
   expect_rejected(scene(kBody, R"("solver": {"backend": "gauss-seidel"}, )"), "solver.backend",
                   "unknown backend");
   expect_rejected(scene(kBody, R"("solver": {"rotation": "euler"}, )"), "solver.rotation",
                   "unknown");
   expect_rejected(scene(kBody, R"("solver": {"backend": 1}, )"), "solver.backend", "string");
+}
+
+TEST(Scene, RotationParameterisations) {
+  const std::pair<const char*, RotationParameterization> cases[] = {
+      {"lie", RotationParameterization::kLie},
+      {"rotvec", RotationParameterization::kRotationVector},
+      {"quat", RotationParameterization::kQuaternion}};
+  for (const auto& [name, rotation] : cases) {
+    const Scene s =
+        parse_scene(scene(kBody, std::string(R"("solver": {"rotation": ")") + name + "\"}, "),
+                    "inline.json");
+    EXPECT_EQ(s.solver.rotation, rotation) << name;
+  }
 }
 
 TEST(SceneErrors, BadSolverNumbers) {

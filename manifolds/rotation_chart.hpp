@@ -1,0 +1,97 @@
+#pragma once
+// The rotation-vector chart of a component during a Newton solve: every rotation is
+// R = exp(r), and assembly turns the Lie gradient and Hessian that the terms provide into the
+// derivatives with respect to the r's (manifolds/rotation_vector.hpp):
+//   g_r = J_l(r)ᵀ g,   H_rr' = J_l(r)ᵀ H_rr' J_l(r')  (+ C(r, g) on the diagonal),
+//   H_xr = H_xr J_l(r)  for a position x.
+// Each 3×3 block is transformed on its way to the linear system's sink (ChartSink), so the
+// same scatter, pattern and factorisation serve every parameterisation; C is added once per
+// rotation after the terms, from the rotation's total Lie gradient.
+
+#include <vector>
+
+#include "../lib/incremental_potential.hpp"
+#include "rotation_vector.hpp"
+
+namespace liedyn {
+
+class RotationVectorChart {
+ public:
+  RotationVectorChart() = default;
+  explicit RotationVectorChart(const Component& component)
+      : offsets_(component.rotations.size()),
+        r_(component.rotations.size(), Vector3::Zero()),
+        J_(component.rotations.size(), Matrix3::Identity()),
+        rotation_of_block_(component.dofs / 3, -1) {
+    for (std::size_t i = 0; i < component.rotations.size(); ++i) {
+      offsets_[i] = component.rotations[i].offset;
+      rotation_of_block_[offsets_[i] / 3] = static_cast<int>(i);
+    }
+  }
+
+  // Sets rotation i's vector and returns exp(r).
+  Matrix3 set(std::size_t i, const Vector3& r) {
+    r_[i] = r;
+    return so3::exp(r, &J_[i]);
+  }
+  const Vector3& r(std::size_t i) const { return r_[i]; }
+
+  // J_l(r) of the rotation whose DOFs start at `offset`, or null for a position.
+  const Matrix3* jacobian_at(int offset) const {
+    const int i = rotation_of_block_[offset / 3];
+    return i < 0 ? nullptr : &J_[i];
+  }
+
+  // After the terms: adds C(r, g) to each rotation's diagonal block (through `sink`, the
+  // system's own sink, so that a pattern recorded once sees these blocks too) and replaces g's
+  // rotation entries by J_l(r)ᵀ g.
+  template <class Vector, class Sink>
+  void finish(Vector& g, Sink& sink) const {
+    for (std::size_t i = 0; i < offsets_.size(); ++i) {
+      const int o = offsets_[i];
+      const Vector3 g_lie = g.template segment<3>(o);
+      sink.add(o, o, rotvec::hessian_correction(r_[i], g_lie));
+      g.template segment<3>(o) = J_[i].transpose() * g_lie;
+    }
+  }
+
+ private:
+  std::vector<int> offsets_;            // per rotation, in the tangent vector
+  std::vector<Vector3> r_;              // per rotation
+  std::vector<Matrix3> J_;              // per rotation: J_l(r)
+  std::vector<int> rotation_of_block_;  // per 3-DOF block: its rotation, or −1 (a position)
+};
+
+// Passes each Hessian block to `sink` as Jᵀ_row block J_column (identity for positions).
+template <class Sink>
+struct ChartSink {
+  Sink& sink;
+  const RotationVectorChart& chart;
+  void clear() { sink.clear(); }
+  template <class Block>
+  void add(int row, int column, const Block& block) {
+    const Matrix3* J_row = chart.jacobian_at(row);
+    const Matrix3* J_column = chart.jacobian_at(column);
+    if (J_row == nullptr && J_column == nullptr) {
+      sink.add(row, column, block);
+      return;
+    }
+    Matrix3 b = block;
+    if (J_row != nullptr) b = J_row->transpose() * b;
+    if (J_column != nullptr) b = b * *J_column;
+    sink.add(row, column, b);
+  }
+};
+
+// IncrementalPotential::assemble_into, in the chart's coordinates when `chart` is non-null.
+template <class Vector, class Sink>
+double assemble_charted(const IncrementalPotential& potential, const State& q, Vector& g,
+                        Sink& sink, double* roundoff, const RotationVectorChart* chart) {
+  if (chart == nullptr) return potential.assemble_into(q, g, sink, roundoff);
+  ChartSink<Sink> charted{sink, *chart};
+  const double value = potential.assemble_into(q, g, charted, roundoff);
+  chart->finish(g, sink);
+  return value;
+}
+
+}  // namespace liedyn
