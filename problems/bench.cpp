@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "../solvers/simulator.hpp"
+#include "output.hpp"
 
 namespace liedyn {
 double median(std::vector<double> v) {
@@ -98,12 +99,7 @@ std::string format_bench(const BenchResult& r) {
 std::string bench_json(const BenchResult& r) {
   std::ostringstream os;
   os << std::setprecision(9);
-  std::string escaped;
-  for (char ch : r.scene) {
-    if (ch == '"' || ch == '\\') escaped += '\\';
-    escaped += ch;
-  }
-  os << "{\"scene\": \"" << escaped << "\", \"dofs\": " << r.dofs << ", \"frames\": " << r.frames
+  os << "{\"scene\": " << json_quoted(r.scene) << ", \"dofs\": " << r.dofs << ", \"frames\": " << r.frames
      << ", \"time_step\": " << r.time_step << ", \"repeats\": " << r.repeats
      << ", \"total_seconds\": " << r.total_seconds << ", \"assembly_us\": " << r.assembly_us
      << ", \"solve_us\": " << r.solve_us

@@ -9,6 +9,7 @@
 #include "../lib/so3.hpp"
 #include "../solvers/simulator.hpp"
 #include "bench.hpp"
+#include "output.hpp"
 
 namespace liedyn {
 namespace {
@@ -154,14 +155,9 @@ std::string compare_csv(const std::vector<CompareRow>& rows) {
 std::string compare_json(const Scene& scene, const std::vector<CompareRow>& rows) {
   std::ostringstream os;
   os << std::setprecision(9);
-  std::string escaped;
-  for (char ch : scene.source) {
-    if (ch == '"' || ch == '\\') escaped += '\\';
-    escaped += ch;
-  }
   // JSON has no NaN: a missing condition number is null.
   auto json_number = [](double v) { return std::isnan(v) ? std::string("null") : number(v); };
-  os << "{\"scene\": \"" << escaped << "\", \"frames\": " << scene.frames
+  os << "{\"scene\": " << json_quoted(scene.source) << ", \"frames\": " << scene.frames
      << ", \"time_step\": " << scene.model.time_step << ", \"reference\": \""
      << to_string(rows.front().rotation) << "\", \"rows\": [";
   for (std::size_t i = 0; i < rows.size(); ++i) {

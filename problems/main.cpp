@@ -3,6 +3,7 @@
 //   liedyn bench SCENE.json [--repeat N] [--json]     (cost per Newton iteration; no files)
 //   liedyn compare SCENE.json --rotations lie,rotvec,quat [--csv | --json] [--repeat N]
 //                  [--frames-csv FILE] [--condition-every N]
+//   liedyn exp-jacobian --out FILE [--samples N]   (paper Fig. 3 data: σ of ∂vec(exp r)/∂r)
 // Exit status: 0 success; 2 bad input (scene or options), nothing written; 3 some steps ended
 // at max_iterations (outputs written; --allow-unconverged makes this 0); 4 a step failed
 // (outputs written up to it); 1 other errors (I/O).
@@ -10,6 +11,7 @@
 #include <CLI/CLI.hpp>
 #include <iostream>
 
+#include "analysis.hpp"
 #include "bench.hpp"
 #include "compare.hpp"
 #include "output.hpp"
@@ -61,6 +63,15 @@ int main(int argc, char** argv) {
                       "frames)")
       ->check(CLI::NonNegativeNumber);
 
+  std::string out_file;
+  int samples = 361;
+  CLI::App* exp_jacobian = app.add_subcommand(
+      "exp-jacobian", "Singular values of d vec(exp(r))/dr for |r| in [0, 2 pi] (paper Fig. 3)");
+  exp_jacobian->add_option("--out", out_file, "CSV file to write")->required();
+  exp_jacobian->add_option("--samples", samples, "Angles, evenly spaced")
+      ->check(CLI::Range(2, 1000000))
+      ->capture_default_str();
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -69,6 +80,12 @@ int main(int argc, char** argv) {
   }
 
   try {
+    if (exp_jacobian->parsed()) {
+      liedyn::AtomicFile file(out_file);
+      file.stream() << liedyn::exp_jacobian_singular_values_csv(samples);
+      file.commit();
+      return 0;
+    }
     const liedyn::Scene scene = liedyn::load_scene(scene_file);
     if (compare->parsed()) {
       liedyn::CompareOptions options;

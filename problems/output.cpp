@@ -1,5 +1,7 @@
 #include "output.hpp"
 
+#include <cstdio>
+
 #include <unistd.h>
 
 #include <stdexcept>
@@ -34,6 +36,23 @@ void AtomicFile::commit() {
     throw std::runtime_error(target_.string() + ": cannot rename into place: " + error.message());
   }
   committed_ = true;
+}
+
+std::string json_quoted(const std::string& text) {
+  std::string out = "\"";
+  for (const char ch : text) {
+    if (ch == '"' || ch == '\\') {
+      out += '\\';
+      out += ch;
+    } else if (static_cast<unsigned char>(ch) < 0x20) {
+      char code[8];
+      std::snprintf(code, sizeof code, "\\u%04x", static_cast<unsigned>(ch));
+      out += code;
+    } else {
+      out += ch;
+    }
+  }
+  return out + "\"";
 }
 
 }  // namespace liedyn

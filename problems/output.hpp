@@ -26,4 +26,7 @@ class AtomicFile {
   bool committed_ = false;
 };
 
+// `text` as a JSON string literal, quotes included (", \ and control characters escaped).
+std::string json_quoted(const std::string& text);
+
 }  // namespace liedyn

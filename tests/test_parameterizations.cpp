@@ -66,14 +66,24 @@ Vector3 test_rotation_vector(std::size_t i) {
 
 // Checks the charted assembly of `System` on the first component of `model` against central
 // differences of Ψ in (x, r) (gradient) and of the charted gradient (Hessian).
+// The first component of `model` at the start of its first step, its positions moved on by
+// two steps (so that no term sits at its minimum).
+struct StartedComponent {
+  Component c;
+  State q;
+  explicit StartedComponent(const Model& model)
+      : c(std::move(build_components(model).front())), q(model.initial_state()) {
+    const Step dq = model.initial_step();
+    c.potential.begin_step(q, dq);
+    for (std::size_t i = 0; i < q.points.size(); ++i) q.points[i] += 2.0 * dq.points[i];
+  }
+};
+
 template <class System, class... SystemArgs>
 void expect_charted_derivatives(const Model& model, SystemArgs... args) {
-  std::vector<Component> components = build_components(model);
-  Component& c = components.front();
-  State q = model.initial_state();
-  const Step dq = model.initial_step();
-  c.potential.begin_step(q, dq);
-  for (std::size_t i = 0; i < q.points.size(); ++i) q.points[i] += 2.0 * dq.points[i];
+  StartedComponent started(model);
+  Component& c = started.c;
+  State& q = started.q;
   RotationVectorChart chart(c);
   std::vector<Vector3> r(c.rotations.size());
   for (std::size_t i = 0; i < c.rotations.size(); ++i) {
@@ -131,6 +141,89 @@ TEST(RotationVectorChart, SparseSystemsHaveTheDerivativesOfPsiOfExpR) {
   expect_charted_derivatives<SparseSystem>(rod, SparseSystem::Factorization::kBanded, 1);
   expect_charted_derivatives<SparseSystem>(rod, SparseSystem::Factorization::kCholmod, 1);
   expect_charted_derivatives<SparseSystem>(rod, SparseSystem::Factorization::kBanded, 2);
+}
+
+// The paper's own rotation-vector gradient of the inertial potential (appendix B, eq. 37),
+// written out independently of the chart: Ψ_R = −tr(exp(r) M), M = J R̃ᵀ/h², split as
+// M = S + A (symmetric, antisymmetric), a = vee(A) (the paper's skew⁻¹), K = tr(S) I − S:
+//   ∂Ψ_R/∂r = 2 (aᵀr) σ'(t) r/t + 2 σ(t) a + ½ (rᵀK r) σ(t/2) σ'(t/2) r/t + σ²(t/2) K r.
+// The chart's J_l(r)ᵀ g of the RotationalInertia term must equal it.
+TEST(RotationVectorChart, InertialGradientMatchesThePapersAppendixB) {
+  RotationalInertia term;
+  term.offsets = {0};
+  term.rotation = 0;
+  term.J_over_h2 = Eigen::Vector3d(0.2, 0.3, 0.45).asDiagonal();
+  term.J_over_h2 *= 1e4;
+  term.R_tilde = so3::exp(Vector3(0.4, -1.1, 0.7));
+  const Matrix3 M = term.J_over_h2 * term.R_tilde.transpose();
+  const Matrix3 S = 0.5 * (M + M.transpose());
+  const Vector3 a = so3::vee(M);  // vee of the antisymmetric part
+  const Matrix3 K = S.trace() * Matrix3::Identity() - S;
+  auto sigma = [](double t) { return std::sin(t) / t; };
+  auto sigma_prime = [](double t) { return (t * std::cos(t) - std::sin(t)) / (t * t); };
+  for (const double angle : {0.3, 1.0, 2.0, kPi - 1e-6, 4.0, 5.5}) {
+    const Vector3 r = angle * Vector3(0.2, -0.5, 0.84).normalized();
+    const double t = r.norm();
+    const Vector3 paper = 2.0 * a.dot(r) * sigma_prime(t) * r / t + 2.0 * sigma(t) * a +
+                          0.5 * r.dot(K * r) * sigma(t / 2) * sigma_prime(t / 2) * r / t +
+                          sigma(t / 2) * sigma(t / 2) * (K * r);
+    State q;
+    Matrix3 J_l;
+    q.rotations = {so3::exp(r, &J_l)};
+    LocalGradient<1> g;
+    term.evaluate(q, &g, nullptr);
+    const Vector3 chart = J_l.transpose() * g;
+    EXPECT_LT((chart - paper).norm(), 1e-12 * paper.norm()) << "angle " << angle;
+  }
+}
+
+// Quaternions: the Lie gradient and Hessian the systems assemble are the derivatives of
+// δ ↦ Ψ(x, R(retract(q, δ))) at δ = 0 (manifolds/quaternion.hpp), for every term type.
+void expect_quaternion_derivatives(const Model& model) {
+  StartedComponent started(model);
+  Component& c = started.c;
+  State& q = started.q;
+  std::vector<quat::Vector4> quaternions(c.rotations.size());
+  for (std::size_t i = 0; i < c.rotations.size(); ++i) {
+    // ±q alternately: both signs must give the same derivatives.
+    quaternions[i] = (i % 2 == 0 ? 1.0 : -1.0) *
+                     quat::from_rotation(so3::exp(test_rotation_vector(i)));
+    q.rotations[c.rotations[i].index] = quat::rotation(quaternions[i]);
+  }
+  DenseSystem<Eigen::Dynamic> system(c);
+  system.assemble(c.potential, q, nullptr);
+  Eigen::MatrixXd H;
+  system.dense_hessian(H);
+  auto value = [&](const Eigen::VectorXd& delta) {
+    State p = q;
+    for (const DofBlock& b : c.points) p.points[b.index] += delta.segment<3>(b.offset);
+    for (std::size_t i = 0; i < c.rotations.size(); ++i) {
+      const DofBlock& b = c.rotations[i];
+      p.rotations[b.index] =
+          quat::rotation(quat::retract(quaternions[i], delta.segment<3>(b.offset)));
+    }
+    return c.potential.value(p);
+  };
+  const double h = 1e-4;  // second differences: error O(h²) against round-off O(ε Ψ/h²)
+  const double g_scale = system.gradient().cwiseAbs().maxCoeff();
+  const double H_scale = H.cwiseAbs().maxCoeff();
+  for (int k = 0; k < c.dofs; ++k) {
+    Eigen::VectorXd e = Eigen::VectorXd::Zero(c.dofs);
+    e[k] = h;
+    EXPECT_NEAR(system.gradient()[k], (value(e) - value(-e)) / (2 * h), 1e-6 * g_scale) << k;
+    for (int l = 0; l <= k; ++l) {
+      Eigen::VectorXd f = Eigen::VectorXd::Zero(c.dofs);
+      f[l] = h;
+      const double fd = (value(e + f) - value(e - f) - value(f - e) + value(-e - f)) / (4 * h * h);
+      EXPECT_NEAR(H(k, l), fd, 1e-5 * H_scale) << k << ", " << l;
+    }
+  }
+}
+
+TEST(Parameterizations, QuaternionDerivativesAreTheLieOnesForEveryTerm) {
+  expect_quaternion_derivatives(loaded_body(Vector3(0.3, -2.0, 1.0)));
+  expect_quaternion_derivatives(test_models::spring_chain(3));
+  expect_quaternion_derivatives(curved_rod(6));
 }
 
 // Steps of `model` under `rotation` and under Lie, both to a tight tolerance: the minimiser
