@@ -18,12 +18,6 @@ void IncrementalPotential::set_load_scale(double lambda) {
   for (auto& t : torques) t.scale = lambda;
 }
 
-double IncrementalPotential::roundoff_position_scale(const State& q) {
-  double scale = 1.0;
-  for (const Vector3& x : q.points) scale = std::max(scale, 1.0 + x.cwiseAbs().maxCoeff());
-  return scale;
-}
-
 double IncrementalPotential::value(const State& q) const {
   double value = 0.0;
   for_each_term_vector([&](const auto& terms) {

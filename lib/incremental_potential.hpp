@@ -90,7 +90,11 @@ class IncrementalPotential {
   template <class Vector, class Sink>
   double add_terms(const State& q, Vector& g, Sink& sink, Part part, double position_scale,
                    double* magnitude) const;
-  static double roundoff_position_scale(const State& q);
+  static double roundoff_position_scale(const State& q) {
+    double scale = 1.0;
+    for (const Vector3& x : q.points) scale = std::max(scale, 1.0 + x.cwiseAbs().maxCoeff());
+    return scale;
+  }
 
   // Potential energy (gravity, constant forces, springs, rod elasticity):
   // what frames.csv reports. Inertia and torque terms are not energies of the state.
@@ -166,9 +170,12 @@ double IncrementalPotential::add_terms(const State& q, Vector& g, Sink& sink, Pa
     constexpr int B = Term::kBlocks;
     LocalGradient<B> g_local;
     LocalHessian<B> H_local;
+    // The divisions are skipped in the common serial case: on a single rigid body they cost
+    // as much as its whole assembly.
     const std::size_t n = terms.size();
-    const std::size_t end = n * (part.index + 1) / part.count;
-    for (std::size_t t = n * part.index / part.count; t < end; ++t) {
+    const std::size_t begin = part.count == 1 ? 0 : n * part.index / part.count;
+    const std::size_t end = part.count == 1 ? n : n * (part.index + 1) / part.count;
+    for (std::size_t t = begin; t < end; ++t) {
       const Term& term = terms[t];
       const double term_value = term.evaluate(q, &g_local, &H_local);
       value += term_value;

@@ -1,6 +1,7 @@
 #include "linear_system.hpp"
 #include "unroll.hpp"
 
+#include <Eigen/Eigenvalues>
 #include <omp.h>
 #include <suitesparse/cholmod.h>
 
@@ -556,6 +557,14 @@ void SparseSystem::dense_hessian(Eigen::MatrixXd& H) const {
       H(original[i[k]], original[col]) = H(original[col], original[i[k]]) = x[k];
     }
   }
+}
+
+double condition_number(const Eigen::MatrixXd& H) {
+  const Eigen::VectorXd magnitudes =
+      Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(H, Eigen::EigenvaluesOnly)
+          .eigenvalues()
+          .cwiseAbs();
+  return magnitudes.maxCoeff() / magnitudes.minCoeff();
 }
 
 bool SparseSystem::factorize(double mu) {

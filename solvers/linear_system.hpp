@@ -36,6 +36,9 @@
 
 namespace liedyn {
 
+// |λ|max/|λ|min of a symmetric matrix (dense eigendecomposition; infinite if singular).
+double condition_number(const Eigen::MatrixXd& H);
+
 template <int N>
 class DenseSystem {
  public:

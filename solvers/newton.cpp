@@ -1,6 +1,5 @@
 #include "newton.hpp"
 
-#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -107,6 +106,7 @@ Newton<System>::Newton(Component component, const NewtonOptions& options)
 
 template <class System>
 void Newton<System>::enter_parameterization(State& q) {
+  if (options_.rotation == RotationParameterization::kLie) return;
   for (std::size_t i = 0; i < component_.rotations.size(); ++i) {
     Matrix3& R = q.rotations[component_.rotations[i].index];
     if (options_.rotation == RotationParameterization::kRotationVector) {
@@ -179,11 +179,7 @@ template <class System>
 double Newton<System>::hessian_condition() const {
   Eigen::MatrixXd H;
   system_.dense_hessian(H);
-  const Eigen::VectorXd magnitudes =
-      Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(H, Eigen::EigenvaluesOnly)
-          .eigenvalues()
-          .cwiseAbs();
-  return magnitudes.maxCoeff() / magnitudes.minCoeff();
+  return condition_number(H);
 }
 
 template <class System>
