@@ -6,11 +6,14 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <numbers>
 
 #include "lib/so3.hpp"
 #include "models.hpp"
+#include "problems/scene.hpp"
 #include "rod_models.hpp"
 #include "solvers/simulator.hpp"
 
@@ -280,6 +283,46 @@ TEST(Parameterizations, RotationsThroughPiFollowTheLieTrajectory) {
     expect_same_trajectory(loaded_body(kPi * Vector3(1.0, 0.0, 0.0)), rotation, 300, 1e-13,
                            1e-7);
   }
+}
+
+// Every bundled scene (bodies, rods, static load steps, prescribed motions) runs under each
+// parameterisation, its first 40 frames converged and within 1e-6 (m, rad) of the Lie run:
+// the scenes' tolerances are 1e-9 or tighter, and 40 frames give little room for amplification.
+TEST(Parameterizations, EveryBundledSceneRunsUnderEachParameterisation) {
+  const std::filesystem::path scenes = std::filesystem::path(LIEDYN_SOURCE_DIR) / "problems/scenes";
+  int count = 0;
+  for (const auto& entry : std::filesystem::directory_iterator(scenes)) {
+    if (entry.path().extension() != ".json") continue;
+    SCOPED_TRACE(entry.path().filename().string());
+    const Scene scene = load_scene(entry.path());
+    const int frames = std::min(scene.frames, 40);
+    Simulator lie(scene.model, scene.solver);
+    std::vector<Simulator> others;
+    for (const auto rotation :
+         {RotationParameterization::kRotationVector, RotationParameterization::kQuaternion}) {
+      NewtonOptions options = scene.solver;
+      options.rotation = rotation;
+      others.emplace_back(scene.model, options);
+    }
+    double deviation = 0.0;
+    for (int k = 0; k < frames; ++k) {
+      ASSERT_TRUE(lie.step().converged());
+      for (Simulator& other : others) {
+        ASSERT_TRUE(other.step().converged()) << "frame " << k + 1;
+        for (std::size_t i = 0; i < lie.state().points.size(); ++i) {
+          deviation = std::max(
+              deviation, (lie.state().points[i] - other.state().points[i]).cwiseAbs().maxCoeff());
+        }
+        for (std::size_t i = 0; i < lie.state().rotations.size(); ++i) {
+          deviation = std::max(
+              deviation, so3::distance(lie.state().rotations[i], other.state().rotations[i]));
+        }
+      }
+    }
+    EXPECT_LT(deviation, 1e-6);
+    ++count;
+  }
+  EXPECT_GE(count, 10);
 }
 
 }  // namespace
