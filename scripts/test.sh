@@ -10,7 +10,11 @@ build="$root/build"
 options=(-DCMAKE_BUILD_TYPE=Release)
 if [ "${1:-}" = "--sanitize" ]; then
   build="$root/build-asan"
-  options=(-DCMAKE_BUILD_TYPE=RelWithDebInfo -DLIEDYN_SANITIZE=ON -DLIEDYN_BUILD_BENCHMARKS=OFF)
+  # -O1 -g1 rather than RelWithDebInfo's -O2 -g: half the compile time (97 → 46 s for
+  # test_rod_validation.cpp), which is most of this phase in CI; -g1 keeps the line tables
+  # that sanitizer reports print.
+  options=(-DCMAKE_BUILD_TYPE=RelWithDebInfo "-DCMAKE_CXX_FLAGS_RELWITHDEBINFO=-O1 -g1 -DNDEBUG"
+           -DLIEDYN_SANITIZE=ON -DLIEDYN_BUILD_BENCHMARKS=OFF)
   export ASAN_OPTIONS=detect_leaks=1:abort_on_error=1
   export UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1
 fi
