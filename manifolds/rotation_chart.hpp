@@ -36,6 +36,17 @@ class RotationVectorChart {
   }
   const Vector3& r(std::size_t i) const { return r_[i]; }
 
+  // Keeps the current r's and J_l(r)'s / returns to them (Newton's line search backtracking:
+  // the rotations themselves are restored by the caller, so nothing is recomputed here).
+  void save() {
+    saved_r_ = r_;  // same sizes: no allocation after the first save
+    saved_J_ = J_;
+  }
+  void restore() {
+    r_ = saved_r_;
+    J_ = saved_J_;
+  }
+
   // J_l(r) of the rotation whose DOFs start at `offset`, or null for a position.
   const Matrix3* jacobian_at(int offset) const {
     const int i = rotation_of_block_[offset / 3];
@@ -60,6 +71,8 @@ class RotationVectorChart {
   std::vector<Vector3> r_;              // per rotation
   std::vector<Matrix3> J_;              // per rotation: J_l(r)
   std::vector<int> rotation_of_block_;  // per 3-DOF block: its rotation, or −1 (a position)
+  std::vector<Vector3> saved_r_;        // save() / restore()
+  std::vector<Matrix3> saved_J_;
 };
 
 // Passes each Hessian block to `sink` as Jᵀ_row block J_column (identity for positions).
@@ -83,14 +96,22 @@ struct ChartSink {
   }
 };
 
+// Calls assemble(s) with s = `sink` itself, or `sink` behind the chart's ChartSink when
+// `chart` is non-null; returns what it returns. (The caller still owes chart->finish.)
+template <class Sink, class Assemble>
+double through_chart(Sink& sink, const RotationVectorChart* chart, Assemble&& assemble) {
+  if (chart == nullptr) return assemble(sink);
+  ChartSink<Sink> charted{sink, *chart};
+  return assemble(charted);
+}
+
 // IncrementalPotential::assemble_into, in the chart's coordinates when `chart` is non-null.
 template <class Vector, class Sink>
 double assemble_charted(const IncrementalPotential& potential, const State& q, Vector& g,
                         Sink& sink, double* roundoff, const RotationVectorChart* chart) {
-  if (chart == nullptr) return potential.assemble_into(q, g, sink, roundoff);
-  ChartSink<Sink> charted{sink, *chart};
-  const double value = potential.assemble_into(q, g, charted, roundoff);
-  chart->finish(g, sink);
+  const double value = through_chart(
+      sink, chart, [&](auto& s) { return potential.assemble_into(q, g, s, roundoff); });
+  if (chart != nullptr) chart->finish(g, sink);
   return value;
 }
 

@@ -328,7 +328,7 @@ struct SparseSystem::ParallelAssembly {
   std::vector<std::vector<std::pair<int, int>>> own_ranges;  // per part: band entries [b, e)
                                                              // written in place
   std::vector<std::vector<double>> band;  // per part: a private band (shared columns only used)
-  std::vector<Eigen::VectorXd> g;         // per part (part 0 uses the system's g)
+  std::vector<Eigen::VectorXd> g;         // per part; part 0 uses the system's g (g[0] empty)
   std::vector<double> value, magnitude;   // per part: Σ Ψ_t and the round-off sum
 
   // The sink of part k.
@@ -440,6 +440,7 @@ void SparseSystem::split_assembly(const IncrementalPotential& potential, const S
   }
   p->band.assign(parts, std::vector<double>(band_.value_count(), 0.0));
   p->g.assign(parts, Eigen::VectorXd::Zero(n));
+  p->g[0].resize(0);
   p->value.assign(parts, 0.0);
   p->magnitude.assign(parts, 0.0);
   parallel_ = std::move(p);
@@ -467,12 +468,9 @@ double SparseSystem::assemble_in_parts(const IncrementalPotential& potential, co
       const IncrementalPotential::Part part{k, p.parts};
       double* magnitude = roundoff != nullptr ? &p.magnitude[k] : nullptr;
       p.magnitude[k] = 0.0;
-      if (chart != nullptr) {
-        ChartSink<ParallelAssembly::Scatter> charted{sink, *chart};
-        p.value[k] = potential.add_terms(q, g, charted, part, position_scale, magnitude);
-      } else {
-        p.value[k] = potential.add_terms(q, g, sink, part, position_scale, magnitude);
-      }
+      p.value[k] = through_chart(sink, chart, [&](auto& s) {
+        return potential.add_terms(q, g, s, part, position_scale, magnitude);
+      });
     }
   }
   double value = p.value[0];

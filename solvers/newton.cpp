@@ -97,7 +97,6 @@ Newton<System>::Newton(Component component, const NewtonOptions& options)
   const std::size_t n = component_.rotations.size();
   if (options_.rotation == RotationParameterization::kRotationVector) {
     chart_ = RotationVectorChart(component_);
-    saved_rotation_vectors_.resize(n);
   } else if (options_.rotation == RotationParameterization::kQuaternion) {
     quaternions_.resize(n);
     saved_quaternions_.resize(n);
@@ -126,9 +125,7 @@ void Newton<System>::save(const State& q) {
   for (std::size_t i = 0; i < component_.rotations.size(); ++i) {
     saved_rotations_[i] = q.rotations[component_.rotations[i].index];
   }
-  for (std::size_t i = 0; i < saved_rotation_vectors_.size(); ++i) {
-    saved_rotation_vectors_[i] = chart_.r(i);
-  }
+  if (options_.rotation == RotationParameterization::kRotationVector) chart_.save();
   for (std::size_t i = 0; i < saved_quaternions_.size(); ++i) {
     saved_quaternions_[i] = quaternions_[i];
   }
@@ -142,9 +139,7 @@ void Newton<System>::restore(State& q) {
   for (std::size_t i = 0; i < component_.rotations.size(); ++i) {
     q.rotations[component_.rotations[i].index] = saved_rotations_[i];
   }
-  for (std::size_t i = 0; i < saved_rotation_vectors_.size(); ++i) {
-    chart_.set(i, saved_rotation_vectors_[i]);
-  }
+  if (options_.rotation == RotationParameterization::kRotationVector) chart_.restore();
   for (std::size_t i = 0; i < saved_quaternions_.size(); ++i) {
     quaternions_[i] = saved_quaternions_[i];
   }

@@ -155,9 +155,8 @@ class Newton {
   Vector delta_;
   std::vector<Vector3> saved_points_, entry_points_;
   std::vector<Matrix3> saved_rotations_, entry_rotations_;
-  // Rotation vectors: the chart (current r's, J_l(r)'s) and the r's at the last save().
+  // Rotation vectors: the chart (current and saved r's and J_l(r)'s).
   RotationVectorChart chart_;
-  std::vector<Vector3> saved_rotation_vectors_;
   // Quaternions: current and saved, per rotation of the component.
   std::vector<quat::Vector4> quaternions_, saved_quaternions_;
 };

@@ -16,6 +16,7 @@
 #include <cstddef>
 #include <cstdlib>
 #include <new>
+#include <string>
 #include <vector>
 
 #include <Eigen/Core>
@@ -437,6 +438,26 @@ TEST(Allocation, ClampedRodStepDoesNotAllocate) {
     options.assembly_threads = threads;
     Simulator sim(clamped_rod(), options);
     expect_no_allocation(run_counted(sim, kSteps), kSteps);
+  }
+}
+
+// Rotation vectors (chart, save/restore of its r's and J's) and quaternions, on the three
+// kinds of linear system.
+TEST(Allocation, RotationVectorAndQuaternionStepsDoNotAllocate) {
+  Model bolt;
+  bolt.time_step = 0.01;
+  bolt.bodies.push_back(butterfly_bolt());
+  for (const auto rotation : {liedyn::RotationParameterization::kRotationVector,
+                              liedyn::RotationParameterization::kQuaternion}) {
+    for (const Model& model : {bolt, spring_chain(3), clamped_rod()}) {
+      SCOPED_TRACE(std::string(liedyn::to_string(rotation)) + ", " +
+                   std::to_string(model.bodies.size()) + " bodies, " +
+                   std::to_string(model.rods.size()) + " rods");
+      NewtonOptions options;
+      options.rotation = rotation;
+      Simulator sim(model, options);
+      expect_no_allocation(run_counted(sim, kSteps), kSteps);
+    }
   }
 }
 

@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "fd_check.hpp"
+#include "rotation_test_functions.hpp"
 #include "lib/so3.hpp"
 #include "manifolds/quaternion.hpp"
 
@@ -319,36 +320,17 @@ TEST(QuaternionRetract, TurnsByTwiceTheArctangentAboutTheWorldAxis) {
   }
 }
 
-// Ψ(R) = tr(A R) + ½‖R p − y‖², a smooth function of a rotation with non-trivial Lie
-// gradient and Hessian everywhere. With M = R A, a = R p, r = a − y and
-// exp(θ) = I + [θ]× + ½[θ]×² + O(θ³), [θ]×² = θθᵀ − ‖θ‖² I:
-//   tr(A exp(θ) R) = tr M + tr(M [θ]×) + ½ tr(M [θ]×²) + …
-//                  = tr M − 2 vee(M)·θ + ½ θᵀ (sym M − tr M I) θ + …,
-//   ½‖exp(θ) a − y‖² = ½‖r‖² + rᵀ(θ × a) + ½‖θ × a‖² + ½ rᵀ [θ]×² a + …
-//                  = ½‖r‖² + (a × r)·θ + ½ θᵀ (−[a]×² + sym(r aᵀ) − (r·a) I) θ + ….
-struct TestFunction {
-  Matrix3 A;
-  Vector3 p, y;
-
-  double value(const Matrix3& R) const { return (A * R).trace() + 0.5 * (R * p - y).squaredNorm(); }
-
-  Vector3 gradient(const Matrix3& R) const {
-    const Vector3 a = R * p;
-    return -2.0 * so3::vee(R * A) + a.cross(a - y);
-  }
-
-  Matrix3 hessian(const Matrix3& R) const {
-    const Matrix3 M = R * A;
-    const Vector3 a = R * p, r = a - y;
-    const Matrix3 ha = so3::hat(a);
-    return 0.5 * (M + M.transpose()) - M.trace() * Matrix3::Identity() - ha * ha +
-           0.5 * (r * a.transpose() + a * r.transpose()) - r.dot(a) * Matrix3::Identity();
-  }
-};
+// Ψ(R) = tr(A R) + ½‖R p − y‖² (tests/rotation_test_functions.hpp): non-trivial Lie
+// gradient and Hessian everywhere.
+using test_functions::TestFunction;
 
 TestFunction make_test_function() {
   std::mt19937 rng(14);
-  return {Matrix3::Random(), fd::random_vector(rng, 1.0), fd::random_vector(rng, 1.0)};
+  // Evaluated in this order (A first), as before the function moved to the shared header.
+  const Matrix3 A = Matrix3::Random();
+  const Vector3 p = fd::random_vector(rng, 1.0);
+  const Vector3 y = fd::random_vector(rng, 1.0);
+  return test_functions::trace_and_point(A, p, y);
 }
 
 TEST(QuaternionRetract, TestFunctionLieDerivativesMatchFiniteDifferences) {
