@@ -473,6 +473,17 @@ TEST(SceneErrors, BadSolverNumbers) {
                   "(0, 1)");
 }
 
+TEST(SceneErrors, BadAssemblyThreads) {
+  expect_rejected(scene(kBody, R"("solver": {"assembly_threads": -1}, )"),
+                  "solver.assembly_threads", "integer in [0, 256]");
+  expect_rejected(scene(kBody, R"("solver": {"assembly_threads": 257}, )"),
+                  "solver.assembly_threads", "integer in [0, 256]");
+  expect_rejected(scene(kBody, R"("solver": {"assembly_threads": 1.5}, )"),
+                  "solver.assembly_threads", "integer");
+  const Scene s = parse_scene(scene(kBody, R"("solver": {"assembly_threads": 2}, )"), "inline.json");
+  EXPECT_EQ(s.solver.assembly_threads, 2);
+}
+
 TEST(SceneErrors, BadFrames) {
   const auto with_frames = [](const std::string& frames) {
     return R"({"time_step": 0.01, "frames": )" + frames + R"(, "bodies": [{)" + kBody + "}]}";
