@@ -46,7 +46,7 @@ liedyn::Model make_model(const liedyn::Vector3& torque) {
 
 // ω_N(τ), or nothing if a time step fails.
 std::optional<liedyn::Vector3> final_angular_velocity(const liedyn::Vector3& torque) {
-  liedyn::NewtonOptions options;
+  liedyn::SolverOptions options;
   options.tolerance = 1e-12;
   liedyn::Simulator sim(make_model(torque), options);
   for (int k = 0; k < kSteps; ++k) {

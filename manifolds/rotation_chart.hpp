@@ -1,6 +1,9 @@
 #pragma once
-// The rotation-vector chart of a component during a Newton solve: every rotation is
-// R = exp(r), and assembly turns the Lie gradient and Hessian that the terms provide into the
+// The rotation-vector chart of a component: every rotation is R = exp(r) R_ref, with a fixed
+// reference R_ref per rotation (the identity unless set_reference says otherwise: the global
+// rotation vectors of a Newton solve; Ipopt's tangent increments use R_ref = R at the start,
+// solvers/ipopt_step.hpp). Since exp(r + dr) = exp(J_l(r) dr) exp(r), R_ref changes nothing
+// below. Assembly turns the Lie gradient and Hessian that the terms provide into the
 // derivatives with respect to the r's (manifolds/rotation_vector.hpp):
 //   g_r = J_l(r)ᵀ g,   H_rr' = J_l(r)ᵀ H_rr' J_l(r')  (+ C(r, g) on the diagonal),
 //   H_xr = H_xr J_l(r)  for a position x.
@@ -22,6 +25,7 @@ class RotationVectorChart {
       : offsets_(component.rotations.size()),
         r_(component.rotations.size(), Vector3::Zero()),
         J_(component.rotations.size(), Matrix3::Identity()),
+        reference_(component.rotations.size(), Matrix3::Identity()),
         rotation_of_block_(component.dofs / 3, -1) {
     for (std::size_t i = 0; i < component.rotations.size(); ++i) {
       offsets_[i] = component.rotations[i].offset;
@@ -29,12 +33,19 @@ class RotationVectorChart {
     }
   }
 
-  // Sets rotation i's vector and returns exp(r).
+  // Sets rotation i's vector and returns exp(r) R_ref.
   Matrix3 set(std::size_t i, const Vector3& r) {
     r_[i] = r;
-    return so3::exp(r, &J_[i]);
+    return so3::exp(r, &J_[i]) * reference_[i];
   }
   const Vector3& r(std::size_t i) const { return r_[i]; }
+  // Re-centres rotation i on R: R_ref = R, r = 0 (so J_l = I).
+  void set_reference(std::size_t i, const Matrix3& R) {
+    reference_[i] = R;
+    r_[i].setZero();
+    J_[i].setIdentity();
+  }
+  std::size_t size() const { return r_.size(); }
 
   // Keeps the current r's and J_l(r)'s / returns to them (Newton's line search backtracking:
   // the rotations themselves are restored by the caller, so nothing is recomputed here).
@@ -70,6 +81,7 @@ class RotationVectorChart {
   std::vector<int> offsets_;            // per rotation, in the tangent vector
   std::vector<Vector3> r_;              // per rotation
   std::vector<Matrix3> J_;              // per rotation: J_l(r)
+  std::vector<Matrix3> reference_;      // per rotation: R_ref
   std::vector<int> rotation_of_block_;  // per 3-DOF block: its rotation, or −1 (a position)
   std::vector<Vector3> saved_r_;        // save() / restore()
   std::vector<Matrix3> saved_J_;

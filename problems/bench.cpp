@@ -21,7 +21,7 @@ double TimedRun::assembly_us() const {
 }
 double TimedRun::solve_us() const { return 1e6 * sum.solve_seconds / std::max(sum.assemblies, 1); }
 
-TimedRun time_scene(const Scene& scene, NewtonOptions options, std::vector<State>* trajectory) {
+TimedRun time_scene(const Scene& scene, SolverOptions options, std::vector<State>* trajectory) {
   options.measure_time = true;
   TimedRun run;
   Simulator sim(scene.model, options);

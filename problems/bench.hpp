@@ -44,7 +44,7 @@ struct TimedRun {
   double assembly_us() const;  // per assembly
   double solve_us() const;     // per factorisation + solve
 };
-TimedRun time_scene(const Scene& scene, NewtonOptions options, std::vector<State>* trajectory);
+TimedRun time_scene(const Scene& scene, SolverOptions options, std::vector<State>* trajectory);
 
 // Runs the scene `repeats` times (≥ 1), with timing on.
 BenchResult bench_scene(const Scene& scene, int repeats);

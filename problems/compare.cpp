@@ -18,7 +18,7 @@ constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
 // The diagnostics run: per-frame iterations and gradient norms, and the condition number of
 // the first Hessian at the sampled frames.
-void diagnose(const Scene& scene, NewtonOptions options, int condition_every, CompareRow& row) {
+void diagnose(const Scene& scene, SolverOptions options, int condition_every, CompareRow& row) {
   Simulator sim(scene.model, options);
   double condition_sum = 0.0;
   for (int k = 1; k <= row.frames; ++k) {
@@ -79,7 +79,7 @@ std::vector<CompareRow> compare_rotations(const Scene& scene, const CompareOptio
   std::vector<CompareRow> rows;
   std::vector<State> reference;
   for (const RotationParameterization rotation : options.rotations) {
-    NewtonOptions solver = scene.solver;
+    SolverOptions solver = scene.solver;
     solver.rotation = rotation;
     std::vector<State> trajectory;
     const TimedRun run = time_scene(scene, solver, &trajectory);

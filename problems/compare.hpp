@@ -3,7 +3,7 @@
 // quaternions; solvers/newton.hpp), same potential, Newton solver and tolerances, side by side
 // (paper §4.4, Fig. 4, Table 1).
 //
-// Each parameterisation is run `repeats` times timed (NewtonOptions::measure_time; medians,
+// Each parameterisation is run `repeats` times timed (SolverOptions::measure_time; medians,
 // the first run's trajectory), then once more for the diagnostics, with the condition number of the first Hessian of
 // every sampled frame (a dense eigendecomposition, which would distort the timing).
 

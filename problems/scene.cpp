@@ -407,7 +407,7 @@ Scene parse(const json& root, const std::string& source) {
     scene.solver.min_step_length = s.number("min_step_length", scene.solver.min_step_length);
     if (s.has("assembly_threads")) {
       scene.solver.assembly_threads =
-          s.integer("assembly_threads", 0, NewtonOptions::kMaxAssemblyThreads);
+          s.integer("assembly_threads", 0, SolverOptions::kMaxAssemblyThreads);
     }
     s.finish();
   }

@@ -27,7 +27,7 @@ struct Scene {
   std::string description;
   int frames = 0;      // time steps to simulate; frame 0 is the initial state
   Model model;
-  NewtonOptions solver;
+  SolverOptions solver;
 };
 
 // Parses and validates JSON text; `source` names it in error messages.

@@ -11,69 +11,10 @@
 
 namespace liedyn {
 
-void NewtonOptions::validate() const {
-  if (!(tolerance > 0.0) || !std::isfinite(tolerance)) {
-    throw ModelError("solver.tolerance", "must be a finite positive number");
-  }
-  if (max_iterations < 1) throw ModelError("solver.max_iterations", "must be at least 1");
-  if (!(armijo > 0.0 && armijo < 0.5)) throw ModelError("solver.armijo", "must be in (0, 0.5)");
-  if (!(min_step_length > 0.0 && min_step_length < 1.0)) {
-    throw ModelError("solver.min_step_length", "must be in (0, 1)");
-  }
-  if (assembly_threads < 0 || assembly_threads > kMaxAssemblyThreads) {
-    throw ModelError("solver.assembly_threads",
-                     "must be in [0, " + std::to_string(kMaxAssemblyThreads) + "] (0: automatic)");
-  }
-}
-
-const char* to_string(RotationParameterization rotation) {
-  switch (rotation) {
-    case RotationParameterization::kLie: return "lie";
-    case RotationParameterization::kRotationVector: return "rotvec";
-    case RotationParameterization::kQuaternion: return "quat";
-  }
-  return "unknown";
-}
-
-std::optional<RotationParameterization> parse_rotation(std::string_view name) {
-  for (const auto r : {RotationParameterization::kLie, RotationParameterization::kRotationVector,
-                       RotationParameterization::kQuaternion}) {
-    if (name == to_string(r)) return r;
-  }
-  return std::nullopt;
-}
-
-const char* to_string(StepStatus status) {
-  switch (status) {
-    case StepStatus::kConverged: return "converged";
-    case StepStatus::kMaxIterations: return "max_iterations";
-    case StepStatus::kLineSearchFailed: return "line_search_failed";
-    case StepStatus::kNonFinite: return "non_finite";
-  }
-  return "unknown";
-}
-
-void StepReport::merge(const StepReport& other) {
-  // The worst status wins; iterations are the slowest component's (they are independent).
-  if (static_cast<int>(other.status) > static_cast<int>(status)) status = other.status;
-  iterations = std::max(iterations, other.iterations);
-  regularized_iterations = std::max(regularized_iterations, other.regularized_iterations);
-  factorizations += other.factorizations;
-  assemblies += other.assemblies;
-  assembly_seconds += other.assembly_seconds;
-  solve_seconds += other.solve_seconds;
-  gradient_norm = std::hypot(gradient_norm, other.gradient_norm);
-  step_norm = std::max(step_norm, other.step_norm);
-  // std::fmax ignores a NaN operand: a component without the figure does not erase another's.
-  first_gradient_norm = std::fmax(first_gradient_norm, other.first_gradient_norm);
-  second_gradient_norm = std::fmax(second_gradient_norm, other.second_gradient_norm);
-  first_hessian_condition = std::fmax(first_hessian_condition, other.first_hessian_condition);
-}
-
 namespace {
 
 template <class System>
-System make_system(const Component& component, const NewtonOptions& options) {
+System make_system(const Component& component, const SolverOptions& options) {
   if constexpr (std::is_same_v<System, SparseSystem>) {
     return SparseSystem(component, SparseSystem::Factorization::kUndecided,
                         options.assembly_threads);
@@ -85,7 +26,7 @@ System make_system(const Component& component, const NewtonOptions& options) {
 }  // namespace
 
 template <class System>
-Newton<System>::Newton(Component component, const NewtonOptions& options)
+Newton<System>::Newton(Component component, const SolverOptions& options)
     : component_(std::move(component)),
       options_(options),
       system_(make_system<System>(component_, options)),
@@ -192,7 +133,7 @@ bool Newton<System>::factorize(StepReport& report, bool& regularized) {
 }
 
 template <class System>
-StepReport Newton<System>::solve(State& q) {
+StepReport Newton<System>::solve(State& q, int max_iterations) {
   StepReport report;
   // Keep the entry state so that a failed step leaves q untouched.
   for (std::size_t i = 0; i < component_.points.size(); ++i) {
@@ -249,7 +190,7 @@ StepReport Newton<System>::solve(State& q) {
       report.status = StepStatus::kConverged;
       return report;
     }
-    if (report.iterations >= options_.max_iterations) {
+    if (report.iterations >= max_iterations) {
       report.status = StepStatus::kMaxIterations;
       return report;
     }
@@ -276,6 +217,14 @@ StepReport Newton<System>::solve(State& q) {
     ++report.iterations;
     if (regularized) ++report.regularized_iterations;
   }
+}
+
+std::unique_ptr<StepSolver> make_newton(Component component, const SolverOptions& options) {
+  if (component.dofs == 6) return std::make_unique<DenseNewton<6>>(std::move(component), options);
+  if (component.dofs <= kDenseLimit) {
+    return std::make_unique<DenseNewton<Eigen::Dynamic>>(std::move(component), options);
+  }
+  return std::make_unique<SparseNewton>(std::move(component), options);
 }
 
 template class Newton<DenseSystem<6>>;

@@ -6,7 +6,7 @@
 
 namespace liedyn {
 
-Simulator::Simulator(Model model, const NewtonOptions& options)
+Simulator::Simulator(Model model, const SolverOptions& options)
     : model_(std::move(model)), options_(options) {
   model_.validate();
   options_.validate();
@@ -21,20 +21,12 @@ Simulator::Simulator(Model model, const NewtonOptions& options)
   previous_ = state_;
   previous_step_ = step_;
   for (Component& c : build_components(model_)) {
-    if (c.dofs == 6) {
-      single_bodies_.emplace_back(std::move(c), options_);
-    } else if (c.dofs <= kDenseLimit) {
-      coupled_bodies_.emplace_back(std::move(c), options_);
-    } else {
-      sparse_components_.emplace_back(std::move(c), options_);
-    }
+    solvers_.push_back(make_step_solver(std::move(c), options_));
   }
 }
 
 void Simulator::set_measure_condition(bool on) {
-  for (auto& s : single_bodies_) s.set_measure_condition(on);
-  for (auto& s : coupled_bodies_) s.set_measure_condition(on);
-  for (auto& s : sparse_components_) s.set_measure_condition(on);
+  for (auto& s : solvers_) s->set_measure_condition(on);
 }
 
 StepReport Simulator::step() {
@@ -56,16 +48,11 @@ StepReport Simulator::step() {
   apply_prescribed_motions(load_scale);
 
   StepReport report;
-  auto run = [&](auto& solvers) {
-    for (auto& solver : solvers) {
-      solver.component().potential.begin_step(previous_, previous_step_);
-      if (!dynamic) solver.component().potential.set_load_scale(load_scale);
-      report.merge(solver.solve(state_));
-    }
-  };
-  run(single_bodies_);
-  run(coupled_bodies_);
-  run(sparse_components_);
+  for (auto& solver : solvers_) {
+    solver->component().potential.begin_step(previous_, previous_step_);
+    if (!dynamic) solver->component().potential.set_load_scale(load_scale);
+    report.merge(solver->solve(state_));
+  }
 
   if (!report.state_updated()) {
     state_ = previous_;
@@ -126,11 +113,7 @@ double Simulator::kinetic_energy() const {
 
 double Simulator::potential_energy() const {
   double energy = 0.0;
-  for (const auto& s : single_bodies_) energy += s.component().potential.potential_energy(state_);
-  for (const auto& s : coupled_bodies_) energy += s.component().potential.potential_energy(state_);
-  for (const auto& s : sparse_components_) {
-    energy += s.component().potential.potential_energy(state_);
-  }
+  for (const auto& s : solvers_) energy += s->component().potential.potential_energy(state_);
   return energy;
 }
 

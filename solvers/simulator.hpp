@@ -1,6 +1,6 @@
 #pragma once
 // Forward simulation of a Model by backward Euler: each step minimises the incremental
-// potential of every independent component with Newton (dense or sparse, newton.hpp) (§4);
+// potential of every independent component with the chosen back-end (step_solver.hpp) (§4);
 // in static mode each step is a load step without inertia (Model::static_equilibrium).
 // Clamped rod nodes and edges with a prescribed motion are moved before each step.
 //
@@ -11,22 +11,17 @@
 // kinetic energy Σ ½ m‖v‖² + ½ ωᵀ (R I_b Rᵀ) ω and angular momentum about the world origin
 // Σ m x × v + R I_b Rᵀ ω, over bodies and over rods' lumped node masses and edge inertias.
 
+#include <memory>
 #include <vector>
 
-#include "newton.hpp"
+#include "step_solver.hpp"
 
 namespace liedyn {
 
 class Simulator {
  public:
-  // Components with more DOFs than this are solved with the sparse (CHOLMOD) system; up to
-  // it, with a dense Cholesky. Measured (BM_ChainIteration, one Newton iteration of a spring
-  // chain, Release, 2 GHz Xeon VM): dense/sparse 7.4/8.3 µs at 24 DOFs, 7.8/10.7 µs at 30,
-  // 14.4/12.7 µs at 36, 34/10 µs at 48, 625/54 µs at 192.
-  static constexpr int kDenseLimit = 30;
-
   // Validates the model and options (throws ModelError) and builds the components.
-  Simulator(Model model, const NewtonOptions& options);
+  Simulator(Model model, const SolverOptions& options);
 
   // Advances one time step. When the report says the state was not updated, the simulator
   // is left exactly as before the call.
@@ -42,7 +37,7 @@ class Simulator {
   // State::rotations[rotation]; for body i both indices are i (see Model for rods).
   Vector3 linear_velocity(int point) const;
   Vector3 angular_velocity(int rotation) const;
-  // NewtonOptions::measure_condition for the next steps (sampling an expensive diagnostic).
+  // SolverOptions::measure_condition for the next steps (sampling an expensive diagnostic).
   void set_measure_condition(bool on);
 
   double kinetic_energy() const;
@@ -62,13 +57,11 @@ class Simulator {
   Model model_;
   std::vector<RodDiscretization> rods_;
   State initial_;  // q_0: where prescribed motions start from
-  NewtonOptions options_;
+  SolverOptions options_;
   State state_, previous_;
   Step step_, previous_step_;
   int frame_ = 0;
-  std::vector<DenseNewton<6>> single_bodies_;
-  std::vector<DenseNewton<Eigen::Dynamic>> coupled_bodies_;
-  std::vector<SparseNewton> sparse_components_;
+  std::vector<std::unique_ptr<StepSolver>> solvers_;  // one per component
 };
 
 }  // namespace liedyn

@@ -21,6 +21,7 @@
 
 #include <Eigen/Core>
 
+#include "solvers/newton.hpp"
 #include "solvers/simulator.hpp"
 #include "models.hpp"
 
@@ -205,7 +206,7 @@ using liedyn::BodyPoint;
 using liedyn::ForceSpec;
 using liedyn::Matrix3;
 using liedyn::Model;
-using liedyn::NewtonOptions;
+using liedyn::SolverOptions;
 using liedyn::RigidBody;
 using liedyn::Simulator;
 using liedyn::SpringSpec;
@@ -354,7 +355,7 @@ TEST(Allocation, FreeRigidBodyStepDoesNotAllocate) {
   Model model;
   model.time_step = 0.01;
   model.bodies.push_back(butterfly_bolt());
-  Simulator sim(model, NewtonOptions{});
+  Simulator sim(model, SolverOptions{});
   expect_no_allocation(run_counted(sim, kSteps), kSteps);
 }
 
@@ -381,7 +382,7 @@ TEST(Allocation, LoadedBodyStepDoesNotAllocate) {
   torque.body = 0;
   torque.torque = Vector3(0.1, 0.0, 0.2);
   model.torques.push_back(torque);
-  Simulator sim(model, NewtonOptions{});
+  Simulator sim(model, SolverOptions{});
   expect_no_allocation(run_counted(sim, kSteps), kSteps);
 }
 
@@ -389,24 +390,24 @@ TEST(Allocation, LoadedBodyStepDoesNotAllocate) {
 using liedyn::test_models::spring_chain;
 
 // (c) Three bodies coupled by springs: the dynamic-size dense path (18 DOFs).
-static_assert(18 <= Simulator::kDenseLimit);
+static_assert(18 <= liedyn::kDenseLimit);
 TEST(Allocation, ThreeCoupledBodiesStepDoesNotAllocate) {
-  Simulator sim(spring_chain(3), NewtonOptions{});
+  Simulator sim(spring_chain(3), SolverOptions{});
   expect_no_allocation(run_counted(sim, kSteps), kSteps);
 }
 
-// (d) Eight coupled bodies: 48 DOFs, beyond Simulator::kDenseLimit, so the sparse path.
+// (d) Eight coupled bodies: 48 DOFs, beyond kDenseLimit, so the sparse path.
 TEST(Allocation, EightCoupledBodiesStepDoesNotAllocate) {
-  Simulator sim(spring_chain(8), NewtonOptions{});
+  Simulator sim(spring_chain(8), SolverOptions{});
   expect_no_allocation(run_counted(sim, kSteps), kSteps);
 }
 
-// (e) Twenty coupled bodies: 120 DOFs > Simulator::kDenseLimit, the sparse CHOLMOD path
+// (e) Twenty coupled bodies: 120 DOFs > kDenseLimit, the sparse CHOLMOD path
 // (pattern and symbolic analysis at the first step; numeric factorisation and solve2 with
 // reused workspaces afterwards). CHOLMOD allocates through malloc, which is counted too.
 TEST(Allocation, TwentyCoupledBodiesSparseStepDoesNotAllocate) {
-  static_assert(6 * 20 > Simulator::kDenseLimit);
-  Simulator sim(spring_chain(20), NewtonOptions{});
+  static_assert(6 * 20 > liedyn::kDenseLimit);
+  Simulator sim(spring_chain(20), SolverOptions{});
   expect_no_allocation(run_counted(sim, kSteps), kSteps);
 }
 
@@ -434,7 +435,7 @@ Model clamped_rod() {
 TEST(Allocation, ClampedRodStepDoesNotAllocate) {
   for (const int threads : {1, 2}) {
     SCOPED_TRACE(threads);
-    NewtonOptions options;
+    SolverOptions options;
     options.assembly_threads = threads;
     Simulator sim(clamped_rod(), options);
     expect_no_allocation(run_counted(sim, kSteps), kSteps);
@@ -453,7 +454,7 @@ TEST(Allocation, RotationVectorAndQuaternionStepsDoNotAllocate) {
       SCOPED_TRACE(std::string(liedyn::to_string(rotation)) + ", " +
                    std::to_string(model.bodies.size()) + " bodies, " +
                    std::to_string(model.rods.size()) + " rods");
-      NewtonOptions options;
+      SolverOptions options;
       options.rotation = rotation;
       Simulator sim(model, options);
       expect_no_allocation(run_counted(sim, kSteps), kSteps);
@@ -467,7 +468,7 @@ TEST(Allocation, MixedComponentsStepDoesNotAllocate) {
   RigidBody free_body = butterfly_bolt();
   free_body.position = Vector3(0.0, 5.0, 0.0);
   model.bodies.push_back(free_body);
-  Simulator sim(model, NewtonOptions{});
+  Simulator sim(model, SolverOptions{});
   expect_no_allocation(run_counted(sim, kSteps), kSteps);
 }
 
@@ -488,7 +489,7 @@ struct NewtonRun {
 template <int N>
 NewtonRun solve_first_step(const Model& model) {
   std::vector<liedyn::Component> components = liedyn::build_components(model);
-  liedyn::DenseNewton<N> newton(std::move(components.at(0)), NewtonOptions{});
+  liedyn::DenseNewton<N> newton(std::move(components.at(0)), SolverOptions{});
   const liedyn::State previous = model.initial_state();
   const liedyn::Step step = model.initial_step();
   newton.component().potential.begin_step(previous, step);

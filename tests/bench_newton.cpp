@@ -18,6 +18,7 @@
 
 #include "lib/incremental_potential.hpp"
 #include "lib/so3.hpp"
+#include "solvers/newton.hpp"
 #include "solvers/simulator.hpp"
 #include "models.hpp"
 
@@ -27,7 +28,7 @@ using liedyn::BodyPoint;
 using liedyn::Component;
 using liedyn::Matrix3;
 using liedyn::Model;
-using liedyn::NewtonOptions;
+using liedyn::SolverOptions;
 using liedyn::RigidBody;
 using liedyn::Simulator;
 using liedyn::SpringSpec;
@@ -140,7 +141,7 @@ BENCHMARK(BM_RotationalInertiaTerm);
 template <Model (*make_model)()>
 void BM_NewtonIteration(benchmark::State& state) {
   OneBodyProblem p(make_model());
-  liedyn::DenseNewton<6> newton(p.component, NewtonOptions{});
+  liedyn::DenseNewton<6> newton(p.component, SolverOptions{});
   const StepReport first = newton.solve(p.q);  // converge once
   if (!first.converged()) state.SkipWithError("initial solve did not converge");
   long factorizations = 0, updates = 0;
@@ -258,7 +259,7 @@ BENCHMARK(BM_So3Orthonormalize);
 // (tolerance 1e-9 on ‖δ‖∞), Δq update. Counters: Newton updates and factorisations per
 // step, and the number of steps that did not converge (must be 0).
 void run_steps(benchmark::State& state, const Model& model) {
-  Simulator sim(model, NewtonOptions{});
+  Simulator sim(model, SolverOptions{});
   long iterations = 0, factorizations = 0, not_converged = 0;
   for (auto _ : state) {
     const StepReport r = sim.step();
@@ -289,14 +290,14 @@ BENCHMARK(BM_Step_HeavyTop);
 // ---------------------------------------------------------------------------------------
 // Dense against sparse (CHOLMOD) linear algebra for n bodies in a chain of springs: one
 // Newton iteration (assembly + factorisation + solve) at a converged iterate, as in
-// BM_NewtonIteration. Picks Simulator::kDenseLimit.
+// BM_NewtonIteration. Picks kDenseLimit.
 using liedyn::test_models::spring_chain;
 
 template <class System>
 void BM_ChainIteration(benchmark::State& state) {
   const Model model = spring_chain(static_cast<int>(state.range(0)));
   std::vector<Component> components = liedyn::build_components(model);
-  liedyn::Newton<System> newton(std::move(components.at(0)), NewtonOptions{});
+  liedyn::Newton<System> newton(std::move(components.at(0)), SolverOptions{});
   State q = model.initial_state();
   newton.component().potential.begin_step(q, model.initial_step());
   newton.solve(q);  // converge once (and build the sparse pattern); later calls: 1 iteration

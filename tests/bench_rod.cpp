@@ -15,12 +15,13 @@
 #include <string>
 
 #include "problems/scene.hpp"
+#include "solvers/newton.hpp"
 #include "solvers/simulator.hpp"
 
 namespace {
 
 using liedyn::Component;
-using liedyn::NewtonOptions;
+using liedyn::SolverOptions;
 using liedyn::SparseSystem;
 using liedyn::State;
 
@@ -85,7 +86,7 @@ BENCHMARK_TEMPLATE(BM_Rod_FactorizeSolve, SparseSystem::Factorization::kCholmod)
 // factorises, solves, finds ‖δ‖∞ ≤ tolerance and returns.
 void BM_Rod_NewtonIteration(benchmark::State& state) {
   RodProblem p;
-  NewtonOptions options;
+  SolverOptions options;
   options.assembly_threads = static_cast<int>(state.range(0));
   liedyn::SparseNewton newton(std::move(p.component), options);
   if (!newton.solve(p.q).converged()) state.SkipWithError("first solve did not converge");

@@ -9,7 +9,7 @@ namespace liedyn::test_models {
 
 // n spinning links in a row along x under gravity, the first hung from a world anchor, each
 // joined to the next by a spring between body points: one component of 6n DOFs (dense up to
-// Simulator::kDenseLimit, sparse beyond). The springs start at their rest length.
+// kDenseLimit, sparse beyond). The springs start at their rest length.
 inline Model spring_chain(int n) {
   Model model;
   model.time_step = 0.01;

@@ -26,8 +26,8 @@ inline RodSpec uniform_rod(int edges, double length, double mass, double radius,
   return rod;
 }
 
-inline NewtonOptions newton(double tolerance, int max_iterations = 50) {
-  NewtonOptions options;
+inline SolverOptions newton(double tolerance, int max_iterations = 50) {
+  SolverOptions options;
   options.tolerance = tolerance;  // on the Newton step, metres and radians
   options.max_iterations = max_iterations;
   return options;

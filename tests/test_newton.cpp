@@ -61,7 +61,7 @@ Model chain(int n, double stiffness, double rest_scale, Topology topology = Topo
 // The factorisation the sparse system picks for the single component of `model`.
 SparseSystem::Factorization factorization_of(const Model& model) {
   std::vector<Component> components = build_components(model);
-  SparseNewton newton(std::move(components.front()), NewtonOptions{});
+  SparseNewton newton(std::move(components.front()), SolverOptions{});
   State q = model.initial_state();
   newton.component().potential.begin_step(q, model.initial_step());
   newton.solve(q);
@@ -74,7 +74,7 @@ constexpr Topology kTopologies[] = {Topology::kChain, Topology::kStar};
 // state and the reports.
 template <class System>
 std::pair<std::vector<State>, std::vector<StepReport>> run(const Model& model, int steps,
-                                                           const NewtonOptions& options) {
+                                                           const SolverOptions& options) {
   std::vector<Component> components = build_components(model);
   EXPECT_EQ(components.size(), 1u);
   Newton<System> newton(std::move(components.front()), options);
@@ -124,7 +124,7 @@ TEST(SparseNewton, MatchesDenseNewtonOnSpringNetworks) {
   for (const Topology topology : kTopologies) {
     SCOPED_TRACE(topology == Topology::kChain ? "chain (banded)" : "star (CHOLMOD)");
     const Model model = chain(12, 2e3, 1.0, topology);
-    NewtonOptions options;
+    SolverOptions options;
     options.tolerance = 1e-11;
     const auto [dense_states, dense_reports] =
         run<DenseSystem<Eigen::Dynamic>>(model, 50, options);
@@ -148,7 +148,7 @@ TEST(SparseNewton, RegularisesIndefiniteHessiansLikeTheDensePath) {
     SCOPED_TRACE(topology == Topology::kChain ? "chain (banded)" : "star (CHOLMOD)");
     // Stiff springs compressed to 60 % of their rest length: indefinite spring Hessians.
     const Model model = chain(10, 1e6, 1.0 / 0.6, topology);
-    NewtonOptions options;
+    SolverOptions options;
     options.tolerance = 1e-10;
     const auto [dense_states, dense_reports] =
         run<DenseSystem<Eigen::Dynamic>>(model, 20, options);
@@ -172,7 +172,7 @@ TEST(SparseNewton, StoresTheLowerBandOfAChainAndTheUpperTriangleOfAStar) {
     SCOPED_TRACE(topology == Topology::kChain ? "chain (banded)" : "star (CHOLMOD)");
     const Model model = chain(n, 1e3, 1.0, topology);
     std::vector<Component> components = build_components(model);
-    SparseNewton newton(std::move(components.front()), NewtonOptions{});
+    SparseNewton newton(std::move(components.front()), SolverOptions{});
     EXPECT_EQ(newton.system().stored_nonzeros(), 0);  // before the first assembly
     State q = model.initial_state();
     newton.component().potential.begin_step(q, model.initial_step());
@@ -192,9 +192,9 @@ TEST(SparseNewton, StoresTheLowerBandOfAChainAndTheUpperTriangleOfAStar) {
 TEST(Simulator, UsesTheSparseSystemBeyondTheDenseLimitWithTheSameResult) {
   // 10 bodies = 60 DOFs > kDenseLimit: the simulator's component is sparse. It must agree
   // with the dense path run directly.
-  static_assert(Simulator::kDenseLimit < 60);
+  static_assert(kDenseLimit < 60);
   const Model model = chain(10, 2e3, 1.0);
-  NewtonOptions options;
+  SolverOptions options;
   options.tolerance = 1e-11;
   Simulator sim(model, options);
   std::vector<State> simulated;
@@ -291,7 +291,7 @@ TEST(SparseSystem, AutomaticAssemblyThreadsDependOnSizeAndFactorisation) {
 
 TEST(SparseNewton, TrajectoryDoesNotDependOnAssemblyThreads) {
   const Model model = chain(12, 2e3, 1.0);
-  NewtonOptions options;
+  SolverOptions options;
   options.tolerance = 1e-11;
   options.assembly_threads = 1;
   const auto [serial_states, serial_reports] = run<SparseSystem>(model, 30, options);

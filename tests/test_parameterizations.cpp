@@ -237,9 +237,9 @@ TEST(Parameterizations, QuaternionDerivativesAreTheLieOnesForEveryTerm) {
 // for tolerances 1e-9, 1e-11, 1e-13), so a bug, which would not, cannot hide below `bound`.
 void expect_same_trajectory(const Model& model, RotationParameterization rotation, int steps,
                             double tolerance = 1e-11, double bound = 1e-8) {
-  NewtonOptions lie_options;
+  SolverOptions lie_options;
   lie_options.tolerance = tolerance;
-  NewtonOptions options = lie_options;
+  SolverOptions options = lie_options;
   options.rotation = rotation;
   Simulator lie(model, lie_options), other(model, options);
   double position = 0.0, angle = 0.0;
@@ -300,7 +300,7 @@ TEST(Parameterizations, EveryBundledSceneRunsUnderEachParameterisation) {
     std::vector<Simulator> others;
     for (const auto rotation :
          {RotationParameterization::kRotationVector, RotationParameterization::kQuaternion}) {
-      NewtonOptions options = scene.solver;
+      SolverOptions options = scene.solver;
       options.rotation = rotation;
       others.emplace_back(scene.model, options);
     }

@@ -81,7 +81,7 @@ TEST(PrescribedMotion, StaticTwistOfOneAndAHalfTurnsSpreadsEvenlyAlongTheRod) {
   Model model = clamped_rod(edges, 1.0, Vector3::Zero(), Vector3(0.0, 0.0, phi));
   model.static_equilibrium = true;
   model.load_steps = 12;
-  NewtonOptions options;
+  SolverOptions options;
   options.tolerance = 1e-11;
   Simulator sim(model, options);
   for (int k = 1; k <= model.load_steps; ++k) {
@@ -112,7 +112,7 @@ TEST(PrescribedMotion, StaticPullStretchesEveryEdgeEqually) {
   Model model = clamped_rod(edges, L, Vector3(0.0, 0.0, dL), Vector3::Zero());
   model.static_equilibrium = true;
   model.load_steps = 3;
-  NewtonOptions options;
+  SolverOptions options;
   options.tolerance = 1e-12;
   Simulator sim(model, options);
   for (int k = 0; k < model.load_steps; ++k) ASSERT_TRUE(sim.step().converged());
@@ -130,7 +130,7 @@ TEST(PrescribedMotion, DynamicEndFollowsThePathAndDrivesTheRod) {
   const Vector3 d(0.0, 0.0, -0.3), r(0.0, 0.0, 0.5 * kPi);
   Model model = clamped_rod(edges, 1.0, d, r, 1e-3);
   model.time_step = 0.01;
-  Simulator sim(model, NewtonOptions{});
+  Simulator sim(model, SolverOptions{});
   const PrescribedMotion& motion = model.rods[0].prescribed_motions[0];
   const Vector3 top0 = sim.state().points[edges];
   const Matrix3 edge0 = sim.state().rotations[edges - 1];

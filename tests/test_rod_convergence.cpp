@@ -78,7 +78,7 @@ Model cantilever(int edges, double L, double mass, double radius, double EI,
 }
 
 // Static equilibrium of a one-rod model, loads ramped over `load_steps`; the tip node.
-Vector3 static_tip(Model model, int load_steps, const NewtonOptions& options) {
+Vector3 static_tip(Model model, int load_steps, const SolverOptions& options) {
   model.static_equilibrium = true;
   model.load_steps = load_steps;
   Simulator sim(model, options);
@@ -196,7 +196,7 @@ TEST(RodConvergence, SmallLoadCantileverTipDeflection) {
   const double L = 1.0, EI = 1.0, F = 1e-3;
   const double delta = F * L * L * L / (3.0 * EI);
   // Tolerance 1e-12 m on the Newton step: 3e-9 δ, far below ê_32.
-  const NewtonOptions options = newton(1e-12);
+  const SolverOptions options = newton(1e-12);
   std::vector<Eigen::VectorXd> deflection;
   for (int N : kEdges) {
     const Vector3 tip = static_tip(cantilever(N, L, 0.1, 0.01, EI, Vector3(0, 0, -F)), 1, options);
@@ -235,7 +235,7 @@ TEST(RodConvergence, LargeDeflectionCantileverTipVsElastica) {
   // Tolerance 1e-10 m: with k = 1e7 N the gradient's rounding floor leaves Newton steps of
   // ~1e-11 (see test_rod_validation.cpp). Four load steps, up to 200 iterations each (the
   // stiff shear and stretch make Newton take ~60 per load step at N = 64).
-  const NewtonOptions options = newton(1e-10, 200);
+  const SolverOptions options = newton(1e-10, 200);
   std::vector<Eigen::VectorXd> tips;
   for (int N : kEdges) {
     const Vector3 tip = static_tip(cantilever(N, L, 0.1, 0.01, EI, Vector3(0, 0, -F)), 4, options);

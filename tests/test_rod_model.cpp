@@ -109,7 +109,7 @@ TEST(RodModel, ClampedDofsAreNotInTheComponent) {
 // Simulates a clamped rod under a constant load until backward Euler's dissipation has
 // brought it to rest; returns the simulator.
 Simulator settle(const Model& model, int steps) {
-  NewtonOptions options;
+  SolverOptions options;
   options.tolerance = 1e-12;
   Simulator sim(model, options);
   for (int k = 0; k < steps; ++k) {
@@ -186,7 +186,7 @@ TEST(RodMechanics, FreeRodUnderGravityFallsFreely) {
   model.time_step = 0.005;
   model.gravity = Vector3(0.0, 0.0, -9.81);
   model.rods.push_back(helix_rod(30));
-  Simulator sim(model, NewtonOptions{});
+  Simulator sim(model, SolverOptions{});
   const RodDiscretization d = discretize(model.rods[0]);
   auto centre = [&]() {
     Vector3 c = Vector3::Zero();
@@ -217,7 +217,7 @@ TEST(RodStatics, CantileverLoadStepsFollowTheLinearPrediction) {
   rod.fixed_edges = {0};
   rod.node_forces = {{edges, Vector3(0.0, 0.0, -F)}};
   model.rods.push_back(rod);
-  NewtonOptions options;
+  SolverOptions options;
   options.tolerance = 1e-12;
   Simulator sim(model, options);
   const double n = edges;
@@ -252,7 +252,7 @@ TEST(RodStatics, LargeDeflectionStaticEqualsTheDynamicRestState) {
     model.rods.push_back(rod);
     return model;
   };
-  NewtonOptions options;
+  SolverOptions options;
   options.tolerance = 1e-10;
   options.max_iterations = 200;
   Simulator statics(cantilever(true), options);

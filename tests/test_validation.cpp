@@ -112,7 +112,7 @@ FreeBodyPeriod measure_free_body_period(double h, const Vector3& principal,
                                         const Vector3& omega_body, double t_max) {
   const Matrix3 R0 = so3::exp(Vector3(0.3, -0.2, 0.5));  // generic initial orientation
   Model model = free_body(h, principal.asDiagonal(), R0, R0 * omega_body);
-  NewtonOptions options;
+  SolverOptions options;
   // The period is the quantity measured, so solve each step well below the O(h²)
   // remainder we resolve (1e-4 relative): ‖δ‖∞ ≤ 1e-10 rad per step. (Tighter tolerances
   // run into the line-search round-off issue documented in DISABLED_TightTolerance... below.)
@@ -211,7 +211,7 @@ EnergyRun run_energy(double h, const Vector3& omega, int steps) {
   Model model = free_body(h, I, so3::exp(Vector3(-0.2, 0.1, 0.7)), omega);
   // Library default tolerance: see DISABLED_TightToleranceDoesNotStall below for why
   // tighter tolerances are not used at h = 0.1.
-  Simulator sim(model, NewtonOptions{});
+  Simulator sim(model, SolverOptions{});
   auto discrete = [&](const Matrix3& R, const Matrix3& R_previous) {
     const Matrix3 D = R - R_previous;
     return (D * J * D.transpose()).trace() / (2.0 * h * h);
@@ -271,7 +271,7 @@ TEST(Validation, FreeBodyKineticEnergyNeverIncreases) {
 TEST(Validation, FreeBodyOrientationStaysOrthonormal) {
   Model model = free_body(0.01, generic_inertia(), so3::exp(Vector3(1.0, -2.0, 0.5)),
                           Vector3(9.0, -14.0, 19.0));
-  Simulator sim(model, NewtonOptions{});
+  Simulator sim(model, SolverOptions{});
   double worst_orthogonality = 0.0, worst_determinant = 0.0;
   int unconverged = 0;
   for (int k = 1; k <= 100000; ++k) {
@@ -393,7 +393,7 @@ TEST(Validation, CompoundPendulumPeriod) {
     spring.stiffness = k;
     spring.rest_length = 0.0;
     model.springs.push_back(spring);
-    NewtonOptions options;
+    SolverOptions options;
     options.tolerance = 1e-10;
     Simulator sim(model, options);
 
@@ -490,7 +490,7 @@ TEST(Validation, HeavyTopPrecession) {
   spring.stiffness = k;
   spring.rest_length = 0.0;
   model.springs.push_back(spring);
-  NewtonOptions options;
+  SolverOptions options;
   options.tolerance = 1e-10;
   Simulator sim(model, options);
 
@@ -569,7 +569,7 @@ TEST(Validation, TightToleranceDoesNotStall) {
   for (const Case c : {Case{0.1, 1e-10, 300}, Case{0.01, 1e-12, 300}}) {
     Model model = free_body(c.h, generic_inertia(), so3::exp(Vector3(-0.2, 0.1, 0.7)),
                             Vector3(0.7, -1.3, 2.1));
-    NewtonOptions options;
+    SolverOptions options;
     options.tolerance = c.tolerance;
     Simulator sim(model, options);
     for (int k = 1; k <= c.frames; ++k) {

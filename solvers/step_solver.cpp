@@ -1,0 +1,139 @@
+#include "step_solver.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <initializer_list>
+#include <string>
+
+#include "ceres_step.hpp"
+#include "ipopt_step.hpp"
+#include "newton.hpp"
+
+namespace liedyn {
+
+void SolverOptions::validate() const {
+  if (!(tolerance > 0.0) || !std::isfinite(tolerance)) {
+    throw ModelError("solver.tolerance", "must be a finite positive number");
+  }
+  if (max_iterations < 1) throw ModelError("solver.max_iterations", "must be at least 1");
+  if (!(armijo > 0.0 && armijo < 0.5)) throw ModelError("solver.armijo", "must be in (0, 0.5)");
+  if (!(min_step_length > 0.0 && min_step_length < 1.0)) {
+    throw ModelError("solver.min_step_length", "must be in (0, 1)");
+  }
+  if (assembly_threads < 0 || assembly_threads > kMaxAssemblyThreads) {
+    throw ModelError("solver.assembly_threads",
+                     "must be in [0, " + std::to_string(kMaxAssemblyThreads) + "] (0: automatic)");
+  }
+  const auto one_of = [](const std::string& value, std::initializer_list<const char*> names) {
+    for (const char* name : names) {
+      if (value == name) return true;
+    }
+    return false;
+  };
+  if (!one_of(ceres.linear_solver,
+              {"auto", "dense_qr", "dense_normal_cholesky", "sparse_normal_cholesky"})) {
+    throw ModelError("solver.ceres.linear_solver",
+                     "unknown linear solver \"" + ceres.linear_solver +
+                         "\" (expected auto, dense_qr, dense_normal_cholesky or "
+                         "sparse_normal_cholesky)");
+  }
+  if (!one_of(ceres.trust_region_strategy, {"levenberg_marquardt", "dogleg"})) {
+    throw ModelError("solver.ceres.trust_region_strategy",
+                     "unknown strategy \"" + ceres.trust_region_strategy +
+                         "\" (expected levenberg_marquardt or dogleg)");
+  }
+  if (!one_of(ipopt.hessian_approximation, {"exact", "limited-memory"})) {
+    throw ModelError("solver.ipopt.hessian_approximation",
+                     "unknown approximation \"" + ipopt.hessian_approximation +
+                         "\" (expected exact or limited-memory)");
+  }
+  if (ipopt.print_level < 0 || ipopt.print_level > 12) {
+    throw ModelError("solver.ipopt.print_level", "must be in [0, 12]");
+  }
+  if (!one_of(ipopt.derivative_test, {"none", "first-order", "second-order"})) {
+    throw ModelError("solver.ipopt.derivative_test",
+                     "unknown test \"" + ipopt.derivative_test +
+                         "\" (expected none, first-order or second-order)");
+  }
+  if (ipopt.max_recentrings < 0) {
+    throw ModelError("solver.ipopt.max_recentrings", "must be at least 0");
+  }
+  if (backend == Backend::kIpopt && rotation == RotationParameterization::kQuaternion) {
+    throw ModelError("solver.rotation",
+                     "\"quat\" is not available with the ipopt backend (it would need the "
+                     "unit-norm equality constraint, not implemented); use lie or rotvec");
+  }
+}
+
+const char* to_string(Backend backend) {
+  switch (backend) {
+    case Backend::kNewton: return "newton";
+    case Backend::kCeres: return "ceres";
+    case Backend::kIpopt: return "ipopt";
+  }
+  return "unknown";
+}
+
+std::optional<Backend> parse_backend(std::string_view name) {
+  for (const auto b : {Backend::kNewton, Backend::kCeres, Backend::kIpopt}) {
+    if (name == to_string(b)) return b;
+  }
+  return std::nullopt;
+}
+
+const char* to_string(RotationParameterization rotation) {
+  switch (rotation) {
+    case RotationParameterization::kLie: return "lie";
+    case RotationParameterization::kRotationVector: return "rotvec";
+    case RotationParameterization::kQuaternion: return "quat";
+  }
+  return "unknown";
+}
+
+std::optional<RotationParameterization> parse_rotation(std::string_view name) {
+  for (const auto r : {RotationParameterization::kLie, RotationParameterization::kRotationVector,
+                       RotationParameterization::kQuaternion}) {
+    if (name == to_string(r)) return r;
+  }
+  return std::nullopt;
+}
+
+const char* to_string(StepStatus status) {
+  switch (status) {
+    case StepStatus::kConverged: return "converged";
+    case StepStatus::kMaxIterations: return "max_iterations";
+    case StepStatus::kLineSearchFailed: return "line_search_failed";
+    case StepStatus::kNonFinite: return "non_finite";
+    case StepStatus::kSolverFailed: return "solver_failed";
+  }
+  return "unknown";
+}
+
+void StepReport::merge(const StepReport& other) {
+  // The worst status wins; iterations are the slowest component's (they are independent).
+  if (static_cast<int>(other.status) > static_cast<int>(status)) status = other.status;
+  iterations = std::max(iterations, other.iterations);
+  regularized_iterations = std::max(regularized_iterations, other.regularized_iterations);
+  factorizations += other.factorizations;
+  assemblies += other.assemblies;
+  assembly_seconds += other.assembly_seconds;
+  solve_seconds += other.solve_seconds;
+  gradient_norm = std::hypot(gradient_norm, other.gradient_norm);
+  step_norm = std::max(step_norm, other.step_norm);
+  // std::fmax ignores a NaN operand: a component without the figure does not erase another's.
+  first_gradient_norm = std::fmax(first_gradient_norm, other.first_gradient_norm);
+  second_gradient_norm = std::fmax(second_gradient_norm, other.second_gradient_norm);
+  first_hessian_condition = std::fmax(first_hessian_condition, other.first_hessian_condition);
+  if (!other.message.empty()) message += (message.empty() ? "" : "; ") + other.message;
+}
+
+std::unique_ptr<StepSolver> make_step_solver(Component component, const SolverOptions& options) {
+  switch (options.backend) {
+    case Backend::kNewton: return make_newton(std::move(component), options);
+    case Backend::kCeres: return make_ceres_step_solver(std::move(component), options);
+    case Backend::kIpopt: return make_ipopt_step_solver(std::move(component), options);
+  }
+  return nullptr;
+}
+
+}  // namespace liedyn

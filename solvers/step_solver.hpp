@@ -1,0 +1,172 @@
+#pragma once
+// One backward-Euler time step of one component: minimise its incremental potential
+// Ψ(q; q_{k−1}, Δq_{k−1}) (paper §4.2) over positions and rotations. Three back-ends behind
+// one interface, chosen by SolverOptions::backend (scene: "solver": {"backend": ...}):
+//   * newton — our Newton solver on the exact Lie Hessian (solvers/newton.hpp);
+//   * ceres  — Ψ as a nonlinear least-squares problem ½Σ‖r_t‖² over SO(3) manifolds
+//              (solvers/ceres_step.hpp): Gauss–Newton/Levenberg–Marquardt, no residual
+//              curvature;
+//   * ipopt  — Ψ as an unconstrained NLP over tangent increments R = exp(θ) R₀ with the
+//              exact gradient J_l(θ)ᵀ g and Hessian (solvers/ipopt_step.hpp), re-centred
+//              between solves.
+//
+// One convergence test for all three, so that "converged" means the same thing whichever
+// back-end ran: the Newton step of the exact Lie Hessian at the final state,
+//   δ = −H⁻¹ g,   ‖δ‖∞ ≤ tolerance   with H positive definite (no regularisation),
+// i.e. the quadratic model puts the minimiser within `tolerance` metres and radians. Newton
+// evaluates it on its own iterates; Ceres and Ipopt stop on their own step sizes and are
+// then checked once with StepSolver::check (its cost is included in their time).
+
+#include <limits>
+#include <memory>
+#include <optional>
+#include <string>
+#include <string_view>
+
+#include "../lib/incremental_potential.hpp"
+
+namespace liedyn {
+
+enum class Backend { kNewton, kCeres, kIpopt };
+enum class RotationParameterization { kLie, kRotationVector, kQuaternion };
+
+// The scene file's names ("newton", "ceres", "ipopt"; "lie", "rotvec", "quat") and back
+// (nullopt for another name).
+const char* to_string(Backend backend);
+std::optional<Backend> parse_backend(std::string_view name);
+const char* to_string(RotationParameterization rotation);
+std::optional<RotationParameterization> parse_rotation(std::string_view name);
+
+// Components with more DOFs than this use sparse linear algebra (Newton: SparseSystem; Ceres:
+// SPARSE_NORMAL_CHOLESKY); up to it, dense. Measured (BM_ChainIteration, one Newton iteration
+// of a spring chain, Release, 2 GHz Xeon VM): dense/sparse 7.4/8.3 µs at 24 DOFs, 7.8/10.7 µs
+// at 30, 14.4/12.7 µs at 36, 34/10 µs at 48, 625/54 µs at 192.
+inline constexpr int kDenseLimit = 30;
+
+struct CeresOptions {
+  // "auto" (dense_qr up to kDenseLimit DOFs, sparse_normal_cholesky with SuiteSparse above),
+  // "dense_qr", "dense_normal_cholesky", "sparse_normal_cholesky".
+  std::string linear_solver = "auto";
+  // "levenberg_marquardt" or "dogleg".
+  std::string trust_region_strategy = "levenberg_marquardt";
+  // Ceres's per-iteration progress on stdout.
+  bool verbose = false;
+};
+
+struct IpoptOptions {
+  // "exact" (the Lie Hessian through the chart) or "limited-memory" (Ipopt's L-BFGS).
+  std::string hessian_approximation = "exact";
+  // Ipopt's console output, 0 (silent) … 12. Its linear solver is MUMPS (the only one in
+  // Debian's Ipopt).
+  int print_level = 0;
+  // Ipopt's derivative checker before every solve: "none", "first-order", "second-order"
+  // (its findings go to the console or output_file; for tests and debugging).
+  std::string derivative_test = "none";
+  // If not empty, Ipopt also writes its log there at print level max(print_level, 5).
+  std::string output_file;
+  // Re-centrings R₀ ← R allowed per step (a new Ipopt solve each) before the step is
+  // declared unconverged; ≥ 0.
+  int max_recentrings = 3;
+};
+
+struct SolverOptions {
+  Backend backend = Backend::kNewton;
+  // Convergence threshold on ‖δ‖∞ (the Newton step above), in metres and radians; > 0.
+  double tolerance = 1e-9;
+  // Iterations allowed per time step (Newton updates, Ceres or Ipopt iterations); ≥ 1.
+  // Newton with 1: every step does exactly one update and is flagged unless that update
+  // already meets the tolerance.
+  int max_iterations = 50;
+  // Newton's Armijo sufficient-decrease constant c in Ψ(q ⊕ αδ) ≤ Ψ(q) + c α gᵀδ; in (0, 0.5).
+  double armijo = 1e-4;
+  // Newton's smallest line-search step α before the step is declared failed; in (0, 1).
+  double min_step_length = 1e-10;
+  // Measure wall time of assembly and of factorisation + solve (StepReport; Newton). Off by
+  // default: the clock reads cost ~10 % of a single rigid body's Newton iteration.
+  bool measure_time = false;
+  // Condition number of the first Hessian of every solve (StepReport; Newton): a dense
+  // symmetric eigendecomposition, O(n³) — for analysis (liedyn compare), not for production.
+  bool measure_condition = false;
+  // Threads for assembling a banded (rod) system (Newton): n ≥ 1 uses n; 0 chooses (2 from
+  // SparseSystem::kParallelAssemblyMinDofs DOFs on, when OpenMP may use 2). Dense systems and
+  // CHOLMOD-factorised ones always assemble on one thread. One by default: on the 957-DOF
+  // helix (2-vCPU VM) two threads saved only 10–20 % of an assembly, while OpenMP's waiting
+  // thread keeps the second core busy for the whole run (README, Performance).
+  int assembly_threads = 1;
+  static constexpr int kMaxAssemblyThreads = 256;
+
+  // How rotations are parameterised (newton.hpp; Ceres: ceres_step.hpp). Ipopt supports lie
+  // and rotvec.
+  RotationParameterization rotation = RotationParameterization::kLie;
+
+  CeresOptions ceres;
+  IpoptOptions ipopt;
+
+  // Throws ModelError naming "solver.<field>".
+  void validate() const;
+};
+
+enum class StepStatus {
+  kConverged,         // tolerance met; state updated
+  kMaxIterations,     // iterations used up without meeting the tolerance; state updated
+  kLineSearchFailed,  // Newton: no decrease along the Newton direction; state NOT updated
+  kNonFinite,         // NaN/Inf in Ψ, g, H or δ; state NOT updated
+  kSolverFailed,      // Ceres or Ipopt reported an error (StepReport::message); NOT updated
+};
+
+const char* to_string(StepStatus status);
+
+struct StepReport {
+  StepStatus status = StepStatus::kConverged;
+  int iterations = 0;              // accepted Newton updates / Ceres or Ipopt iterations
+  int regularized_iterations = 0;  // Newton: of which used H + μI
+  int factorizations = 0;          // Cholesky factorisations, including retries (Newton, check)
+  double gradient_norm = 0.0;      // ‖g‖₂ at the final iterate (Lie gradient for Ceres/Ipopt)
+  double step_norm = 0.0;          // ‖δ‖∞ of the last Newton step computed
+  int assemblies = 0;              // gradient + Hessian assemblies (iterations + final check)
+  double assembly_seconds = 0.0;   // with SolverOptions::measure_time: time in assemblies,
+  double solve_seconds = 0.0;      // and in factorisations + triangular solves
+  // Paper Fig. 4's diagnostics, in the parameterisation's own coordinates: ‖g‖₂ at the first
+  // and second assembly (NaN if there was none) and, with SolverOptions::measure_condition,
+  // the 2-norm condition number |λ|max/|λ|min of the first Hessian (NaN otherwise). Merged
+  // over components: the largest.
+  double first_gradient_norm = std::numeric_limits<double>::quiet_NaN();
+  double second_gradient_norm = std::numeric_limits<double>::quiet_NaN();
+  double first_hessian_condition = std::numeric_limits<double>::quiet_NaN();
+  // Ceres/Ipopt: what the back-end said when the step did not converge (else empty).
+  std::string message;
+
+  bool state_updated() const {
+    return status == StepStatus::kConverged || status == StepStatus::kMaxIterations;
+  }
+  bool converged() const { return status == StepStatus::kConverged; }
+  // Merges the report of another component of the same time step.
+  void merge(const StepReport& other);
+};
+
+class StepSolver {
+ public:
+  virtual ~StepSolver() = default;
+
+  // The component whose potential is minimised (the simulator calls begin_step and
+  // set_load_scale on it before each solve).
+  virtual Component& component() = 0;
+  virtual const Component& component() const = 0;
+
+  // Minimises the component's potential, starting from (and writing into) q. On failure
+  // (state_updated() false), q is restored to its value on entry.
+  virtual StepReport solve(State& q) = 0;
+
+  // The convergence test above at q, without moving q: status kConverged or kMaxIterations
+  // (kNonFinite if Ψ, g or H is not finite), gradient_norm and step_norm set.
+  virtual StepReport check(State& q) = 0;
+
+  // SolverOptions::measure_condition for the next solves (Newton only; others ignore it).
+  virtual void set_measure_condition(bool) {}
+};
+
+// The step solver for `component` that `options` choose (options validated by the caller):
+// Newton on a DenseSystem<6>, DenseSystem<Dynamic> or SparseSystem by size, or Ceres or Ipopt.
+std::unique_ptr<StepSolver> make_step_solver(Component component, const SolverOptions& options);
+
+}  // namespace liedyn
