@@ -90,6 +90,7 @@ std::vector<Component> build_components(const Model& model) {
       ri.offsets = {rotation_offset[i]};
       ri.rotation = i;
       ri.J_over_h2 = rotational_mass(body.inertia) * inv_h2;
+      ri.sqrt_J_over_h = psd_sqrt(ri.J_over_h2);  // J^½/h, for the residual form
       p.rotational_inertia.push_back(ri);
     }
     if (!model.gravity.isZero(0.0)) {
@@ -194,6 +195,7 @@ Component build_rod_component(const Model& model, int r) {
       ri.offsets = {edge_offset[j]};
       ri.rotation = model.rod_rotation(r, j);
       ri.J_over_h2 = rotational_mass(d.edge_inertia[j]) * inv_h2;
+      ri.sqrt_J_over_h = psd_sqrt(ri.J_over_h2);  // J^½/h (nearly singular for a thin rod: fine)
       p.rotational_inertia.push_back(ri);
     }
     RodStretch stretch;

@@ -1,11 +1,37 @@
 #include "inertia.hpp"
 
+#include <Eigen/Eigenvalues>
+#include <cmath>
+#include <sstream>
+#include <stdexcept>
+
 #include "so3.hpp"
 
 namespace liedyn {
 
 Matrix3 rotational_mass(const Matrix3& body_inertia) {
   return 0.5 * body_inertia.trace() * Matrix3::Identity() - body_inertia;
+}
+
+Matrix3 psd_sqrt(const Matrix3& A) {
+  if (!A.allFinite()) throw std::invalid_argument("psd_sqrt: the matrix has non-finite entries");
+  // Iterative (not the closed-form computeDirect) solver: accurate eigenvectors also for
+  // (nearly) repeated eigenvalues; this runs once per term, at set-up.
+  const Eigen::SelfAdjointEigenSolver<Matrix3> eig(0.5 * (A + A.transpose()));
+  const Vector3 lambda = eig.eigenvalues();  // ascending
+  const double largest = lambda.cwiseAbs().maxCoeff();
+  if (lambda(0) < -1e-9 * largest) {
+    std::ostringstream os;
+    os << "psd_sqrt: the matrix is not positive semi-definite: eigenvalues " << lambda.transpose()
+       << " (rule: λ_min ≥ −1e-9 λ_max; for J = ½ tr(I_b) 1 − I_b "
+       << "this is the triangle inequality of the inertia I_b)";
+    throw std::invalid_argument(os.str());
+  }
+  // Round-off negatives (see inertia.hpp) → 0.
+  const Vector3 root = lambda.cwiseMax(0.0).cwiseSqrt();
+  const Matrix3& V = eig.eigenvectors();
+  const Matrix3 S = V * root.asDiagonal() * V.transpose();
+  return 0.5 * (S + S.transpose());  // exactly symmetric
 }
 
 void TranslationalInertia::begin_step(const State& previous, const Step& previous_step) {
@@ -18,6 +44,25 @@ double TranslationalInertia::evaluate(const State& q, LocalGradient<1>* g,
   if (g != nullptr) *g = mass_over_h2 * e;                          // m/h² (x − x̃)
   if (H != nullptr) *H = mass_over_h2 * LocalHessian<1>::Identity();  // m/h² I
   return 0.5 * mass_over_h2 * e.squaredNorm();
+}
+
+void TranslationalInertia::residual(const State& q, Residual& r, ResidualJacobian* J,
+                                    const Vector3& load) const {
+  if (!(mass_over_h2 > 0.0)) {
+    if (!load.isZero(0.0)) {
+      std::ostringstream os;
+      os << "TranslationalInertia::residual: mass_over_h2 = " << mass_over_h2 << " with a load "
+         << load.transpose()
+         << " (rule: a load needs mass_over_h2 > 0 to be folded into the square)";
+      throw std::invalid_argument(os.str());
+    }
+    r.setZero();  // a/2 ‖x − x̃‖² = 0
+    if (J != nullptr) J->setZero();
+    return;
+  }
+  const double s = std::sqrt(mass_over_h2);                 // √(m/h²)
+  r = s * (q.points[point] - x_tilde) - load / s;           // √a (x − x̃ − load/a)
+  if (J != nullptr) *J = s * ResidualJacobian::Identity();  // ∂r/∂x = √a I
 }
 
 void RotationalInertia::begin_step(const State& previous, const Step& previous_step) {
@@ -47,6 +92,19 @@ double RotationalInertia::evaluate(const State& q, LocalGradient<1>* g,
     for (int l = 0; l < 3; ++l) value += J_over_h2(l, k) * d[l].dot(d[k]);
   }
   return 0.5 * value;
+}
+
+void RotationalInertia::residual(const State& q, Residual& r, ResidualJacobian* J) const {
+  const Matrix3& R = q.rotations[rotation];
+  // r = vec((R − R̃) J^½/h), column k in rows 3k…3k+2.
+  Eigen::Map<Matrix3>(r.data()) = (R - R_tilde) * sqrt_J_over_h;
+  if (J != nullptr) {
+    const Matrix3 C = R * sqrt_J_over_h;  // columns c_k
+    for (int k = 0; k < 3; ++k) {
+      // ∂/∂θ (exp(θ) c_k) = ∂/∂θ (θ × c_k) = −hat(c_k)
+      J->block<3, 3>(3 * k, 0) = -so3::hat(C.col(k));
+    }
+  }
 }
 
 }  // namespace liedyn

@@ -11,6 +11,14 @@
 //   ‖(R − R̃) J^½‖²_F/(2h²) = tr((R − R̃) J (R − R̃)ᵀ)/(2h²)  = Ψ_R + const,
 // because −tr(RJR̃ᵀ)/h² is a large constant plus a small variation and loses digits in the
 // line search.
+//
+// Least-squares (residual) forms, for the Ceres back-end (contract: term.hpp):
+//   translation  r = √(m/h²) (x − x̃) − load/√(m/h²)                       (3 residuals)
+//   rotation     r = vec((R − R̃) J^½)/h, column-major                      (9 residuals)
+// The rotation's Lie Jacobian: exp(θ)R J^½ has column k  c_k + θ × c_k + O(θ²) with
+// c_k = (R J^½)_k, and θ × c_k = −hat(c_k) θ, so rows 3k…3k+2 of J are −hat(c_k)/h.
+// Then Jᵀr = Σ_k c_k × (D J^½)_k/h² (D = R − R̃) = −Σ_k (RJ^½)_k × (R̃J^½)_k/h²
+// = −2 vee(R̃ J Rᵀ)/h² = 2 vee(M), eq. (12), using Σ_k a_k × b_k = 2 vee(Σ_k b_k a_kᵀ).
 
 #include "state.hpp"
 #include "term.hpp"
@@ -20,6 +28,15 @@ namespace liedyn {
 // J = ½ tr(I_b) 1 − I_b, the "mass matrix" of the rotation: J = ∫ρ x̄ x̄ᵀ (PSD iff I_b obeys
 // the triangle inequality).
 Matrix3 rotational_mass(const Matrix3& body_inertia);
+
+// The symmetric PSD square root S of a symmetric PSD A (S = Sᵀ, S² = A up to round-off), by
+// eigen-decomposition A = V Λ Vᵀ, S = V Λ^½ Vᵀ. A singular A (J of a rod of zero radius,
+// diag(0, 0, m l²/12)) is fine. Eigenvalues in [−1e-9 λ_max, 0) are clamped to 0: they are
+// round-off, or the 1e-12 triangle-inequality tolerance of Model::validate (which allows
+// λ_min(J) ≥ −1e-12 tr(J)), not a lack of PSD-ness. Throws std::invalid_argument for an A
+// with a more negative eigenvalue (no square root, no least-squares form) or non-finite
+// entries.
+Matrix3 psd_sqrt(const Matrix3& A);
 
 struct TranslationalInertia {
   static constexpr int kBlocks = 1;
@@ -31,6 +48,19 @@ struct TranslationalInertia {
   // x̃ = x_{k−1} + Δx_{k−1}
   void begin_step(const State& previous, const Step& previous_step);
   double evaluate(const State& q, LocalGradient<1>* g, LocalHessian<1>* H) const;
+
+  static constexpr int kResiduals = 3;
+  using Residual = LocalResidual<kResiduals>;
+  using ResidualJacobian = LocalResidualJacobian<kResiduals, kBlocks>;
+  // With a = m/h² and a constant world force `load` on the point (its potential −load·x;
+  // e.g. gravity's scale·weight plus node forces, DESIGN.md §8), completing the square:
+  //   a/2 ‖x − x̃‖² − load·x = ½‖r‖² − load·x̃ − ‖load‖²/(2a),
+  //   r = √a (x − x̃ − load/a) = √a (x − x̃) − load/√a,   J = √a I.
+  // So ½‖r‖² = evaluate() − load·x + const, and Jᵀr = evaluate()'s gradient − load.
+  // a = 0 (no mass) gives r = 0, J = 0 when load = 0, and throws std::invalid_argument
+  // otherwise: a massless point under a load has no least-squares form.
+  void residual(const State& q, Residual& r, ResidualJacobian* J,
+                const Vector3& load = Vector3::Zero()) const;
 };
 
 struct RotationalInertia {
@@ -39,10 +69,20 @@ struct RotationalInertia {
   int rotation = -1;
   Matrix3 J_over_h2 = Matrix3::Zero();  // J/h²
   Matrix3 R_tilde = Matrix3::Identity();
+  // J^½/h = psd_sqrt(J/h²), for residual() only; set beside J_over_h2 (build_components).
+  Matrix3 sqrt_J_over_h = Matrix3::Zero();
 
   // R̃ = (2I − ΔR_{k−1}ᵀ) R_{k−1} = 2R_{k−1} − R_{k−2}   (10)
   void begin_step(const State& previous, const Step& previous_step);
   double evaluate(const State& q, LocalGradient<1>* g, LocalHessian<1>* H) const;
+
+  static constexpr int kResiduals = 9;
+  using Residual = LocalResidual<kResiduals>;
+  using ResidualJacobian = LocalResidualJacobian<kResiduals, kBlocks>;
+  // r = vec((R − R̃) J^½/h) column-major: r(3k + i) = ((R − R̃) sqrt_J_over_h)(i, k), and
+  // ½‖r‖² = ½ tr(D J Dᵀ)/h² = evaluate()'s value (the constant is 0).
+  // J rows 3k…3k+2 = −hat(c_k), c_k column k of R J^½/h (derivation at the top).
+  void residual(const State& q, Residual& r, ResidualJacobian* J) const;
 };
 
 }  // namespace liedyn

@@ -1,5 +1,7 @@
 #include "rod_terms.hpp"
 
+#include <cmath>
+
 #include "so3.hpp"
 #include "spring.hpp"
 
@@ -132,6 +134,63 @@ double RodBendTwist::evaluate(const State& q, LocalGradient<2>* g, LocalHessian<
     H->block<3, 3>(3, 0) = mixed.transpose();
   }
   return value;
+}
+
+// ---------------------------------------------------------------------------------------
+// Residual forms (derivations in rod_terms.hpp). Each r is built from the same intermediates
+// as evaluate()'s value, so ½‖r‖² equals it to round-off.
+
+void RodStretch::residual(const State& q, Residual& r, ResidualJacobian* J) const {
+  const Vector3 e = q.points[node1] - q.points[node0];
+  const double L = e.norm();
+  const double s = std::sqrt(stiffness / rest_length);  // √(k_s/l)
+  r(0) = s * (L - rest_length);                         // √(k_s/l) (‖e‖ − l)
+  if (J == nullptr) return;
+  if (!(L > 0.0)) {
+    J->setZero();  // no direction: J = 0, as evaluate()'s gradient is 0 (rod_terms.hpp)
+    return;
+  }
+  const Vector3 sn = (s / L) * e;  // √(k_s/l) n
+  J->leftCols<3>() = -sn.transpose();
+  J->rightCols<3>() = sn.transpose();
+}
+
+void RodShear::residual(const State& q, Residual& r, ResidualJacobian* J) const {
+  const Vector3 e = q.points[node1] - q.points[node0];
+  const double L = e.norm();
+  const Vector3 t = q.rotations[edge].col(2);  // R e_z
+  const double c = 0.5 * stiffness * rest_length;
+  if (!(L > 0.0)) {
+    // Coincident nodes: ½‖r‖² = c, evaluate()'s value there; J = 0, its zero gradient.
+    r = -std::sqrt(2.0 * c) * t;
+    if (J != nullptr) J->setZero();
+    return;
+  }
+  const double sqrt_c = std::sqrt(c);
+  const Vector3 d = e / L;
+  r = sqrt_c * (d - t);  // √c (d − t)
+  if (J != nullptr) {
+    // ∂r/∂e = √c P/L, P = I − d dᵀ;  ∂r/∂θ = √c hat(t)
+    const Matrix3 A = (sqrt_c / L) * (Matrix3::Identity() - d * d.transpose());
+    J->block<3, 3>(0, 0) = -A;
+    J->block<3, 3>(0, 3) = A;
+    J->block<3, 3>(0, 6) = sqrt_c * so3::hat(t);
+  }
+}
+
+void RodBendTwist::residual(const State& q, Residual& r, ResidualJacobian* J) const {
+  const Matrix3& Ra = q.rotations[edge0];
+  const Matrix3& Rb = q.rotations[edge1];
+  const Vector3 dw = darboux(Ra, Rb, rest_length) - rest_darboux;  // Δω = ω − ω̄
+  r = (rest_length * stiffness).cwiseSqrt().cwiseProduct(dw);      // √l K^½ Δω
+  if (J != nullptr) {
+    const Matrix3 C = Rb * Ra.transpose();
+    const Matrix3 G = 0.5 * (C.trace() * Matrix3::Identity() - C);  // vee(hat(u) C) = G u
+    // W = √l K^½ ∂ω/∂β = √l K^½ R_aᵀ G / l = diag(√(K/l)) R_aᵀ G;  ∂ω/∂α = −∂ω/∂β
+    const Matrix3 W = (stiffness / rest_length).cwiseSqrt().asDiagonal() * (Ra.transpose() * G);
+    J->leftCols<3>() = -W;
+    J->rightCols<3>() = W;
+  }
 }
 
 }  // namespace liedyn

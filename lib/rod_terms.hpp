@@ -52,6 +52,24 @@
 //     H_ab = H_baᵀ = −S − ½ N + (m·c) I.
 //   Checks: H_aa + H_ab + H_ba + H_bb = 0 (common rotation); at rest m = 0 and H = l JᵀKJ
 //   (PSD); for a straight untwisted rod (C = I, G = I, ω̄ = 0) H_aa = H_bb = −H_ab = R K Rᵀ/l.
+//
+// ---------------------------------------------------------------------------------------
+// Least-squares (residual) forms, for the Ceres back-end (contract: term.hpp). Each has
+// Ψ = ½‖r‖² exactly (the constant is 0) and Jᵀr = the Lie gradient above; the square roots
+// need non-negative stiffnesses:
+//   Stretch  r = √(k_s/l) (L − l)  (1 residual),   J = √(k_s/l) [−nᵀ, nᵀ];
+//            Jᵀr = (k_s/l)(L − l) [−n; n] ✓.
+//   Shear    r = √c (d − t),  c = ½ k_x l  (3 residuals),
+//            J = [−√c P/L, √c P/L, √c hat(t)]   (∂d/∂e = P/L; exp(θ)t = t − hat(t)θ + …,
+//            so ∂(−t)/∂θ = hat(t)); Jᵀr: e-block c P(d − t)/L = −c P t/L ✓ (P d = 0),
+//            θ-block −c hat(t)(d − t) = −c t × d ✓.
+//   Bend     r = √l K^½ Δω  (3 residuals, K ≥ 0 diagonal),
+//            J = [−W, W],  W = √l K^½ ∂ω/∂β = K^½ R_aᵀ G/√l;
+//            Jᵀr = ±Gᵀ R_a K Δω = ±Gᵀ m ✓.
+// Degenerate edges (L = 0, where d and n are undefined and evaluate() returns a zero
+// gradient): r keeps evaluate()'s value and J = 0 (so Jᵀr = 0 = its gradient):
+//   Stretch r = −√(k_s/l) l  (Ψ = ½ k_s l);   Shear r = −√(2c) t  (Ψ = c, d := 0 as in
+//   evaluate(): ½ c‖d − t‖² with d ⊥ t, the mean over directions, not ½ c‖0 − t‖²).
 
 #include "state.hpp"
 #include "term.hpp"
@@ -71,6 +89,12 @@ struct RodStretch {
   double stiffness = 0.0;                    // k_s [N]  (axial stiffness EA)
 
   double evaluate(const State& q, LocalGradient<2>* g, LocalHessian<2>* H) const;
+
+  static constexpr int kResiduals = 1;
+  using Residual = LocalResidual<kResiduals>;
+  using ResidualJacobian = LocalResidualJacobian<kResiduals, kBlocks>;
+  // r = √(k_s/l)(‖e‖ − l); J = √(k_s/l) [−nᵀ, nᵀ] (see the top; e = 0: J = 0).
+  void residual(const State& q, Residual& r, ResidualJacobian* J) const;
 };
 
 struct RodShear {
@@ -83,6 +107,12 @@ struct RodShear {
   double stiffness = 0.0;                        // k_x [N]
 
   double evaluate(const State& q, LocalGradient<3>* g, LocalHessian<3>* H) const;
+
+  static constexpr int kResiduals = 3;
+  using Residual = LocalResidual<kResiduals>;
+  using ResidualJacobian = LocalResidualJacobian<kResiduals, kBlocks>;
+  // r = √(k_x l/2)(d − t); J = [−√c P/L, √c P/L, √c hat(t)] (see the top; e = 0: J = 0).
+  void residual(const State& q, Residual& r, ResidualJacobian* J) const;
 };
 
 struct RodBendTwist {
@@ -95,6 +125,12 @@ struct RodBendTwist {
   Vector3 rest_darboux = Vector3::Zero();    // ω̄ [1/m], material frame of edge i−1
 
   double evaluate(const State& q, LocalGradient<2>* g, LocalHessian<2>* H) const;
+
+  static constexpr int kResiduals = 3;
+  using Residual = LocalResidual<kResiduals>;
+  using ResidualJacobian = LocalResidualJacobian<kResiduals, kBlocks>;
+  // r = √l K^½ Δω; J = [−W, W], W = K^½ R_aᵀ G/√l (see the top). Needs K ≥ 0.
+  void residual(const State& q, Residual& r, ResidualJacobian* J) const;
 };
 
 }  // namespace liedyn

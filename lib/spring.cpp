@@ -1,5 +1,7 @@
 #include "spring.hpp"
 
+#include <cmath>
+
 #include "so3.hpp"
 
 namespace liedyn {
@@ -26,6 +28,37 @@ double Spring::evaluate(const State& q, LocalGradient<4>* g, LocalHessian<4>* H)
     H->block<3, 3>(9, 9) += rotated_point_curvature(r_b, f);
   }
   return value;
+}
+
+void Spring::residual(const State& q, Residual& r, ResidualJacobian* J) const {
+  const Vector3 d = b.position(q) - a.position(q);
+  const double sqrt_k = std::sqrt(stiffness);
+  Matrix3 A;  // ∂r/∂d
+  if (rest_length == 0.0) {
+    r = sqrt_k * d;  // √k d
+    A = sqrt_k * Matrix3::Identity();
+  } else {
+    // Same branches as length_spring, so that Jᵀr is evaluate()'s gradient everywhere.
+    const double l = d.norm();
+    if (!(l > 0.0)) {
+      r = Vector3(-sqrt_k * rest_length, 0.0, 0.0);  // d = 0: see spring.hpp
+      if (J != nullptr) J->setZero();
+      return;
+    }
+    const double inv_l = 1.0 / l;
+    const Vector3 n = inv_l * d;
+    const double stretch = l - rest_length;
+    r = (sqrt_k * stretch) * n;  // √k (d − L n) = √k (l − L) n, without cancellation
+    // √k [L/l n nᵀ + (l − L)/l I]: neither coefficient a difference (as in length_spring).
+    A = (sqrt_k * rest_length * inv_l) * (n * n.transpose()) +
+        (sqrt_k * stretch * inv_l) * Matrix3::Identity();
+  }
+  if (J != nullptr) {
+    // A ∂d/∂(x_a, θ_a, x_b, θ_b) = [−A, A hat(r_a), A, −A hat(r_b)]
+    const Matrix3 A_hat_ra = A * so3::hat(a.lever(q));
+    const Matrix3 A_hat_rb = A * so3::hat(b.lever(q));
+    *J << -A, A_hat_ra, A, -A_hat_rb;
+  }
 }
 
 }  // namespace liedyn

@@ -9,6 +9,24 @@
 // evaluate returns the value and, when the pointers are non-null, writes (not adds) the
 // local Lie gradient and Lie Hessian. Blocks whose offset is −1 are ignored by assembly.
 // Terms are stored per type in contiguous vectors: no virtual call per element.
+//
+// A term that is a sum of squares (inertia, springs, rod elasticity; not the linear loads)
+// also provides its least-squares form, for the Ceres back-end:
+//   static constexpr int kResiduals;          // R, the length of its residual r
+//   using Residual = LocalResidual<kResiduals>;
+//   using ResidualJacobian = LocalResidualJacobian<kResiduals, kBlocks>;
+//   void residual(const State& q, Residual& r, ResidualJacobian* J) const;
+// with, for every q,
+//   Ψ(q) = ½ ‖r(q)‖² + c,   c independent of q,
+//   J = ∂r/∂(blocks) (written when non-null), rotation blocks by LEFT perturbation
+//       (column 3b + j of J = ∂r(…, exp(ε e_j) R_b, …)/∂ε at ε = 0, see so3.hpp),
+// so that Jᵀ r is the Lie gradient evaluate() returns and Jᵀ J is the Gauss–Newton model of
+// the Lie Hessian (no residual curvature, not the exact Hessian). Blocks are in the order of
+// `offsets`; columns of blocks whose offset is −1 are written but are not DOFs. J is
+// column-major (Eigen's default): Ceres's row-major jacobians[i][r·n + c] = J(r, 3i + c)
+// for a parameter block i of tangent size 3.
+// Where r is not differentiable (a spring or edge of zero length with a positive rest
+// length) a term documents the r and J it returns; Jᵀ r is still evaluate()'s gradient.
 
 #include <Eigen/Core>
 #include <array>
@@ -19,5 +37,9 @@ template <int B>
 using LocalGradient = Eigen::Matrix<double, 3 * B, 1>;
 template <int B>
 using LocalHessian = Eigen::Matrix<double, 3 * B, 3 * B>;
+template <int R>
+using LocalResidual = Eigen::Matrix<double, R, 1>;
+template <int R, int B>
+using LocalResidualJacobian = Eigen::Matrix<double, R, 3 * B>;
 
 }  // namespace liedyn

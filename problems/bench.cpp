@@ -30,7 +30,8 @@ TimedRun time_scene(const Scene& scene, SolverOptions options, std::vector<State
     const StepReport report = sim.step();
     if (!report.state_updated()) {
       run.failed = true;
-      run.failure = "step " + std::to_string(k) + " failed: " + to_string(report.status);
+      run.failure = "step " + std::to_string(k) + " failed: " + to_string(report.status) +
+                    (report.message.empty() ? "" : " (" + report.message + ")");
       break;
     }
     ++run.frames;
@@ -83,7 +84,7 @@ std::string format_bench(const BenchResult& r) {
   os << "scene        " << r.scene << "\n";
   os << "size         " << r.dofs << " DOFs, " << r.frames << " frames, h = " << r.time_step
      << " s; medians of " << r.repeats << " runs\n";
-  os << "newton       " << r.iterations_per_frame << " iterations per frame (max "
+  os << "iterations   " << r.iterations_per_frame << " per frame (max "
      << r.max_iterations_in_frame << "), " << r.assemblies_per_frame
      << " assemblies per frame (iterations + convergence checks)\n";
   os << "assembly     " << r.assembly_us << " µs per assembly\n";

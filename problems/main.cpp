@@ -1,21 +1,51 @@
 // liedyn — command-line driver.
 //   liedyn simulate SCENE.json --out DIR [--allow-unconverged] [--quiet]
 //   liedyn bench SCENE.json [--repeat N] [--json]     (cost per Newton iteration; no files)
-//   liedyn compare SCENE.json --rotations lie,rotvec,quat [--csv | --json] [--repeat N]
-//                  [--frames-csv FILE] [--condition-every N]
+//   liedyn compare SCENE.json [--backends newton,ceres,ipopt] [--rotations lie,rotvec,quat]
+//                  [--csv | --json] [--repeat N] [--frames-csv FILE] [--condition-every N]
+//                  (one row per backend × rotation, backends outer; the first row is the
+//                  reference for deviations; without --backends the scene's back-end, without
+//                  --rotations the scene's parameterisation if --backends is given, else all
+//                  three; an unsupported pair such as ipopt + quat is a failed row)
 //   liedyn exp-jacobian --out FILE [--samples N]   (paper Fig. 3 data: σ of ∂vec(exp r)/∂r)
 // Exit status: 0 success; 2 bad input (scene or options), nothing written; 3 some steps ended
 // at max_iterations (outputs written; --allow-unconverged makes this 0); 4 a step failed
-// (outputs written up to it); 1 other errors (I/O).
+// (outputs written up to it; compare: a row failed or is unsupported, all rows printed); 1
+// other errors (I/O).
 
 #include <CLI/CLI.hpp>
 #include <iostream>
+#include <optional>
+#include <string_view>
 
 #include "analysis.hpp"
 #include "bench.hpp"
 #include "compare.hpp"
 #include "output.hpp"
 #include "run.hpp"
+
+namespace {
+
+// The values of a list option (--backends, --rotations) through `parse` (parse_backend,
+// parse_rotation) into `out`; false, after a message naming the option and the value, for an
+// unknown name.
+template <class T>
+bool parse_names(const std::vector<std::string>& names,
+                 std::optional<T> (*parse)(std::string_view), const char* option,
+                 const char* what, const char* expected, std::vector<T>& out) {
+  for (const std::string& name : names) {
+    const std::optional<T> value = parse(name);
+    if (!value) {
+      std::cerr << "liedyn: " << option << ": unknown " << what << " \"" << name
+                << "\" (expected " << expected << ")\n";
+      return false;
+    }
+    out.push_back(*value);
+  }
+  return true;
+}
+
+}  // namespace
 
 int main(int argc, char** argv) {
   CLI::App app{"liedyn: rigid-body dynamics with Lie derivatives"};
@@ -39,28 +69,37 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   bench->add_flag("--json", json, "Print one JSON object instead of text");
 
-  std::vector<std::string> rotation_names{"lie", "rotvec", "quat"};
+  std::vector<std::string> backend_names, rotation_names;
   bool csv = false;
   std::string frames_csv;
   int condition_every = 0;
-  CLI::App* compare =
-      app.add_subcommand("compare", "Run a scene under several rotation parameterisations");
+  CLI::App* compare = app.add_subcommand(
+      "compare",
+      "Run a scene under several back-ends and rotation parameterisations: one row per "
+      "backend × rotation (backends outer); deviations are from the first row");
   compare->add_option("scene", scene_file, "Scene file (JSON)")->required();
-  compare->add_option("--rotations", rotation_names, "Parameterisations (the first is the reference)")
-      ->delimiter(',')
-      ->capture_default_str();
+  compare
+      ->add_option("--backends", backend_names,
+                   "Back-ends: newton, ceres, ipopt (default: the scene's)")
+      ->delimiter(',');
+  compare
+      ->add_option("--rotations", rotation_names,
+                   "Parameterisations: lie, rotvec, quat (default: the scene's with --backends, "
+                   "else lie,rotvec,quat); a pair the back-end does not support is a failed row")
+      ->delimiter(',');
   int compare_repeats = 3;
-  compare->add_option("--repeat", compare_repeats, "Timed runs per parameterisation (medians)")
+  compare->add_option("--repeat", compare_repeats, "Timed runs per row (medians)")
       ->check(CLI::Range(1, 1000))
       ->capture_default_str();
   auto* compare_csv_flag = compare->add_flag("--csv", csv, "Print CSV instead of a table");
   compare->add_flag("--json", json, "Print one JSON object instead of a table")
       ->excludes(compare_csv_flag);
   compare->add_option("--frames-csv", frames_csv,
-                      "Also write per-frame iterations, gradient norms and condition numbers");
+                      "Also write per-frame iterations, gradient norms and condition numbers "
+                      "(condition numbers: Newton only)");
   compare->add_option("--condition-every", condition_every,
-                      "Condition number every N frames (0: every frame up to 300 DOFs, else ~20 "
-                      "frames)")
+                      "Newton's condition number every N frames (0: every frame up to 300 DOFs, "
+                      "else ~20 frames)")
       ->check(CLI::NonNegativeNumber);
 
   std::string out_file;
@@ -86,21 +125,19 @@ int main(int argc, char** argv) {
       file.commit();
       return 0;
     }
+    liedyn::CompareOptions options;
+    if (compare->parsed() &&
+        !(parse_names(backend_names, liedyn::parse_backend, "--backends", "back-end",
+                      "newton, ceres or ipopt", options.backends) &&
+          parse_names(rotation_names, liedyn::parse_rotation, "--rotations", "parameterisation",
+                      "lie, rotvec or quat", options.rotations))) {
+      return 2;
+    }
     const liedyn::Scene scene = liedyn::load_scene(scene_file);
     if (compare->parsed()) {
-      liedyn::CompareOptions options;
       options.condition_every = condition_every;
       options.repeats = compare_repeats;
-      for (const std::string& name : rotation_names) {
-        const auto rotation = liedyn::parse_rotation(name);
-        if (!rotation) {
-          std::cerr << "liedyn: --rotations: unknown parameterisation \"" << name
-                    << "\" (expected lie, rotvec or quat)\n";
-          return 2;
-        }
-        options.rotations.push_back(*rotation);
-      }
-      const std::vector<liedyn::CompareRow> rows = liedyn::compare_rotations(scene, options);
+      const std::vector<liedyn::CompareRow> rows = liedyn::compare_solvers(scene, options);
       if (!frames_csv.empty()) {
         liedyn::AtomicFile file(frames_csv);
         file.stream() << liedyn::compare_frames_csv(rows);
@@ -109,14 +146,14 @@ int main(int argc, char** argv) {
       std::cout << (json  ? liedyn::compare_json(scene, rows)
                     : csv ? liedyn::compare_csv(rows)
                           : liedyn::format_compare(scene, rows));
+      int status = 0;
       for (const liedyn::CompareRow& row : rows) {
         if (row.failed) {
-          std::cerr << "liedyn: " << liedyn::to_string(row.rotation) << ": " << row.failure
-                    << "\n";
-          return 4;
+          std::cerr << "liedyn: " << row.label() << ": " << row.failure << "\n";
+          status = 4;
         }
       }
-      return 0;
+      return status;
     }
     if (bench->parsed()) {
       const liedyn::BenchResult result = liedyn::bench_scene(scene, repeats);

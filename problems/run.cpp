@@ -88,7 +88,9 @@ SimulationSummary simulate_scene(const Scene& scene, const std::filesystem::path
       std::ostringstream os;
       os << "step " << k << " (t = " << k * scene.model.time_step
          << " s) failed: " << to_string(report.status) << " after " << report.iterations
-         << " Newton iterations, gradient norm " << report.gradient_norm;
+         << " " << to_string(scene.solver.backend) << " iterations, gradient norm "
+         << report.gradient_norm;
+      if (!report.message.empty()) os << " (" << report.message << ")";
       summary.failure = os.str();
       break;
     }
@@ -129,7 +131,8 @@ std::string format_summary(const Scene& scene, const SimulationSummary& s) {
   os << "bodies       " << scene.model.bodies.size() << ", rods " << scene.model.rods.size();
   if (!scene.model.rods.empty()) os << " (" << nodes << " nodes)";
   os << ", h = " << scene.model.time_step
-     << " s, tolerance " << scene.solver.tolerance << ", max_iterations "
+     << " s, " << to_string(scene.solver.backend) << "/" << to_string(scene.solver.rotation)
+     << ", tolerance " << scene.solver.tolerance << ", max_iterations "
      << scene.solver.max_iterations << "\n";
   os << "frames       " << s.frames_completed << " of " << s.frames_requested << " in "
      << std::setprecision(3) << s.wall_seconds << " s";
@@ -137,7 +140,8 @@ std::string format_summary(const Scene& scene, const SimulationSummary& s) {
     os << " (" << 1e6 * s.wall_seconds / s.frames_completed << " µs/step)";
   }
   os << "\n";
-  os << "newton       " << s.total_iterations << " iterations, "
+  os << "iterations   " << s.total_iterations << " (" << to_string(scene.solver.backend)
+     << "), "
      << (s.frames_completed ? double(s.total_iterations) / s.frames_completed : 0.0)
      << " per step (max " << s.max_iterations_in_step << ")\n";
   os << "unconverged  " << s.unconverged_steps << " steps ended at max_iterations\n";

@@ -94,6 +94,12 @@ class ObjectReader {
   std::string string(const std::string& key, const std::string& fallback) {
     return has(key) ? string(key) : fallback;
   }
+  bool boolean(const std::string& key, bool fallback) {
+    if (!has(key)) return fallback;
+    const json& v = value_.at(key);
+    if (!v.is_boolean()) fail(field(key), "must be true or false (got " + type_of(v) + ")");
+    return v.get<bool>();
+  }
 
   // Fixed-length array of finite numbers.
   template <int N>
@@ -388,11 +394,11 @@ Scene parse(const json& root, const std::string& source) {
   if (top.has("solver")) {
     ObjectReader s(top.get("solver"), "solver", source);
     const std::string backend = s.string("backend", "newton");
-    if (backend == "ceres" || backend == "ipopt") {
-      s.fail("solver.backend", "\"" + backend +
-                                   "\" is not available yet (only \"newton\" is implemented)");
-    } else if (backend != "newton") {
-      s.fail("solver.backend", "unknown backend \"" + backend + "\" (expected \"newton\")");
+    if (const auto parsed = parse_backend(backend)) {
+      scene.solver.backend = *parsed;
+    } else {
+      s.fail("solver.backend", "unknown backend \"" + backend +
+                                   "\" (expected \"newton\", \"ceres\" or \"ipopt\")");
     }
     const std::string rotation = s.string("rotation", "lie");
     if (const auto parsed = parse_rotation(rotation)) {
@@ -408,6 +414,26 @@ Scene parse(const json& root, const std::string& source) {
     if (s.has("assembly_threads")) {
       scene.solver.assembly_threads =
           s.integer("assembly_threads", 0, SolverOptions::kMaxAssemblyThreads);
+    }
+    // Back-end options: accepted whichever back-end runs, so that `liedyn compare
+    // --backends` can switch; their values are checked by SolverOptions::validate.
+    if (s.has("ceres")) {
+      ObjectReader c(s.get("ceres"), "solver.ceres", source);
+      CeresOptions& o = scene.solver.ceres;
+      o.linear_solver = c.string("linear_solver", o.linear_solver);
+      o.trust_region_strategy = c.string("trust_region_strategy", o.trust_region_strategy);
+      o.verbose = c.boolean("verbose", o.verbose);
+      c.finish();
+    }
+    if (s.has("ipopt")) {
+      ObjectReader i(s.get("ipopt"), "solver.ipopt", source);
+      IpoptOptions& o = scene.solver.ipopt;
+      o.hessian_approximation = i.string("hessian_approximation", o.hessian_approximation);
+      if (i.has("print_level")) o.print_level = i.integer("print_level", 0, 12);
+      o.derivative_test = i.string("derivative_test", o.derivative_test);
+      o.output_file = i.string("output_file", o.output_file);
+      if (i.has("max_recentrings")) o.max_recentrings = i.integer("max_recentrings", 0);
+      i.finish();
     }
     s.finish();
   }

@@ -1,8 +1,49 @@
 #pragma once
 // The backward-Euler step as a manifold nonlinear least-squares problem for Ceres
-// (DESIGN.md §8). Placeholder while the back-end is written.
+// (DESIGN.md §8): Ψ(q) = ½ Σ_t ‖r_t(q)‖² + const, minimised by Ceres's trust-region
+// Gauss–Newton (Levenberg–Marquardt or dogleg).
+//
+// Residuals. Each term provides its least-squares form with a Lie Jacobian (lib/*.hpp,
+// `residual`): inertia ‖(x − x̂)‖√m/h and vec((R − R̃)J^½)/h, springs, rod stretch, shear and
+// bend–twist. Constant loads on a point with inertia (gravity, node forces) are folded into
+// its inertia residual by completing the square, x̂ = x̃ + h² F/m. The remaining linear loads
+// (static mode, forces with a lever arm, torques) have no least-squares form; each becomes
+// r = √(2(V + c)) with c fixed per solve so that V + c = β ≫ the load's work over the step:
+// exact value and gradient, and a spurious Gauss–Newton curvature g gᵀ/(2β) that a large β
+// keeps small.
+//
+// Rotation blocks (SolverOptions::rotation):
+//   lie    — the chart: 3 doubles θ, R = exp(θ) R₀ with R₀ = R where the solve (or round, below)
+//            starts, Jacobian J_Lie J_l(θ) (= J_Lie at θ = 0), no manifold needed;
+//   rotvec — the same chart with R₀ = I: global rotation vectors r = log R;
+//   quat   — UnitQuaternionRetraction (manifolds/ceres_manifolds.hpp): 4 doubles,
+//            Plus = normalize(q + Q(q) δ), the cost returns J_Lie · 4Q(q)ᵀ.
+// For lie, DESIGN.md §8 offers the chart or a 9-double "lift" manifold (R itself, Plus =
+// exp(δ) R, J_amb = J_Lie · MinusJacobian). Both were built and measured side by side
+// (`liedyn bench --repeat 5`, Release, 2-vCPU Xeon VM, twice each, tolerance 1e-8): on the
+// butterfly bolt (1000 frames) the chart took 0.0235–0.0245 s and 2.04 iterations per frame,
+// the lift 0.0306–0.0386 s and 2.20; on the helix (969 DOFs, 100 frames) the chart took
+// 1.19–1.42 s, the lift 1.60–1.65 s, at the same iterations (12.6 against 12.4). The chart
+// wins by 1.1–1.6×: a third of the parameters, 3×3 instead of 3×9 Jacobian blocks, and no
+// re-orthonormalisation in Plus. The lift was removed.
+//
+// Linear solver: DENSE_QR up to kDenseLimit DOFs, SPARSE_NORMAL_CHOLESKY with SuiteSparse
+// beyond (CeresOptions::linear_solver). The problem (parameter blocks, residual blocks, the
+// symbolic analysis Ceres caches) is built once, at the first solve; later solves only reload
+// the parameters.
+//
+// Stopping: Ceres stops after a successful step no longer than `tolerance` (2-norm in tangent
+// space ≥ the ∞-norm); then the shared convergence test (step_solver.hpp) runs once with the
+// exact Lie Hessian. If it fails (Gauss–Newton converges only linearly where residuals stay
+// large at the minimum: inertia under load, stretched springs), Ceres goes on with a ten times
+// smaller threshold, at most three rounds within max_iterations iterations in total.
+// Ceres FAILURE → StepStatus::kSolverFailed with Ceres's message, the state restored.
+//
+// Threads: the cost functions of a component share one scratch state, so Ceres runs them on
+// one thread.
 
 #include <memory>
+#include <string>
 
 #include "step_solver.hpp"
 
@@ -10,5 +51,23 @@ namespace liedyn {
 
 std::unique_ptr<StepSolver> make_ceres_step_solver(Component component,
                                                    const SolverOptions& options);
+
+// Ceres's check_gradients, done our way, on every residual block of the component's problem at
+// q (which must have had begin_step): each analytic Jacobian as Ceres sees it in tangent
+// space (J_amb · PlusJacobian) against central differences of the cost function along each
+// tangent direction through the manifold's Plus (step 1e-6). The error of a parameter block
+// is max|analytic − numeric| over its entries divided by its largest entry. Ceres's own
+// check divides entry by entry, which flags the round-off of entries that are zero
+// analytically (1e-19 against 1e-16), and its GradientChecker's Ridders differences start
+// from a step of 1e-2·|x| (0.32 for a zero coordinate), as long as a rod edge: on rod terms
+// they disagreed with the analytic Jacobian and with plain central differences (both of
+// which agree to 1e-9) by a factor ~5 (Ceres 2.1).
+struct CeresGradientCheck {
+  int residual_blocks = 0;
+  double worst_error = 0.0;  // over all blocks (∞ if a cost failed to evaluate)
+  std::string worst_term;    // its term type
+};
+CeresGradientCheck check_ceres_gradients(Component component, const SolverOptions& options,
+                                         const State& q);
 
 }  // namespace liedyn

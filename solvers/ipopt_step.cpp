@@ -1,12 +1,591 @@
 #include "ipopt_step.hpp"
 
+#include <Eigen/Core>
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <coin/IpIpoptApplication.hpp>
+#include <coin/IpTNLP.hpp>
+#include <cstddef>
+#include <limits>
 #include <stdexcept>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "../lib/so3.hpp"
+#include "../manifolds/rotation_chart.hpp"
+#include "newton.hpp"
 
 namespace liedyn {
 
-// PLACEHOLDER (being written): not a working back-end.
-std::unique_ptr<StepSolver> make_ipopt_step_solver(Component, const SolverOptions&) {
-  throw std::logic_error("the ipopt back-end is not implemented yet");
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double seconds_since(Clock::time_point start) {
+  return std::chrono::duration<double>(Clock::now() - start).count();
+}
+
+// ---------------------------------------------------------------------------------------
+// The lower triangle of the charted Hessian in Ipopt's triplet form.
+//
+// IncrementalPotential::assemble_into (and RotationVectorChart::finish after it) call
+// add(row, column, block) in the same order for every assembly of a potential. The first
+// assembly records that order (and the blocks); finish_recording() then builds the pattern:
+// one slot per distinct block of the lower block triangle (row > column: 9 entries; row =
+// column: the 6 entries of its lower triangle), and for every call the start of its slot —
+// or −1 for a block above the diagonal, the transpose of one below (every term's local
+// Hessian is symmetric, and so is J_rowᵀ B J_column under transposition). Later assemblies
+// scatter each call into its slot by call number: no search, no allocation.
+class LowerTriangleSink {
+ public:
+  // With discard (Ipopt's limited-memory Hessian), every block is dropped.
+  explicit LowerTriangleSink(bool discard) : discard_(discard) {}
+
+  void clear() {
+    next_call_ = 0;
+    std::fill(values_.begin(), values_.end(), 0.0);
+  }
+
+  template <class Block>
+  void add(int row, int column, const Block& block) {
+    if (discard_) return;
+    if (!recorded_) {
+      calls_.emplace_back(row, column);
+      recorded_blocks_.emplace_back(block);
+      return;
+    }
+    // The contract of assemble_into, checked at the cost of two integer comparisons.
+    if (next_call_ >= calls_.size() || calls_[next_call_].first != row ||
+        calls_[next_call_].second != column) {
+      order_broken_ = true;
+      return;
+    }
+    const int start = slot_of_call_[next_call_++];
+    if (start < 0) return;
+    double* v = values_.data() + start;
+    if (row == column) {
+      for (int i = 0; i < 3; ++i) {
+        for (int j = 0; j <= i; ++j) *v++ += block(i, j);
+      }
+    } else {
+      for (int i = 0; i < 3; ++i) {
+        for (int j = 0; j < 3; ++j) *v++ += block(i, j);
+      }
+    }
+  }
+
+  bool recorded() const { return recorded_ || discard_; }
+
+  // After the first assembly: the pattern, and the values of that assembly.
+  void finish_recording() {
+    if (recorded()) return;
+    std::vector<std::pair<int, int>> lower;  // distinct blocks with row ≥ column
+    for (const auto& [row, column] : calls_) {
+      if (row >= column) lower.emplace_back(row, column);
+    }
+    std::sort(lower.begin(), lower.end());
+    lower.erase(std::unique(lower.begin(), lower.end()), lower.end());
+    std::vector<int> start_of_block(lower.size());
+    for (std::size_t b = 0; b < lower.size(); ++b) {
+      const auto [row, column] = lower[b];
+      start_of_block[b] = static_cast<int>(rows_.size());
+      for (int i = 0; i < 3; ++i) {
+        for (int j = 0; j < 3; ++j) {
+          if (row == column && j > i) continue;
+          rows_.push_back(row + i);
+          columns_.push_back(column + j);
+        }
+      }
+    }
+    slot_of_call_.resize(calls_.size());
+    for (std::size_t k = 0; k < calls_.size(); ++k) {
+      const auto [row, column] = calls_[k];
+      if (row < column) {
+        slot_of_call_[k] = -1;
+        continue;
+      }
+      const auto it = std::lower_bound(lower.begin(), lower.end(), calls_[k]);
+      slot_of_call_[k] = start_of_block[it - lower.begin()];
+    }
+    values_.assign(rows_.size(), 0.0);
+    recorded_ = true;
+    // Scatter the recorded first assembly.
+    for (std::size_t k = 0; k < calls_.size(); ++k) {
+      add(calls_[k].first, calls_[k].second, recorded_blocks_[k]);
+    }
+    recorded_blocks_.clear();
+    recorded_blocks_.shrink_to_fit();
+  }
+
+  // Entries of the lower triangle (0 before the pattern is recorded, and when discarding).
+  int nonzeros() const { return static_cast<int>(values_.size()); }
+  const std::vector<int>& rows() const { return rows_; }
+  const std::vector<int>& columns() const { return columns_; }
+  const std::vector<double>& values() const { return values_; }
+  // True if an assembly called add in another order than the recorded one (a broken
+  // contract: the values are then wrong and must not be used).
+  bool order_broken() const { return order_broken_; }
+
+ private:
+  bool discard_ = false;
+  bool recorded_ = false;
+  bool order_broken_ = false;
+  std::vector<std::pair<int, int>> calls_;  // (row, column) of every add, in call order
+  std::vector<Matrix3> recorded_blocks_;    // the first assembly's blocks (until recorded)
+  std::vector<int> slot_of_call_;           // per call: start in values_, −1 if skipped
+  std::vector<int> rows_, columns_;         // per entry (Ipopt's iRow, jCol; 0-based)
+  std::vector<double> values_;
+  std::size_t next_call_ = 0;
+};
+
+// ---------------------------------------------------------------------------------------
+// The NLP of one step: variables [x, θ] in the component's tangent order, R = exp(θ) R₀
+// (ipopt_step.hpp). Evaluations write the point into the state being solved.
+class StepNlp final : public Ipopt::TNLP {
+ public:
+  StepNlp(Component& component, const SolverOptions& options)
+      : component_(component),
+        rotation_vectors_(options.rotation == RotationParameterization::kRotationVector),
+        tolerance_(options.tolerance),
+        measure_time_(options.measure_time),
+        chart_(component),
+        sink_(options.ipopt.hessian_approximation != "exact"),
+        g_(component.dofs),
+        x0_(component.dofs),
+        x_state_(component.dofs),
+        x_assembled_(component.dofs),
+        x_final_(component.dofs) {}
+
+  // Per step: clears the counters below.
+  void begin_step() {
+    assemblies_ = 0;
+    evaluation_seconds_ = 0.0;
+    first_gradient_norm_ = second_gradient_norm_ = std::numeric_limits<double>::quiet_NaN();
+  }
+
+  // Per Ipopt solve: the chart around q's rotations and the starting point (lie: R₀ = R,
+  // θ = 0; rotvec: R₀ = I, θ = log R, and R ← exp(θ) so that both agree exactly).
+  void start(State& q) {
+    q_ = &q;
+    for (const DofBlock& b : component_.points) x0_.segment<3>(b.offset) = q.points[b.index];
+    for (std::size_t i = 0; i < component_.rotations.size(); ++i) {
+      const DofBlock& b = component_.rotations[i];
+      Matrix3& R = q.rotations[b.index];
+      if (rotation_vectors_) {
+        x0_.segment<3>(b.offset) = so3::log(R);
+        R = chart_.set(i, x0_.segment<3>(b.offset));
+      } else {
+        chart_.set_reference(i, R);
+        x0_.segment<3>(b.offset).setZero();
+      }
+    }
+    x_state_ = x0_;
+    state_valid_ = true;
+    assembled_valid_ = false;
+    has_final_ = false;
+    iterations_ = 0;
+  }
+
+  // Assembles at the starting point (the pattern too, the first time); false if Ψ, g or H
+  // is not finite there.
+  bool assemble_start() {
+    assemble(x0_.data());
+    return assembled_finite_;
+  }
+
+  // Writes Ipopt's final point into q (lie: rotations re-orthonormalised, DESIGN.md §4);
+  // false if Ipopt returned none.
+  bool write_final() {
+    if (!has_final_) return false;
+    set_point(x_final_.data());
+    if (!rotation_vectors_) {
+      for (const DofBlock& b : component_.rotations) {
+        q_->rotations[b.index] = so3::orthonormalize(q_->rotations[b.index]);
+      }
+      state_valid_ = false;  // q no longer holds exactly exp(θ) R₀
+    }
+    return true;
+  }
+
+  int iterations() const { return iterations_; }
+  int assemblies() const { return assemblies_; }
+  double evaluation_seconds() const { return evaluation_seconds_; }
+  double first_gradient_norm() const { return first_gradient_norm_; }
+  double second_gradient_norm() const { return second_gradient_norm_; }
+  bool hessian_order_broken() const { return sink_.order_broken(); }
+
+  // --- Ipopt::TNLP --------------------------------------------------------------------
+  bool get_nlp_info(Ipopt::Index& n, Ipopt::Index& m, Ipopt::Index& nnz_jac_g,
+                    Ipopt::Index& nnz_h_lag, IndexStyleEnum& index_style) override {
+    n = component_.dofs;
+    m = 0;
+    nnz_jac_g = 0;
+    nnz_h_lag = sink_.nonzeros();
+    index_style = C_STYLE;
+    return true;
+  }
+
+  bool get_bounds_info(Ipopt::Index n, Ipopt::Number* x_l, Ipopt::Number* x_u, Ipopt::Index,
+                       Ipopt::Number*, Ipopt::Number*) override {
+    // Beyond ±nlp_lower/upper_bound_inf (±1e19): no bounds.
+    std::fill(x_l, x_l + n, -1e20);
+    std::fill(x_u, x_u + n, 1e20);
+    return true;
+  }
+
+  bool get_starting_point(Ipopt::Index n, bool init_x, Ipopt::Number* x, bool, Ipopt::Number*,
+                          Ipopt::Number*, Ipopt::Index, bool, Ipopt::Number*) override {
+    if (init_x) std::copy(x0_.data(), x0_.data() + n, x);
+    return true;
+  }
+
+  // Ψ: from the assembly if there is one at x, else one IncrementalPotential::value (a
+  // line-search trial point). A non-finite Ψ is an evaluation error for Ipopt.
+  bool eval_f(Ipopt::Index, const Ipopt::Number* x, bool, Ipopt::Number& obj_value) override {
+    if (assembled_at(x)) {
+      obj_value = value_;
+      return std::isfinite(obj_value);
+    }
+    const auto t0 = measure_time_ ? Clock::now() : Clock::time_point{};
+    set_point(x);
+    obj_value = component_.potential.value(*q_);
+    if (measure_time_) evaluation_seconds_ += seconds_since(t0);
+    return std::isfinite(obj_value);
+  }
+
+  // ∇f = [g_x, J_l(θ)ᵀ g_θ].
+  bool eval_grad_f(Ipopt::Index n, const Ipopt::Number* x, bool, Ipopt::Number* grad_f) override {
+    assemble(x);
+    std::copy(g_.data(), g_.data() + n, grad_f);
+    return assembled_finite_;
+  }
+
+  bool eval_g(Ipopt::Index, const Ipopt::Number*, bool, Ipopt::Index, Ipopt::Number*) override {
+    return true;  // m = 0
+  }
+
+  bool eval_jac_g(Ipopt::Index, const Ipopt::Number*, bool, Ipopt::Index, Ipopt::Index,
+                  Ipopt::Index*, Ipopt::Index*, Ipopt::Number*) override {
+    return true;  // m = 0
+  }
+
+  // obj_factor · ∇²f, lower triangle: [H_xx, H_xθ J_l; ·, J_lᵀ H_θθ J_l + C(θ, g)].
+  bool eval_h(Ipopt::Index, const Ipopt::Number* x, bool, Ipopt::Number obj_factor, Ipopt::Index,
+              const Ipopt::Number*, bool, Ipopt::Index nele_hess, Ipopt::Index* iRow,
+              Ipopt::Index* jCol, Ipopt::Number* values) override {
+    if (nele_hess != sink_.nonzeros()) return false;
+    if (values == nullptr) {
+      std::copy(sink_.rows().begin(), sink_.rows().end(), iRow);
+      std::copy(sink_.columns().begin(), sink_.columns().end(), jCol);
+      return true;
+    }
+    assemble(x);
+    if (!assembled_finite_ || sink_.order_broken()) return false;
+    const std::vector<double>& h = sink_.values();
+    for (std::size_t k = 0; k < h.size(); ++k) values[k] = obj_factor * h[k];
+    return true;
+  }
+
+  void finalize_solution(Ipopt::SolverReturn, Ipopt::Index n, const Ipopt::Number* x,
+                         const Ipopt::Number*, const Ipopt::Number*, Ipopt::Index,
+                         const Ipopt::Number*, const Ipopt::Number*, Ipopt::Number,
+                         const Ipopt::IpoptData*, Ipopt::IpoptCalculatedQuantities*) override {
+    if (x == nullptr) return;
+    std::copy(x, x + n, x_final_.data());
+    has_final_ = true;
+  }
+
+  // Stops Ipopt once the primal direction of the iteration just made has ‖d‖∞ ≤ tolerance
+  // (never at iteration 0, whose d is 0 by convention, nor in the restoration phase, whose d
+  // belongs to another problem).
+  bool intermediate_callback(Ipopt::AlgorithmMode mode, Ipopt::Index iter, Ipopt::Number,
+                             Ipopt::Number, Ipopt::Number, Ipopt::Number, Ipopt::Number d_norm,
+                             Ipopt::Number, Ipopt::Number, Ipopt::Number, Ipopt::Index,
+                             const Ipopt::IpoptData*, Ipopt::IpoptCalculatedQuantities*) override {
+    iterations_ = iter;
+    return !(mode == Ipopt::RegularMode && iter > 0 && d_norm <= tolerance_);
+  }
+
+ private:
+  bool same_point(const Ipopt::Number* x, const Eigen::VectorXd& y) const {
+    return std::equal(x, x + component_.dofs, y.data());
+  }
+  bool assembled_at(const Ipopt::Number* x) const {
+    return assembled_valid_ && same_point(x, x_assembled_);
+  }
+
+  // Writes the point x into the state (and the chart's r and J_l(r)).
+  void set_point(const Ipopt::Number* x) {
+    if (state_valid_ && same_point(x, x_state_)) return;
+    const Eigen::Map<const Eigen::VectorXd> xv(x, component_.dofs);
+    for (const DofBlock& b : component_.points) q_->points[b.index] = xv.segment<3>(b.offset);
+    for (std::size_t i = 0; i < component_.rotations.size(); ++i) {
+      const DofBlock& b = component_.rotations[i];
+      q_->rotations[b.index] = chart_.set(i, xv.segment<3>(b.offset));
+    }
+    x_state_ = xv;
+    state_valid_ = true;
+  }
+
+  // Ψ, the charted gradient and Hessian at x, unless they are there already.
+  void assemble(const Ipopt::Number* x) {
+    if (assembled_at(x)) return;
+    const auto t0 = measure_time_ ? Clock::now() : Clock::time_point{};
+    set_point(x);
+    value_ = assemble_charted(component_.potential, *q_, g_, sink_, nullptr, &chart_);
+    sink_.finish_recording();  // the first time only
+    if (measure_time_) evaluation_seconds_ += seconds_since(t0);
+    double h_sum = 0.0;
+    for (const double h : sink_.values()) h_sum += h;
+    // A NaN or Inf entry makes the sum non-finite (as does an overflow, as unusable).
+    assembled_finite_ = std::isfinite(value_ + g_.sum() + h_sum);
+    x_assembled_ = x_state_;
+    assembled_valid_ = true;
+    ++assemblies_;
+    if (assemblies_ == 1) {
+      first_gradient_norm_ = g_.norm();
+    } else if (assemblies_ == 2) {
+      second_gradient_norm_ = g_.norm();
+    }
+  }
+
+  Component& component_;
+  bool rotation_vectors_;  // rotvec (else lie)
+  double tolerance_;
+  bool measure_time_;
+  RotationVectorChart chart_;
+  LowerTriangleSink sink_;
+  Eigen::VectorXd g_;            // charted gradient at x_assembled_
+  Eigen::VectorXd x0_;           // starting point
+  Eigen::VectorXd x_state_;      // the point *q_ holds (if state_valid_)
+  Eigen::VectorXd x_assembled_;  // the point of value_, g_ and the sink (if assembled_valid_)
+  Eigen::VectorXd x_final_;      // Ipopt's final point (if has_final_)
+  State* q_ = nullptr;
+  double value_ = 0.0;
+  bool state_valid_ = false;
+  bool assembled_valid_ = false;
+  bool assembled_finite_ = false;
+  bool has_final_ = false;
+  int iterations_ = 0;
+  int assemblies_ = 0;
+  double evaluation_seconds_ = 0.0;
+  double first_gradient_norm_ = std::numeric_limits<double>::quiet_NaN();
+  double second_gradient_norm_ = std::numeric_limits<double>::quiet_NaN();
+};
+
+const char* status_name(Ipopt::ApplicationReturnStatus status) {
+  switch (status) {
+    case Ipopt::Solve_Succeeded: return "Solve_Succeeded";
+    case Ipopt::Solved_To_Acceptable_Level: return "Solved_To_Acceptable_Level";
+    case Ipopt::Infeasible_Problem_Detected: return "Infeasible_Problem_Detected";
+    case Ipopt::Search_Direction_Becomes_Too_Small: return "Search_Direction_Becomes_Too_Small";
+    case Ipopt::Diverging_Iterates: return "Diverging_Iterates";
+    case Ipopt::User_Requested_Stop: return "User_Requested_Stop";
+    case Ipopt::Feasible_Point_Found: return "Feasible_Point_Found";
+    case Ipopt::Maximum_Iterations_Exceeded: return "Maximum_Iterations_Exceeded";
+    case Ipopt::Restoration_Failed: return "Restoration_Failed";
+    case Ipopt::Error_In_Step_Computation: return "Error_In_Step_Computation";
+    case Ipopt::Maximum_CpuTime_Exceeded: return "Maximum_CpuTime_Exceeded";
+    case Ipopt::Not_Enough_Degrees_Of_Freedom: return "Not_Enough_Degrees_Of_Freedom";
+    case Ipopt::Invalid_Problem_Definition: return "Invalid_Problem_Definition";
+    case Ipopt::Invalid_Option: return "Invalid_Option";
+    case Ipopt::Invalid_Number_Detected: return "Invalid_Number_Detected";
+    case Ipopt::Unrecoverable_Exception: return "Unrecoverable_Exception";
+    case Ipopt::NonIpopt_Exception_Thrown: return "NonIpopt_Exception_Thrown";
+    case Ipopt::Insufficient_Memory: return "Insufficient_Memory";
+    case Ipopt::Internal_Error: return "Internal_Error";
+  }
+  return "unknown Ipopt status";
+}
+
+// Ipopt stopped at a usable point (our stop, its own, a limit): the shared test decides.
+// Every other status is an error and the step fails.
+bool usable(Ipopt::ApplicationReturnStatus status) {
+  switch (status) {
+    case Ipopt::Solve_Succeeded:
+    case Ipopt::Solved_To_Acceptable_Level:
+    case Ipopt::Search_Direction_Becomes_Too_Small:
+    case Ipopt::User_Requested_Stop:
+    case Ipopt::Feasible_Point_Found:
+    case Ipopt::Maximum_Iterations_Exceeded:
+    case Ipopt::Maximum_CpuTime_Exceeded: return true;
+    default: return false;
+  }
+}
+
+class IpoptStepSolver final : public StepSolver {
+ public:
+  IpoptStepSolver(Component component, const SolverOptions& options)
+      : options_(options),
+        entry_points_(component.points.size()),
+        entry_rotations_(component.rotations.size()) {
+    if (options.rotation == RotationParameterization::kQuaternion) {
+      throw ModelError("solver.rotation",
+                       "\"quat\" is not available with the ipopt backend; use lie or rotvec");
+    }
+    // The shared convergence test: Newton on the Lie parameterisation, owning the component.
+    SolverOptions lie = options;
+    lie.backend = Backend::kNewton;
+    lie.rotation = RotationParameterization::kLie;
+    lie.measure_condition = false;
+    newton_ = make_newton(std::move(component), lie);
+    nlp_ = new StepNlp(newton_->component(), options);
+    tnlp_ = nlp_;  // owns it (Ipopt's intrusive reference count)
+
+    app_ = new Ipopt::IpoptApplication();
+    const IpoptOptions& ipopt = options.ipopt;
+    // Output options are read by Initialize, so they are set before it.
+    set_integer("print_level", ipopt.print_level);
+    if (ipopt.print_level == 0) set_string("sb", "yes");
+    if (!ipopt.output_file.empty()) {
+      set_string("output_file", ipopt.output_file);
+      set_integer("file_print_level", std::max(ipopt.print_level, 5));
+    }
+    set_string("linear_solver", "mumps");
+    set_string("hessian_approximation", ipopt.hessian_approximation);
+    set_string("derivative_test", ipopt.derivative_test);
+    // The checker tests at the starting point moved at random by up to this much per
+    // variable. Ipopt's default, 10, takes rotation vectors past 2π, where the chart is
+    // singular and forward differences say nothing; 0.1 stays where Ipopt works and still
+    // makes θ ≠ 0 under lie (J_l(θ) ≠ I, C(θ, g) ≠ 0: the whole chart is exercised).
+    set_numeric("point_perturbation_radius", 0.1);
+    set_string("nlp_scaling_method", "none");
+    // Ipopt's own optimality test off: our callback and the shared test decide (header).
+    set_numeric("tol", 1e-300);
+    set_integer("acceptable_iter", 0);
+    set_integer("max_iter", options.max_iterations);
+    // Initialize("") reads no options file; in Ipopt 3.11 it fails only when the output
+    // file cannot be opened.
+    if (app_->Initialize("") != Ipopt::Solve_Succeeded) {
+      if (!ipopt.output_file.empty()) {
+        throw ModelError("solver.ipopt.output_file",
+                         "cannot open \"" + ipopt.output_file + "\" for writing");
+      }
+      throw std::runtime_error("Ipopt could not be initialised");
+    }
+  }
+
+  Component& component() override { return newton_->component(); }
+  const Component& component() const override { return newton_->component(); }
+
+  StepReport check(State& q) override { return newton_->check(q); }
+
+  StepReport solve(State& q) override {
+    StepReport report;
+    const Component& c = newton_->component();
+    for (std::size_t i = 0; i < c.points.size(); ++i)
+      entry_points_[i] = q.points[c.points[i].index];
+    for (std::size_t i = 0; i < c.rotations.size(); ++i) {
+      entry_rotations_[i] = q.rotations[c.rotations[i].index];
+    }
+    nlp_->begin_step();
+    double ipopt_seconds = 0.0;  // Ipopt's wall time, less our evaluations within it
+    double test_assembly_seconds = 0.0, test_solve_seconds = 0.0;
+    int test_assemblies = 0;
+    auto finish = [&](StepStatus status, std::string message) {
+      report.status = status;
+      report.message = std::move(message);
+      report.assemblies = nlp_->assemblies() + test_assemblies;
+      report.first_gradient_norm = nlp_->first_gradient_norm();
+      report.second_gradient_norm = nlp_->second_gradient_norm();
+      if (options_.measure_time) {
+        report.assembly_seconds = nlp_->evaluation_seconds() + test_assembly_seconds;
+        report.solve_seconds = ipopt_seconds + test_solve_seconds;
+      }
+      if (!report.state_updated()) {
+        for (std::size_t i = 0; i < c.points.size(); ++i) {
+          q.points[c.points[i].index] = entry_points_[i];
+        }
+        for (std::size_t i = 0; i < c.rotations.size(); ++i) {
+          q.rotations[c.rotations[i].index] = entry_rotations_[i];
+        }
+      }
+      return report;
+    };
+
+    for (int solves = 1;; ++solves) {
+      const std::string which = "Ipopt solve " + std::to_string(solves);
+      nlp_->start(q);
+      if (!nlp_->assemble_start()) {
+        return finish(StepStatus::kNonFinite,
+                      "Psi, its gradient or Hessian is not finite at the start of " + which);
+      }
+      set_integer("max_iter", options_.max_iterations - report.iterations);
+      const double evaluation_before = nlp_->evaluation_seconds();
+      const auto t0 = options_.measure_time ? Clock::now() : Clock::time_point{};
+      const Ipopt::ApplicationReturnStatus status =
+          optimized_ ? app_->ReOptimizeTNLP(tnlp_) : app_->OptimizeTNLP(tnlp_);
+      optimized_ = true;
+      if (options_.measure_time) {
+        ipopt_seconds += seconds_since(t0) - (nlp_->evaluation_seconds() - evaluation_before);
+      }
+      report.iterations += nlp_->iterations();
+      if (nlp_->hessian_order_broken()) {
+        return finish(StepStatus::kSolverFailed,
+                      std::string("Ipopt: ") + status_name(status) +
+                          "; the potential's Hessian blocks came in another order than at "
+                          "the first assembly");
+      }
+      if (!usable(status) || !nlp_->write_final()) {
+        return finish(StepStatus::kSolverFailed,
+                      std::string("Ipopt: ") + status_name(status) + " in " + which + " after " +
+                          std::to_string(nlp_->iterations()) + " iterations");
+      }
+
+      const StepReport test = newton_->check(q);
+      ++test_assemblies;
+      test_assembly_seconds += test.assembly_seconds;
+      test_solve_seconds += test.solve_seconds;
+      report.factorizations += test.factorizations;
+      report.gradient_norm = test.gradient_norm;
+      report.step_norm = test.step_norm;
+      if (test.status == StepStatus::kNonFinite) {
+        return finish(StepStatus::kNonFinite,
+                      std::string("Ipopt: ") + status_name(status) + " in " + which +
+                          ", but Psi, g or H is not finite at its final point");
+      }
+      if (test.converged()) return finish(StepStatus::kConverged, "");
+      if (solves > options_.ipopt.max_recentrings || report.iterations >= options_.max_iterations) {
+        return finish(StepStatus::kMaxIterations,
+                      std::string("Ipopt: ") + status_name(status) + " in " + which + ", " +
+                          std::to_string(report.iterations) +
+                          " iterations in all; Newton step at the final state " +
+                          std::to_string(test.step_norm) + " > tolerance");
+      }
+    }
+  }
+
+ private:
+  void set_integer(const char* name, int value) {
+    if (!app_->Options()->SetIntegerValue(name, value)) invalid(name);
+  }
+  void set_numeric(const char* name, double value) {
+    if (!app_->Options()->SetNumericValue(name, value)) invalid(name);
+  }
+  void set_string(const char* name, const std::string& value) {
+    if (!app_->Options()->SetStringValue(name, value)) invalid(name);
+  }
+  [[noreturn]] static void invalid(const char* name) {
+    throw std::logic_error(std::string("Ipopt rejected the value of its option ") + name);
+  }
+
+  SolverOptions options_;
+  bool optimized_ = false;
+  std::unique_ptr<StepSolver> newton_;  // the shared test; owns the component
+  StepNlp* nlp_ = nullptr;              // owned by tnlp_
+  Ipopt::SmartPtr<Ipopt::TNLP> tnlp_;
+  Ipopt::SmartPtr<Ipopt::IpoptApplication> app_;
+  std::vector<Vector3> entry_points_;
+  std::vector<Matrix3> entry_rotations_;
+};
+
+}  // namespace
+
+std::unique_ptr<StepSolver> make_ipopt_step_solver(Component component,
+                                                   const SolverOptions& options) {
+  return std::make_unique<IpoptStepSolver>(std::move(component), options);
 }
 
 }  // namespace liedyn

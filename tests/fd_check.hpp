@@ -363,6 +363,42 @@ inline ::testing::AssertionResult check_jacobian(const StateFunction& F, const S
   return detail::compare("Jacobian", a, d, out, nullptr, opt, noise_of(magnitude, opt.step));
 }
 
+// Analytic tangent Jacobian J (m × 3·dofs.size()) of a vector-valued F: State → R^m (e.g. a
+// term's least-squares residual, term.hpp) against central differences
+//   J(:, j) ≈ (F(q ⊕ εe_j) − F(q ⊖ εe_j)) / 2ε.
+// `value_scale` is the size of the quantities F is computed from, for the round-off floor
+// kNoiseUlps·eps·max(value_scale, max|F|)/ε: pass it when F is a small difference of large
+// quantities (e.g. (R − R̃)S near R = R̃), whose absolute round-off max|F| does not bound.
+// Compared as Jᵀ, so that rows are the input DOF blocks: with the default kEveryBlock, every
+// compared block must move F (a block whose column of J is zero by mistake is caught).
+// Columns of non-DOF blocks are not compared.
+using VectorFunction = std::function<Eigen::VectorXd(const State&)>;
+
+inline ::testing::AssertionResult check_vector_jacobian(const VectorFunction& F, const State& q,
+                                                        const Dofs& dofs, const Eigen::MatrixXd& J,
+                                                        const FdOptions& opt = {},
+                                                        double value_scale = 0.0) {
+  const Eigen::Index n = 3 * static_cast<Eigen::Index>(dofs.size());
+  const Eigen::VectorXd f0 = F(q);
+  const Eigen::Index m = f0.size();
+  if (J.rows() != m || J.cols() != n) {
+    return ::testing::AssertionFailure()
+           << "Jacobian is " << J.rows() << "×" << J.cols() << ", expected " << m << "×" << n;
+  }
+  double magnitude = std::max(value_scale, f0.cwiseAbs().maxCoeff());
+  Eigen::MatrixXd d = Eigen::MatrixXd::Zero(m, n);
+  for (Eigen::Index j = 0; j < n; ++j) {
+    if (!detail::compared(dofs, j)) continue;
+    const Eigen::VectorXd fp = F(perturb_one(q, dofs, j, opt.step));
+    const Eigen::VectorXd fm = F(perturb_one(q, dofs, j, -opt.step));
+    magnitude = std::max({magnitude, fp.cwiseAbs().maxCoeff(), fm.cwiseAbs().maxCoeff()});
+    d.col(j) = (fp - fm) / (2.0 * opt.step);
+  }
+  const Eigen::MatrixXd at = J.transpose(), dt = d.transpose();
+  return detail::compare("Jacobian of a vector function (transposed: rows are input DOFs)", at, dt,
+                         dofs, nullptr, opt, noise_of(magnitude, opt.step));
+}
+
 // ---------------------------------------------------------------------------------------
 // Energy terms (lib/term.hpp): value, Lie gradient and Lie Hessian of term.evaluate over all
 // its blocks; `dofs` maps the term's local blocks to the state (no_dof() for world anchors).

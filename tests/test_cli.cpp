@@ -1,6 +1,7 @@
 // The `liedyn simulate SCENE --out DIR` command line (problems/main.cpp), run as a real
 // process: outputs, exit codes (0 ok, 2 bad input, 3 unconverged steps, 4 failed step) and
-// the promise that bad input writes nothing and leaves existing outputs alone.
+// the promise that bad input writes nothing and leaves existing outputs alone; `liedyn bench`
+// and `liedyn compare` (rows per back-end and parameterisation).
 
 #include <gtest/gtest.h>
 #include <sys/wait.h>
@@ -61,14 +62,17 @@ struct Csv {
   }
 };
 
-Csv read_csv(const fs::path& p) {
+// CSV text (`what` names it in a failure); fields split on commas, quotes not interpreted.
+Csv parse_csv(const std::string& text, const std::string& what) {
   Csv csv;
-  std::istringstream in(read_file(p));
+  std::istringstream in(text);
   std::string line;
-  if (!std::getline(in, csv.header)) ADD_FAILURE() << p << " is empty";
+  if (!std::getline(in, csv.header)) ADD_FAILURE() << what << " is empty";
   while (std::getline(in, line)) csv.rows.push_back(split(line, ','));
   return csv;
 }
+
+Csv read_csv(const fs::path& p) { return parse_csv(read_file(p), p.string()); }
 
 std::set<std::string> listing(const fs::path& dir) {
   std::set<std::string> names;
@@ -90,6 +94,16 @@ std::string replace_once(std::string text, const std::string& from, const std::s
   EXPECT_EQ(text.find(from, at + 1), std::string::npos) << "\"" << from << "\" twice";
   return text.replace(at, from.size(), to);
 }
+
+// `liedyn compare --csv`'s columns and `--frames-csv`'s header. The table's, the CSV's and
+// the JSON's fields are one list (problems/compare.cpp).
+const char* const kCompareColumns =
+    "backend,rotation,reference,frames,iterations_mean,iterations_max,step_us,total_seconds,"
+    "max_final_gradient_norm,max_position_deviation,max_rotation_deviation,unconverged_steps,"
+    "assembly_us,solve_us,condition_mean,condition_frames,failed,failure";
+const char* const kCompareFramesHeader =
+    "backend,rotation,frame,iterations,first_gradient_norm,second_gradient_norm,"
+    "residual_reduction,final_gradient_norm,condition";
 
 class Cli : public ::testing::Test {
  protected:
@@ -131,6 +145,21 @@ class Cli : public ::testing::Test {
     std::vector<std::string> args = {"simulate", "scene.json", "--out", out, "--quiet"};
     args.insert(args.end(), extra.begin(), extra.end());
     return run(args);
+  }
+
+  // `liedyn compare <args> --csv --repeat 1` from the test directory; its CSV table, with
+  // the header checked.
+  struct Compared {
+    Result result;
+    Csv table;
+  };
+  Compared compare(std::vector<std::string> args) {
+    args.insert(args.begin(), "compare");
+    args.insert(args.end(), {"--csv", "--repeat", "1"});
+    Compared c{run(args), {}};
+    c.table = parse_csv(c.result.out, "compare's stdout");
+    EXPECT_EQ(c.table.header, kCompareColumns);
+    return c;
   }
 
   fs::path dir_;
@@ -271,12 +300,15 @@ struct RodFrame {
   std::vector<std::vector<double>> node, edge;  // columns x, y, z (and qw, qx, qy, qz)
 };
 
-TEST_F(Cli, RodWritesNodeAndEdgeRows) {
-  // The bundled cantilever, shortened: 4 edges (5 nodes), 10 frames.
+// The bundled cantilever, shortened: 4 edges (5 nodes), 10 frames.
+std::string small_cantilever() {
   std::string scene = replace_once(cantilever(), "\"frames\": 300", "\"frames\": 10");
   scene = replace_once(scene, "\"edges\": 20", "\"edges\": 4");
-  scene = replace_once(scene, "\"node\": 20", "\"node\": 4");
-  const Result r = simulate(scene, "out");
+  return replace_once(scene, "\"node\": 20", "\"node\": 4");
+}
+
+TEST_F(Cli, RodWritesNodeAndEdgeRows) {
+  const Result r = simulate(small_cantilever(), "out");
   ASSERT_EQ(r.exit_code, 0) << r.out << r.err;
   EXPECT_NE(r.out.find("rods 1 (5 nodes)"), std::string::npos) << r.out;
 
@@ -393,41 +425,170 @@ TEST_F(Cli, BenchReportsIterationCostsWithoutWritingFiles) {
   EXPECT_NE(bad.err.find("missing.json"), std::string::npos) << bad.err;
 }
 
+std::string bolt_frames(int frames) {
+  return replace_once(butterfly_bolt(), "\"frames\": 1000",
+                      "\"frames\": " + std::to_string(frames));
+}
+
 TEST_F(Cli, CompareRunsEachParameterisationAndWritesPerFrameSeries) {
-  write_file(dir_ / "scene.json", replace_once(butterfly_bolt(), "\"frames\": 1000",
-                                               "\"frames\": 50"));
-  const Result r = run({"compare", "scene.json", "--rotations", "lie,rotvec,quat", "--csv",
-                        "--repeat", "1", "--frames-csv", "frames.csv"});
+  write_file(dir_ / "scene.json", bolt_frames(50));
+  const auto [r, table] =
+      compare({"scene.json", "--rotations", "lie,rotvec,quat", "--frames-csv", "frames.csv"});
   ASSERT_EQ(r.exit_code, 0) << r.out << r.err;
-  write_file(dir_ / "compare.csv", r.out);
-  const Csv table = read_csv(dir_ / "compare.csv");
   ASSERT_EQ(table.rows.size(), 3u);
-  const std::size_t rotation = table.column("rotation"), frames = table.column("frames");
+  const std::size_t backend = table.column("backend"), rotation = table.column("rotation");
+  const std::size_t frames = table.column("frames"), reference = table.column("reference");
   const std::size_t deviation = table.column("max_rotation_deviation");
   const std::size_t condition = table.column("condition_mean");
+  const std::size_t assembly = table.column("assembly_us");
   const char* names[] = {"lie", "rotvec", "quat"};
   for (std::size_t i = 0; i < 3; ++i) {
+    ASSERT_EQ(table.rows[i].size(), split(kCompareColumns, ',').size()) << "row " << i;
+    EXPECT_EQ(table.rows[i][backend], "newton");  // the scene's back-end
     EXPECT_EQ(table.rows[i][rotation], names[i]);
+    EXPECT_EQ(table.rows[i][reference], i == 0 ? "1" : "0");
     EXPECT_EQ(table.rows[i][frames], "50");
     // Every frame of a 6-DOF body is sampled; the Hessian is positive definite.
     EXPECT_GE(std::stod(table.rows[i][condition]), 1.0);
+    EXPECT_GT(std::stod(table.rows[i][assembly]), 0.0);
     // Converged steps agree with the reference (tolerance 1e-9 rad per step).
     EXPECT_LT(std::stod(table.rows[i][deviation]), 1e-6) << names[i];
   }
   EXPECT_EQ(table.rows[0][deviation], "0");  // the reference itself
   const Csv series = read_csv(dir_ / "frames.csv");
-  EXPECT_EQ(series.header,
-            "rotation,frame,iterations,first_gradient_norm,second_gradient_norm,"
-            "residual_reduction,condition");
+  EXPECT_EQ(series.header, kCompareFramesHeader);
   EXPECT_EQ(series.rows.size(), 150u);
 
-  const Result json = run({"compare", "scene.json", "--rotations", "quat,lie", "--json",
-                           "--repeat", "1"});
+  // Without --rotations or --backends: the same three parameterisations. JSON carries the
+  // CSV's fields and names the reference.
+  const Result json = run({"compare", "scene.json", "--json", "--repeat", "1"});
   ASSERT_EQ(json.exit_code, 0) << json.err;
-  EXPECT_NE(json.out.find("\"reference\": \"quat\""), std::string::npos) << json.out;
+  EXPECT_NE(json.out.find("\"reference\": {\"backend\": \"newton\", \"rotation\": \"lie\"}"),
+            std::string::npos)
+      << json.out;
+  for (const std::string& key : split(kCompareColumns, ',')) {
+    EXPECT_NE(json.out.find("\"" + key + "\": "), std::string::npos) << key << " in " << json.out;
+  }
+  for (const char* name : names) {
+    EXPECT_NE(json.out.find(std::string("\"rotation\": \"") + name + "\", \"reference\""),
+              std::string::npos)
+        << name << " in " << json.out;
+  }
+  const Result quat_first =
+      run({"compare", "scene.json", "--rotations", "quat,lie", "--json", "--repeat", "1"});
+  ASSERT_EQ(quat_first.exit_code, 0) << quat_first.err;
+  EXPECT_NE(quat_first.out.find("\"reference\": {\"backend\": \"newton\", \"rotation\": \"quat\"}"),
+            std::string::npos)
+      << quat_first.out;
+  // The table names the reference and has a heading per field.
+  const Result text = run({"compare", "scene.json", "--rotations", "rotvec,lie", "--repeat", "1"});
+  ASSERT_EQ(text.exit_code, 0) << text.err;
+  EXPECT_NE(text.out.find("deviations from newton/rotvec"), std::string::npos) << text.out;
+  EXPECT_NE(text.out.find("max ‖g‖"), std::string::npos) << text.out;
+
   const Result unknown = run({"compare", "scene.json", "--rotations", "lie,euler"});
   EXPECT_EQ(unknown.exit_code, 2);
-  EXPECT_NE(unknown.err.find("euler"), std::string::npos) << unknown.err;
+  EXPECT_NE(unknown.err.find("--rotations"), std::string::npos) << unknown.err;
+  EXPECT_NE(unknown.err.find("\"euler\""), std::string::npos) << unknown.err;
+}
+
+TEST_F(Cli, CompareBackendsGivesOneRowPerBackEndAgainstTheFirst) {
+  write_file(dir_ / "scene.json", bolt_frames(20));
+  const auto [r, table] =
+      compare({"scene.json", "--backends", "newton,ceres", "--frames-csv", "frames.csv"});
+  ASSERT_EQ(r.exit_code, 0) << r.out << r.err;
+  // Without --rotations: the scene's parameterisation only.
+  ASSERT_EQ(table.rows.size(), 2u);
+  const char* backends[] = {"newton", "ceres"};
+  for (std::size_t i = 0; i < 2; ++i) {
+    const auto& row = table.rows[i];
+    ASSERT_EQ(row.size(), split(kCompareColumns, ',').size()) << "row " << i;
+    EXPECT_EQ(row[table.column("backend")], backends[i]);
+    EXPECT_EQ(row[table.column("rotation")], "lie");
+    EXPECT_EQ(row[table.column("frames")], "20");
+    EXPECT_EQ(row[table.column("failed")], "0");
+    EXPECT_EQ(row[table.column("unconverged_steps")], "0");
+    EXPECT_GE(std::stod(row[table.column("iterations_mean")]), 1.0) << backends[i];
+    EXPECT_GT(std::stod(row[table.column("step_us")]), 0.0) << backends[i];
+    // The Lie gradient at the end of every step, whichever back-end: finite and small.
+    const double gradient = std::stod(row[table.column("max_final_gradient_norm")]);
+    EXPECT_TRUE(std::isfinite(gradient)) << backends[i];
+    EXPECT_LT(gradient, 1e-3) << backends[i];
+    // Both converge to the tolerance (1e-9 per step): the trajectories agree.
+    EXPECT_LT(std::stod(row[table.column("max_position_deviation")]), 1e-6) << backends[i];
+    EXPECT_LT(std::stod(row[table.column("max_rotation_deviation")]), 1e-6) << backends[i];
+  }
+  EXPECT_EQ(table.rows[0][table.column("reference")], "1");
+  EXPECT_EQ(table.rows[1][table.column("reference")], "0");
+  EXPECT_EQ(table.rows[0][table.column("max_rotation_deviation")], "0");
+  // Newton-only figures: measured for Newton, NaN for Ceres.
+  EXPECT_GE(std::stod(table.rows[0][table.column("condition_mean")]), 1.0);
+  for (const char* column : {"assembly_us", "solve_us", "condition_mean"}) {
+    EXPECT_EQ(table.rows[1][table.column(column)], "nan") << column;
+  }
+  const Csv series = read_csv(dir_ / "frames.csv");
+  EXPECT_EQ(series.header, kCompareFramesHeader);
+  ASSERT_EQ(series.rows.size(), 40u);
+  EXPECT_EQ(series.rows[0][0], "newton");
+  EXPECT_EQ(series.rows[20][0], "ceres");
+
+  // A rod (21 DOFs): the same agreement.
+  write_file(dir_ / "rod.json", small_cantilever());
+  const auto [rod, rod_table] = compare({"rod.json", "--backends", "newton,ceres"});
+  ASSERT_EQ(rod.exit_code, 0) << rod.out << rod.err;
+  ASSERT_EQ(rod_table.rows.size(), 2u);
+  for (const auto& row : rod_table.rows) {
+    EXPECT_EQ(row[rod_table.column("frames")], "10");
+    EXPECT_TRUE(std::isfinite(std::stod(row[rod_table.column("max_final_gradient_norm")])));
+    EXPECT_LT(std::stod(row[rod_table.column("max_position_deviation")]), 1e-6);
+    EXPECT_LT(std::stod(row[rod_table.column("max_rotation_deviation")]), 1e-6);
+  }
+}
+
+TEST_F(Cli, CompareReportsAnUnsupportedPairAsAFailedRow) {
+  write_file(dir_ / "scene.json", bolt_frames(5));
+  const auto [r, table] =
+      compare({"scene.json", "--backends", "newton,ipopt", "--rotations", "lie,quat"});
+  // All four rows are printed; the unsupported one fails the command.
+  EXPECT_EQ(r.exit_code, 4) << r.out << r.err;
+  ASSERT_EQ(table.rows.size(), 4u) << r.out;
+  const char* pairs[][2] = {{"newton", "lie"}, {"newton", "quat"}, {"ipopt", "lie"},
+                            {"ipopt", "quat"}};
+  for (std::size_t i = 0; i < 4; ++i) {
+    EXPECT_EQ(table.rows[i][table.column("backend")], pairs[i][0]) << "row " << i;
+    EXPECT_EQ(table.rows[i][table.column("rotation")], pairs[i][1]) << "row " << i;
+    EXPECT_EQ(table.rows[i][table.column("failed")], i == 3 ? "1" : "0") << "row " << i;
+    EXPECT_EQ(table.rows[i][table.column("frames")], i == 3 ? "0" : "5") << "row " << i;
+  }
+  // The reason is SolverOptions::validate's, the last field, quoted (it holds commas and
+  // quotes); the other rows' is empty.
+  const auto lines = split(r.out, '\n');
+  ASSERT_EQ(lines.size(), 6u) << r.out;  // header, 4 rows, "" after the final line break
+  EXPECT_NE(lines[4].find(",1,\"solver.rotation: \"\"quat\"\" is not available with the ipopt "
+                          "backend"),
+            std::string::npos)
+      << lines[4];
+  EXPECT_EQ(lines[4].back(), '"') << lines[4];
+  for (std::size_t i = 1; i < 4; ++i) EXPECT_EQ(lines[i].back(), ',') << lines[i];
+  EXPECT_NE(r.err.find("ipopt/quat: solver.rotation"), std::string::npos) << r.err;
+  EXPECT_EQ(r.err.find("newton/"), std::string::npos) << r.err;
+  EXPECT_EQ(table.rows[3][table.column("max_rotation_deviation")], "nan");
+
+  // The table says so too.
+  const Result text = run({"compare", "scene.json", "--backends", "ipopt", "--rotations",
+                           "quat", "--repeat", "1"});
+  EXPECT_EQ(text.exit_code, 4) << text.out << text.err;
+  EXPECT_NE(text.out.find("not available with the ipopt backend"), std::string::npos)
+      << text.out;
+}
+
+TEST_F(Cli, CompareRejectsAnUnknownBackEnd) {
+  write_file(dir_ / "scene.json", bolt_frames(5));
+  const Result r = run({"compare", "scene.json", "--backends", "newton,cholmod"});
+  EXPECT_EQ(r.exit_code, 2) << r.out << r.err;
+  EXPECT_NE(r.err.find("--backends: unknown back-end \"cholmod\""), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("newton, ceres or ipopt"), std::string::npos) << r.err;
+  EXPECT_EQ(r.out, "");  // nothing run
 }
 
 // One Newton update per step against a tolerance one update cannot meet: with h = 0.1 s the

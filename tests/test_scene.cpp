@@ -432,16 +432,60 @@ TEST(SceneErrors, EmptyBodies) {
   expect_rejected(R"({"time_step": 0.01, "frames": 1, "bodies": []})", "bodies", "at least one");
 }
 
-TEST(SceneErrors, UnavailableAndUnknownSolverChoices) {
-  for (const char* backend : {"ceres", "ipopt"}) {
-    expect_rejected(scene(kBody, std::string(R"("solver": {"backend": ")") + backend + "\"}, "),
-                    "solver.backend", "not available yet");
-  }
+TEST(SceneErrors, UnknownSolverChoices) {
   expect_rejected(scene(kBody, R"("solver": {"backend": "gauss-seidel"}, )"), "solver.backend",
                   "unknown backend");
   expect_rejected(scene(kBody, R"("solver": {"rotation": "euler"}, )"), "solver.rotation",
                   "unknown");
   expect_rejected(scene(kBody, R"("solver": {"backend": 1}, )"), "solver.backend", "string");
+}
+
+TEST(Scene, BackendsAndTheirOptions) {
+  const Scene ceres = parse_scene(
+      scene(kBody, R"("solver": {"backend": "ceres", "ceres": {"linear_solver": "dense_qr",
+            "trust_region_strategy": "dogleg", "verbose": true}}, )"),
+      kSource);
+  EXPECT_EQ(ceres.solver.backend, Backend::kCeres);
+  EXPECT_EQ(ceres.solver.ceres.linear_solver, "dense_qr");
+  EXPECT_EQ(ceres.solver.ceres.trust_region_strategy, "dogleg");
+  EXPECT_TRUE(ceres.solver.ceres.verbose);
+  const Scene ipopt = parse_scene(
+      scene(kBody, R"("solver": {"backend": "ipopt", "rotation": "rotvec", "ipopt": {
+            "hessian_approximation": "limited-memory", "print_level": 3,
+            "derivative_test": "second-order", "output_file": "ipopt.log",
+            "max_recentrings": 1}}, )"),
+      kSource);
+  EXPECT_EQ(ipopt.solver.backend, Backend::kIpopt);
+  EXPECT_EQ(ipopt.solver.ipopt.hessian_approximation, "limited-memory");
+  EXPECT_EQ(ipopt.solver.ipopt.print_level, 3);
+  EXPECT_EQ(ipopt.solver.ipopt.derivative_test, "second-order");
+  EXPECT_EQ(ipopt.solver.ipopt.output_file, "ipopt.log");
+  EXPECT_EQ(ipopt.solver.ipopt.max_recentrings, 1);
+  // Defaults.
+  const Scene plain = parse_scene(scene(), kSource);
+  EXPECT_EQ(plain.solver.backend, Backend::kNewton);
+  EXPECT_EQ(plain.solver.ceres.linear_solver, "auto");
+  EXPECT_EQ(plain.solver.ipopt.hessian_approximation, "exact");
+}
+
+TEST(SceneErrors, BackendOptions) {
+  expect_rejected(scene(kBody, R"("solver": {"ceres": {"linear_solver": "cholesky"}}, )"),
+                  "solver.ceres.linear_solver", "unknown linear solver");
+  expect_rejected(scene(kBody, R"("solver": {"ceres": {"trust_region_strategy": "lbfgs"}}, )"),
+                  "solver.ceres.trust_region_strategy", "unknown strategy");
+  expect_rejected(scene(kBody, R"("solver": {"ceres": {"verbose": 1}}, )"), "solver.ceres.verbose",
+                  "true or false");
+  expect_rejected(scene(kBody, R"("solver": {"ceres": {"threads": 2}}, )"), "solver.ceres.threads");
+  expect_rejected(scene(kBody, R"("solver": {"ipopt": {"hessian_approximation": "bfgs"}}, )"),
+                  "solver.ipopt.hessian_approximation", "unknown approximation");
+  expect_rejected(scene(kBody, R"("solver": {"ipopt": {"print_level": 13}}, )"),
+                  "solver.ipopt.print_level", "[0, 12]");
+  expect_rejected(scene(kBody, R"("solver": {"ipopt": {"derivative_test": "yes"}}, )"),
+                  "solver.ipopt.derivative_test", "unknown test");
+  expect_rejected(scene(kBody, R"("solver": {"ipopt": {"max_recentrings": -1}}, )"),
+                  "solver.ipopt.max_recentrings");
+  expect_rejected(scene(kBody, R"("solver": {"backend": "ipopt", "rotation": "quat"}, )"),
+                  "solver.rotation", "not available with the ipopt backend");
 }
 
 TEST(Scene, RotationParameterisations) {
