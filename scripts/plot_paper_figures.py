@@ -137,7 +137,8 @@ def plot_fig4(out, h):
 
 
 def summary_rows(path):
-    return [dict(r, **{k: num(r[k]) for k in r if k not in ("backend", "rotation", "failure")}) for r in read_csv(path)]
+    text = ("backend", "rotation", "failure")
+    return [dict(r, **{k: num(r[k]) for k in r if k not in text}) for r in read_csv(path)]
 
 
 def write_bolt_summary(out):
