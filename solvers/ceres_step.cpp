@@ -377,9 +377,19 @@ class CeresStepSolver final : public StepSolver {
       // Ceres's iteration 0 only evaluates the starting point; it counts as a successful step.
       int accepted = 0;
       for (const ceres::IterationSummary& it : summary.iterations) {
-        if (it.iteration > 0 && it.step_is_successful) ++accepted;
+        if (it.iteration > 0 && it.step_is_successful) {
+          // Paper Fig. 4's diagnostics: Ceres's gradient (in the block's coordinates, like
+          // Newton's) at the start and after the first accepted step of the first round.
+          if (accepted == 0 && std::isnan(report.second_gradient_norm) && iterations == 0) {
+            report.second_gradient_norm = it.gradient_norm;
+          }
+          ++accepted;
+        }
       }
-      iterations += static_cast<int>(summary.iterations.size()) - 1;
+      if (iterations == 0 && !summary.iterations.empty()) {
+        report.first_gradient_norm = summary.iterations.front().gradient_norm;
+      }
+      iterations += std::max(0, static_cast<int>(summary.iterations.size()) - 1);
       report.assemblies += summary.num_jacobian_evaluations;
       if (options_.measure_time) {
         report.assembly_seconds +=
@@ -402,7 +412,6 @@ class CeresStepSolver final : public StepSolver {
       report.assemblies += test.assemblies;
       report.assembly_seconds += test.assembly_seconds;
       report.solve_seconds += test.solve_seconds;
-      if (std::isnan(report.first_gradient_norm)) report.first_gradient_norm = test.gradient_norm;
       if (test.status == StepStatus::kNonFinite) {
         restore(q);
         report.status = StepStatus::kNonFinite;
