@@ -244,10 +244,13 @@ class FormCost final : public LabeledCost {
   int dofs_ = 0;
 };
 
-// Stops Ceres once a step it computed is at most `threshold` long (2-norm in tangent space,
-// which bounds the ∞-norm of the shared convergence test), accepted or not: near the minimum
-// the cost change of such a step is below the round-off of the cost itself, so Ceres's
-// acceptance test is noise there.
+// Stops Ceres once a step it computed is at most `threshold` long (the 2-norm of the change of
+// the parameters, ≥ the ∞-norm of the shared test's step; halved for quaternions, see
+// solve), whether Ceres accepted it, rejected it, or found it invalid (step_norm 0: a linear
+// solver failure, or a predicted decrease ≤ 0 from round-off): near the minimum the cost
+// change of such a step is below the round-off of the cost itself, so Ceres's acceptance
+// test is noise there. The shared test then decides; a round that accepted nothing ends the
+// solve as stalled.
 class StopOnSmallStep final : public ceres::IterationCallback {
  public:
   double threshold = 0.0;
@@ -270,6 +273,7 @@ class CeresStepSolver final : public StepSolver {
   CeresStepSolver(Component component, const SolverOptions& options) : options_(options) {
     SolverOptions lie = options;
     lie.rotation = RotationParameterization::kLie;
+    lie.measure_condition = false;  // the check needs no eigendecomposition
     newton_ = make_newton(std::move(component), lie);
     initialize_logging();
   }
@@ -330,7 +334,10 @@ class CeresStepSolver final : public StepSolver {
             } else {
               for (int i = 0; i < n; ++i) x[k][i] = x0[i] + delta(i);
             }
-            cost->Evaluate(x.data(), sign > 0 ? r_plus.data() : r_minus.data(), nullptr);
+            if (!cost->Evaluate(x.data(), sign > 0 ? r_plus.data() : r_minus.data(), nullptr)) {
+              out.worst_error = std::numeric_limits<double>::infinity();
+              out.worst_term = cost->label();
+            }
           }
           std::copy(x0.begin(), x0.end(), x[k]);
           for (int i = 0; i < m; ++i) numeric(i, j) = (r_plus[i] - r_minus[i]) / (2.0 * kStep);
@@ -352,15 +359,16 @@ class CeresStepSolver final : public StepSolver {
   StepReport solve(State& q) override {
     if (problem_ == nullptr) build(q);
     const Component& c = component();
-    for (std::size_t i = 0; i < c.points.size(); ++i) entry_.points[i] = q.points[c.points[i].index];
-    for (std::size_t i = 0; i < c.rotations.size(); ++i) {
-      entry_.rotations[i] = q.rotations[c.rotations[i].index];
-    }
+    entry_.save(c, q);
     scratch_ = q;  // the constant (clamped) blocks; same sizes: no allocation
 
     StepReport report;
     ceres::Solver::Options solver = solver_options_;
-    stop_.threshold = options_.tolerance;
+    // Ceres measures a step as the change of the stored parameters: for a quaternion block
+    // ‖Q(q)δ‖ = ½‖δ‖, half the rotation.
+    const double step_scale =
+        options_.rotation == RotationParameterization::kQuaternion ? 0.5 : 1.0;
+    stop_.threshold = step_scale * options_.tolerance;
     int iterations = 0;
     // Rounds until the test holds or the iterations are used up. Gauss–Newton converges only
     // linearly where residuals stay large at the minimum (inertia under load, a bent rod), so
@@ -378,8 +386,9 @@ class CeresStepSolver final : public StepSolver {
       int accepted = 0;
       for (const ceres::IterationSummary& it : summary.iterations) {
         if (it.iteration > 0 && it.step_is_successful) {
-          // Paper Fig. 4's diagnostics: Ceres's gradient (in the block's coordinates, like
-          // Newton's) at the start and after the first accepted step of the first round.
+          // Paper Fig. 4's diagnostics: Ceres's gradient norm ‖x − Plus(x, −g)‖ (for chart
+          // blocks ‖g‖ in the chart's coordinates, like Newton's; about ½‖g‖ for quaternion
+          // blocks) at the start and after the first accepted step of the first round.
           if (accepted == 0 && std::isnan(report.second_gradient_norm) && iterations == 0) {
             report.second_gradient_norm = it.gradient_norm;
           }
@@ -427,28 +436,20 @@ class CeresStepSolver final : public StepSolver {
         report.message = "ceres: stalled (" + summary.message + ")";
         break;
       }
-      stop_.threshold = std::max(0.1 * stop_.threshold, 1e-3 * options_.tolerance);
+      stop_.threshold = std::max(0.1 * stop_.threshold, 1e-3 * step_scale * options_.tolerance);
     }
     report.iterations = iterations;
     if (!report.converged() && report.message.empty()) {
       report.message = "ceres: iterations used up";
     }
     if (!report.converged()) {
-      char step[32];
-      std::snprintf(step, sizeof step, "%.3g", report.step_norm);
-      report.message += std::string("; Newton step ") + step + " > tolerance";
+      report.message += "; Newton step " + short_number(report.step_norm) + " > tolerance";
     }
     return report;
   }
 
  private:
-  void restore(State& q) const {
-    const Component& c = component();
-    for (std::size_t i = 0; i < c.points.size(); ++i) q.points[c.points[i].index] = entry_.points[i];
-    for (std::size_t i = 0; i < c.rotations.size(); ++i) {
-      q.rotations[c.rotations[i].index] = entry_.rotations[i];
-    }
-  }
+  void restore(State& q) const { entry_.restore(component(), q); }
 
   // Per solve: the folded loads and the offset-root constants (c = β − V(q)).
   void refresh(const State& q) {
@@ -473,8 +474,7 @@ class CeresStepSolver final : public StepSolver {
   void build(const State& q) {
     const Component& c = component();
     const IncrementalPotential& P = c.potential;
-    entry_.points.resize(c.points.size());
-    entry_.rotations.resize(c.rotations.size());
+    entry_ = ComponentSnapshot(c);
     scratch_ = q;
 
     // Parameter blocks.
@@ -594,7 +594,7 @@ class CeresStepSolver final : public StepSolver {
   std::unique_ptr<StepSolver> newton_;  // owns the component; runs the convergence test
   Parameters parameters_;
   State scratch_;
-  State entry_;  // the component's blocks on entry (points, rotations in component order)
+  ComponentSnapshot entry_;  // the component's blocks on entry
   std::vector<Vector3> loads_;          // folded loads, per translational inertia term
   std::deque<double> offset_roots_;     // c per offset-root residual (stable addresses)
   std::vector<std::function<void(const State&)>> refresh_;

@@ -28,15 +28,18 @@
 // re-orthonormalisation in Plus. The lift was removed.
 //
 // Linear solver: DENSE_QR up to kDenseLimit DOFs, SPARSE_NORMAL_CHOLESKY with SuiteSparse
-// beyond (CeresOptions::linear_solver). The problem (parameter blocks, residual blocks, the
-// symbolic analysis Ceres caches) is built once, at the first solve; later solves only reload
-// the parameters.
+// beyond (CeresOptions::linear_solver). The problem (parameter blocks, residual blocks) is
+// built once, at the first solve; later solves only reload the parameters (ceres::Solve still
+// preprocesses it and analyses the sparsity anew every time).
 //
-// Stopping: Ceres stops after a successful step no longer than `tolerance` (2-norm in tangent
-// space ≥ the ∞-norm); then the shared convergence test (step_solver.hpp) runs once with the
+// Stopping: Ceres stops once it computes a step no longer than `tolerance` (accepted or not;
+// 2-norm ≥ the ∞-norm); then the shared convergence test (step_solver.hpp) runs with the
 // exact Lie Hessian. If it fails (Gauss–Newton converges only linearly where residuals stay
-// large at the minimum: inertia under load, stretched springs), Ceres goes on with a ten times
-// smaller threshold, at most three rounds within max_iterations iterations in total.
+// large at the minimum: inertia under load, stretched springs), another round starts where
+// Ceres stopped, with a ten times smaller threshold (down to 1e-3 tolerance), until the
+// iterations (max_iterations in all) are used up or a round accepts no step: Ceres's
+// acceptance test compares cost values and cannot see decreases below their round-off, so it
+// stalls there; the step is then reported unconverged ("ceres: stalled").
 // Ceres FAILURE → StepStatus::kSolverFailed with Ceres's message, the state restored.
 //
 // Threads: the cost functions of a component share one scratch state, so Ceres runs them on

@@ -45,6 +45,7 @@ class LowerTriangleSink {
 
   void clear() {
     next_call_ = 0;
+    order_broken_ = false;  // judged per assembly
     std::fill(values_.begin(), values_.end(), 0.0);
   }
 
@@ -124,9 +125,11 @@ class LowerTriangleSink {
   const std::vector<int>& rows() const { return rows_; }
   const std::vector<int>& columns() const { return columns_; }
   const std::vector<double>& values() const { return values_; }
-  // True if an assembly called add in another order than the recorded one (a broken
-  // contract: the values are then wrong and must not be used).
-  bool order_broken() const { return order_broken_; }
+  // True if the last assembly called add in another order than the recorded one, or made
+  // fewer calls (a broken contract: the values are then wrong and must not be used).
+  bool order_broken() const {
+    return order_broken_ || (recorded_ && !discard_ && next_call_ != calls_.size());
+  }
 
  private:
   bool discard_ = false;
@@ -419,8 +422,7 @@ class IpoptStepSolver final : public StepSolver {
  public:
   IpoptStepSolver(Component component, const SolverOptions& options)
       : options_(options),
-        entry_points_(component.points.size()),
-        entry_rotations_(component.rotations.size()) {
+        entry_(component) {
     if (options.rotation == RotationParameterization::kQuaternion) {
       throw ModelError("solver.rotation",
                        "\"quat\" is not available with the ipopt backend; use lie or rotvec");
@@ -475,11 +477,7 @@ class IpoptStepSolver final : public StepSolver {
   StepReport solve(State& q) override {
     StepReport report;
     const Component& c = newton_->component();
-    for (std::size_t i = 0; i < c.points.size(); ++i)
-      entry_points_[i] = q.points[c.points[i].index];
-    for (std::size_t i = 0; i < c.rotations.size(); ++i) {
-      entry_rotations_[i] = q.rotations[c.rotations[i].index];
-    }
+    entry_.save(c, q);
     nlp_->begin_step();
     double ipopt_seconds = 0.0;  // Ipopt's wall time, less our evaluations within it
     double test_assembly_seconds = 0.0, test_solve_seconds = 0.0;
@@ -494,14 +492,7 @@ class IpoptStepSolver final : public StepSolver {
         report.assembly_seconds = nlp_->evaluation_seconds() + test_assembly_seconds;
         report.solve_seconds = ipopt_seconds + test_solve_seconds;
       }
-      if (!report.state_updated()) {
-        for (std::size_t i = 0; i < c.points.size(); ++i) {
-          q.points[c.points[i].index] = entry_points_[i];
-        }
-        for (std::size_t i = 0; i < c.rotations.size(); ++i) {
-          q.rotations[c.rotations[i].index] = entry_rotations_[i];
-        }
-      }
+      if (!report.state_updated()) entry_.restore(c, q);
       return report;
     };
 
@@ -552,7 +543,7 @@ class IpoptStepSolver final : public StepSolver {
                       std::string("Ipopt: ") + status_name(status) + " in " + which + ", " +
                           std::to_string(report.iterations) +
                           " iterations in all; Newton step at the final state " +
-                          std::to_string(test.step_norm) + " > tolerance");
+                          short_number(test.step_norm) + " > tolerance");
       }
     }
   }
@@ -577,8 +568,7 @@ class IpoptStepSolver final : public StepSolver {
   StepNlp* nlp_ = nullptr;              // owned by tnlp_
   Ipopt::SmartPtr<Ipopt::TNLP> tnlp_;
   Ipopt::SmartPtr<Ipopt::IpoptApplication> app_;
-  std::vector<Vector3> entry_points_;
-  std::vector<Matrix3> entry_rotations_;
+  ComponentSnapshot entry_;
 };
 
 }  // namespace

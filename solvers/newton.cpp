@@ -31,10 +31,8 @@ Newton<System>::Newton(Component component, const SolverOptions& options)
       options_(options),
       system_(make_system<System>(component_, options)),
       delta_(component_.dofs),
-      saved_points_(component_.points.size()),
-      entry_points_(component_.points.size()),
-      saved_rotations_(component_.rotations.size()),
-      entry_rotations_(component_.rotations.size()) {
+      saved_(component_),
+      entry_(component_) {
   const std::size_t n = component_.rotations.size();
   if (options_.rotation == RotationParameterization::kRotationVector) {
     chart_ = RotationVectorChart(component_);
@@ -60,12 +58,7 @@ void Newton<System>::enter_parameterization(State& q) {
 
 template <class System>
 void Newton<System>::save(const State& q) {
-  for (std::size_t i = 0; i < component_.points.size(); ++i) {
-    saved_points_[i] = q.points[component_.points[i].index];
-  }
-  for (std::size_t i = 0; i < component_.rotations.size(); ++i) {
-    saved_rotations_[i] = q.rotations[component_.rotations[i].index];
-  }
+  saved_.save(component_, q);
   if (options_.rotation == RotationParameterization::kRotationVector) chart_.save();
   for (std::size_t i = 0; i < saved_quaternions_.size(); ++i) {
     saved_quaternions_[i] = quaternions_[i];
@@ -74,12 +67,7 @@ void Newton<System>::save(const State& q) {
 
 template <class System>
 void Newton<System>::restore(State& q) {
-  for (std::size_t i = 0; i < component_.points.size(); ++i) {
-    q.points[component_.points[i].index] = saved_points_[i];
-  }
-  for (std::size_t i = 0; i < component_.rotations.size(); ++i) {
-    q.rotations[component_.rotations[i].index] = saved_rotations_[i];
-  }
+  saved_.restore(component_, q);
   if (options_.rotation == RotationParameterization::kRotationVector) chart_.restore();
   for (std::size_t i = 0; i < saved_quaternions_.size(); ++i) {
     quaternions_[i] = saved_quaternions_[i];
@@ -136,20 +124,10 @@ template <class System>
 StepReport Newton<System>::solve(State& q, int max_iterations) {
   StepReport report;
   // Keep the entry state so that a failed step leaves q untouched.
-  for (std::size_t i = 0; i < component_.points.size(); ++i) {
-    entry_points_[i] = q.points[component_.points[i].index];
-  }
-  for (std::size_t i = 0; i < component_.rotations.size(); ++i) {
-    entry_rotations_[i] = q.rotations[component_.rotations[i].index];
-  }
+  entry_.save(component_, q);
   auto fail = [&](StepStatus status) {
     report.status = status;
-    for (std::size_t i = 0; i < component_.points.size(); ++i) {
-      q.points[component_.points[i].index] = entry_points_[i];
-    }
-    for (std::size_t i = 0; i < component_.rotations.size(); ++i) {
-      q.rotations[component_.rotations[i].index] = entry_rotations_[i];
-    }
+    entry_.restore(component_, q);
     return report;
   };
 

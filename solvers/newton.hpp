@@ -83,8 +83,7 @@ class Newton final : public StepSolver {
   SolverOptions options_;
   System system_;
   Vector delta_;
-  std::vector<Vector3> saved_points_, entry_points_;
-  std::vector<Matrix3> saved_rotations_, entry_rotations_;
+  ComponentSnapshot saved_, entry_;  // line-search backtracking; restore on failure
   // Rotation vectors: the chart (current and saved r's and J_l(r)'s).
   RotationVectorChart chart_;
   // Quaternions: current and saved, per rotation of the component.

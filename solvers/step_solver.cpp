@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <stdexcept>
 #include <initializer_list>
 #include <string>
 
@@ -127,13 +129,19 @@ void StepReport::merge(const StepReport& other) {
   if (!other.message.empty()) message += (message.empty() ? "" : "; ") + other.message;
 }
 
+std::string short_number(double x) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.3g", x);
+  return text;
+}
+
 std::unique_ptr<StepSolver> make_step_solver(Component component, const SolverOptions& options) {
   switch (options.backend) {
     case Backend::kNewton: return make_newton(std::move(component), options);
     case Backend::kCeres: return make_ceres_step_solver(std::move(component), options);
     case Backend::kIpopt: return make_ipopt_step_solver(std::move(component), options);
   }
-  return nullptr;
+  throw std::logic_error("make_step_solver: unknown back-end");
 }
 
 }  // namespace liedyn

@@ -15,13 +15,15 @@
 //   δ = −H⁻¹ g,   ‖δ‖∞ ≤ tolerance   with H positive definite (no regularisation),
 // i.e. the quadratic model puts the minimiser within `tolerance` metres and radians. Newton
 // evaluates it on its own iterates; Ceres and Ipopt stop on their own step sizes and are
-// then checked once with StepSolver::check (its cost is included in their time).
+// then checked with StepSolver::check, after each Ceres round or Ipopt solve (its cost is
+// included in their time).
 
 #include <limits>
 #include <memory>
 #include <optional>
 #include <string>
 #include <string_view>
+#include <vector>
 
 #include "../lib/incremental_potential.hpp"
 
@@ -125,7 +127,11 @@ struct StepReport {
   double step_norm = 0.0;          // ‖δ‖∞ of the last Newton step computed
   int assemblies = 0;              // gradient + Hessian assemblies (iterations + final check)
   double assembly_seconds = 0.0;   // with SolverOptions::measure_time: time in assemblies,
-  double solve_seconds = 0.0;      // and in factorisations + triangular solves
+  double solve_seconds = 0.0;      // and in factorisations + triangular solves. Ceres: its
+                                   // residual + Jacobian evaluation time, and its linear-solver
+                                   // time; Ipopt: our evaluations, and the rest of its wall
+                                   // time; both plus their checks'. Not comparable across
+                                   // back-ends (liedyn compare shows them for Newton only).
   // Paper Fig. 4's diagnostics, in the parameterisation's own coordinates: ‖g‖₂ at the first
   // and second assembly (NaN if there was none) and, with SolverOptions::measure_condition,
   // the 2-norm condition number |λ|max/|λ|min of the first Hessian (NaN otherwise). Merged
@@ -143,6 +149,35 @@ struct StepReport {
   // Merges the report of another component of the same time step.
   void merge(const StepReport& other);
 };
+
+// The positions and rotations of a component's DOF blocks, copied out of a State and back: a
+// failed solve restores its entry state, Newton's line search its last iterate. Sized at
+// construction; save and restore never allocate.
+class ComponentSnapshot {
+ public:
+  ComponentSnapshot() = default;
+  explicit ComponentSnapshot(const Component& c)
+      : points_(c.points.size()), rotations_(c.rotations.size()) {}
+  void save(const Component& c, const State& q) {
+    for (std::size_t i = 0; i < c.points.size(); ++i) points_[i] = q.points[c.points[i].index];
+    for (std::size_t i = 0; i < c.rotations.size(); ++i) {
+      rotations_[i] = q.rotations[c.rotations[i].index];
+    }
+  }
+  void restore(const Component& c, State& q) const {
+    for (std::size_t i = 0; i < c.points.size(); ++i) q.points[c.points[i].index] = points_[i];
+    for (std::size_t i = 0; i < c.rotations.size(); ++i) {
+      q.rotations[c.rotations[i].index] = rotations_[i];
+    }
+  }
+
+ private:
+  std::vector<Vector3> points_;
+  std::vector<Matrix3> rotations_;
+};
+
+// x with three significant digits ("%.3g"), for back-end messages.
+std::string short_number(double x);
 
 class StepSolver {
  public:
