@@ -460,4 +460,21 @@ inline Matrix3 rotation_at(double angle, std::mt19937& rng) {
   return so3::exp(angle * random_unit(rng));
 }
 
+// A random unit vector perpendicular to the unit vector n.
+inline Vector3 random_perpendicular(const Vector3& n, std::mt19937& rng) {
+  const Vector3 u = random_unit(rng);
+  return (u - u.dot(n) * n).normalized();
+}
+
+// The power of two nearest to x > 0 (scalings by it are exact).
+inline double power_of_two_near(double x) { return std::exp2(std::round(std::log2(x))); }
+
+// "what a b c" at full precision, for SCOPED_TRACE.
+inline std::string trace(const char* what, double a, double b = 0.0, double c = 0.0) {
+  std::ostringstream s;
+  s.precision(17);
+  s << what << " " << a << " " << b << " " << c;
+  return s.str();
+}
+
 }  // namespace liedyn::fd

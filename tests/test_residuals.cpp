@@ -52,24 +52,13 @@ using fd::kAngles;
 using fd::random_unit;
 using fd::random_vector;
 using fd::rotation_at;
+using fd::trace;
+using fd::power_of_two_near;
+using fd::random_perpendicular;
 
 constexpr double kPi = std::numbers::pi;
 constexpr double kEps = std::numeric_limits<double>::epsilon();
 constexpr double kDeg = kPi / 180.0;
-
-std::string trace(const char* what, double a, double b = 0.0, double c = 0.0) {
-  std::ostringstream s;
-  s.precision(17);
-  s << what << " " << a << " " << b << " " << c;
-  return s.str();
-}
-
-double power_of_two_near(double x) { return std::exp2(std::round(std::log2(x))); }
-
-Vector3 random_perpendicular(const Vector3& n, std::mt19937& rng) {
-  const Vector3 u = random_unit(rng);
-  return (u - u.dot(n) * n).normalized();
-}
 
 // ----------------------------------------------------------------------------------------
 // One test case of a term's residual form, and the three checks.

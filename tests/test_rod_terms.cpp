@@ -32,6 +32,9 @@ using fd::kAngles;
 using fd::random_unit;
 using fd::random_vector;
 using fd::rotation_at;
+using fd::trace;
+using fd::power_of_two_near;
+using fd::random_perpendicular;
 
 constexpr double kPi = std::numbers::pi;
 constexpr double kEps = std::numeric_limits<double>::epsilon();
@@ -39,20 +42,6 @@ constexpr double kDeg = kPi / 180.0;
 
 
 // A unit vector perpendicular to n.
-Vector3 random_perpendicular(const Vector3& n, std::mt19937& rng) {
-  const Vector3 u = random_unit(rng);
-  return (u - u.dot(n) * n).normalized();
-}
-
-std::string trace(const char* what, double a, double b = 0.0, double c = 0.0) {
-  std::ostringstream s;
-  s.precision(17);
-  s << what << " " << a << " " << b << " " << c;
-  return s.str();
-}
-
-double power_of_two_near(double x) { return std::exp2(std::round(std::log2(x))); }
-
 // The term seen in point coordinates y = x/s (s a power of two: every scaling is exact):
 //   ψ(y, R) = Ψ(s y, R),  ∂ψ/∂y = s ∂Ψ/∂x,  ∂²ψ/∂y² = s² ∂²Ψ/∂x²,  ∂²ψ/∂y∂θ = s ∂²Ψ/∂x∂θ.
 template <class Term>

@@ -36,6 +36,7 @@ using fd::kAngles;
 using fd::random_unit;
 using fd::random_vector;
 using fd::rotation_at;
+using fd::trace;
 
 constexpr double kPi = std::numbers::pi;
 constexpr double kEps = std::numeric_limits<double>::epsilon();
@@ -45,13 +46,6 @@ constexpr double kEps = std::numeric_limits<double>::epsilon();
 Matrix3 body_inertia(double scale, std::mt19937& rng) {
   const Matrix3 Q = rotation_at(1.3, rng);
   return scale * Q * Eigen::Vector3d(1.0, 1.6, 2.2).asDiagonal() * Q.transpose();
-}
-
-std::string trace(const char* what, double a, double b = 0.0, double c = 0.0) {
-  std::ostringstream s;
-  s.precision(17);
-  s << what << " " << a << " " << b << " " << c;
-  return s.str();
 }
 
 // ----------------------------------------------------------------------------------------
