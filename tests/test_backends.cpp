@@ -17,6 +17,7 @@
 #include <string>
 #include <vector>
 
+#include "fd_check.hpp"
 #include "lib/so3.hpp"
 #include "problems/scene.hpp"
 #include "rod_models.hpp"
@@ -140,6 +141,49 @@ TEST(Backends, CeresGradientCheckPassesOnEveryTerm) {
         }
         const CeresGradientCheck check = check_ceres_gradients(std::move(c), options, q);
         EXPECT_GT(check.residual_blocks, 0);
+        EXPECT_LE(check.worst_error, 1e-6) << check.worst_term;
+      }
+    }
+  }
+}
+
+// The same check at the extremes: a body in every orientation of fd::kAngles (0, 1e-9, 1e-4,
+// …, π − 1e-6, π, near 2π), with tiny and huge masses, time steps and loads, and with a torque
+// and a force off its centre (offset-root residuals) beside the folded gravity; lie, rotvec
+// (whose chart at ‖r‖ near π and beyond exercises J_l far from the identity) and quat.
+TEST(Backends, CeresGradientCheckAtTheExtremes) {
+  std::mt19937 rng(9);
+  for (const double angle : fd::kAngles) {
+    for (const double scale : {1e-6, 1.0, 1e6}) {
+      Model model;
+      model.time_step = scale < 1.0 ? 1e-5 : (scale > 1.0 ? 1.0 : 0.01);
+      model.gravity = Vector3(0.0, 0.0, -9.81);
+      RigidBody b;
+      b.mass = scale;
+      b.inertia = scale * Matrix3(Vector3(0.02, 0.03, 0.04).asDiagonal());
+      b.orientation = fd::rotation_at(angle, rng);
+      b.angular_velocity = Vector3(1.0, -2.0, 0.5);
+      model.bodies.push_back(b);
+      model.forces.push_back(
+          ForceSpec{BodyPoint{0, Vector3(0.1, 0.0, 0.05)}, scale * Vector3(0.0, 3.0, 1.0)});
+      model.torques.push_back(TorqueSpec{0, scale * Vector3(0.2, 0.0, -0.1)});
+      for (const auto rotation : {RotationParameterization::kLie,
+                                  RotationParameterization::kRotationVector,
+                                  RotationParameterization::kQuaternion}) {
+        SCOPED_TRACE(fd::trace(to_string(rotation), angle, scale));
+        SolverOptions options;
+        options.backend = Backend::kCeres;
+        options.rotation = rotation;
+        std::vector<Component> components = build_components(model);
+        ASSERT_EQ(components.size(), 1u);
+        Component& c = components[0];
+        const State q0 = model.initial_state();
+        c.potential.begin_step(q0, model.initial_step());
+        State q = q0;  // off the minimiser: a small turn and shift
+        q.rotations[0] = so3::exp(Vector3(1e-3, -2e-3, 5e-4)) * q.rotations[0];
+        q.points[0] += Vector3(1e-3, 2e-3, -1e-3);
+        const CeresGradientCheck check = check_ceres_gradients(std::move(c), options, q);
+        EXPECT_EQ(check.residual_blocks, 4);  // two inertias, the force, the torque
         EXPECT_LE(check.worst_error, 1e-6) << check.worst_term;
       }
     }
