@@ -6,10 +6,17 @@
 
 namespace liedyn {
 
-void IncrementalPotential::begin_step(const State& previous, const Step& previous_step) {
+void IncrementalPotential::begin_step(const State& previous, const Step& previous_step,
+                                      int frame) {
   for (auto& t : translational_inertia) t.begin_step(previous, previous_step);
   for (auto& t : rotational_inertia) t.begin_step(previous, previous_step);
-  for (auto& t : torques) t.begin_step(previous, previous_step);
+  for (auto& t : torques) {
+    t.begin_step(previous, previous_step);
+    t.begin_frame(frame);
+  }
+  for (auto& t : forces) t.begin_frame(frame);
+  for (auto& t : rod_bend_twist) t.begin_frame(frame);
+  for (auto& t : cables) t.begin_frame(frame);
 }
 
 void IncrementalPotential::set_load_scale(double lambda) {
@@ -119,6 +126,7 @@ std::vector<Component> build_components(const Model& model) {
     term.offsets = offsets_of(f.at);
     term.at = attach(f.at);
     term.force = f.force;
+    term.control = f.control;
     components[component_of[f.at.body]].potential.forces.push_back(term);
   }
   for (const TorqueSpec& t : model.torques) {
@@ -126,6 +134,7 @@ std::vector<Component> build_components(const Model& model) {
     term.offsets = {rotation_offset[t.body]};
     term.rotation = t.body;
     term.torque = t.torque;
+    term.control = t.control;
     components[component_of[t.body]].potential.torques.push_back(term);
   }
   for (const SpringSpec& s : model.springs) {
@@ -136,6 +145,7 @@ std::vector<Component> build_components(const Model& model) {
     term.b = attach(s.b);
     term.stiffness = s.stiffness;
     term.rest_length = s.rest_length;
+    term.stiffness_slot = s.stiffness_slot;
     const int body = s.a.body >= 0 ? s.a.body : s.b.body;
     components[component_of[body]].potential.springs.push_back(term);
   }
@@ -204,6 +214,7 @@ Component build_rod_component(const Model& model, int r) {
     stretch.node1 = model.rod_point(r, j + 1);
     stretch.rest_length = d.rest_length[j];
     stretch.stiffness = rod.stretch_stiffness;
+    stretch.stiffness_slot = rod.stretch_stiffness_slot;
     p.rod_stretch.push_back(stretch);
     RodShear shear;
     shear.offsets = {node_offset[j], node_offset[j + 1], edge_offset[j]};
@@ -212,6 +223,7 @@ Component build_rod_component(const Model& model, int r) {
     shear.edge = model.rod_rotation(r, j);
     shear.rest_length = d.rest_length[j];
     shear.stiffness = rod.shear_stiffness;
+    shear.stiffness_slot = rod.shear_stiffness_slot;
     p.rod_shear.push_back(shear);
   }
   for (int i = 1; i + 1 < n; ++i) {
@@ -222,7 +234,23 @@ Component build_rod_component(const Model& model, int r) {
     bend.rest_length = d.voronoi_length[i - 1];
     bend.stiffness = rod.bending_stiffness;
     bend.rest_darboux = d.rest_darboux[i - 1];
+    if (!rod.rest_darboux_controls.empty()) bend.rest_control = rod.rest_darboux_controls[i - 1];
+    bend.stiffness_slot = rod.bending_stiffness_slot;
     p.rod_bend_twist.push_back(bend);
+  }
+  for (const CableSpec& cable : rod.cables) {
+    for (std::size_t k = 0; k + 1 < cable.route.size(); ++k) {
+      CableSegment segment;
+      const CableRoutePoint& a = cable.route[k];
+      const CableRoutePoint& b = cable.route[k + 1];
+      segment.offsets = {node_offset[a.edge], edge_offset[a.edge], node_offset[b.edge],
+                         edge_offset[b.edge]};
+      segment.a = {model.rod_point(r, a.edge), model.rod_rotation(r, a.edge), a.local};
+      segment.b = {model.rod_point(r, b.edge), model.rod_rotation(r, b.edge), b.local};
+      segment.tension = cable.tension;
+      segment.control = cable.control;
+      p.cables.push_back(segment);
+    }
   }
   for (const NodeForce& f : rod.node_forces) {
     if (node_fixed[f.node]) continue;
@@ -230,6 +258,7 @@ Component build_rod_component(const Model& model, int r) {
     term.offsets = {node_offset[f.node], -1};
     term.at.point = model.rod_point(r, f.node);
     term.force = f.force;
+    term.control = f.control;
     p.forces.push_back(term);
   }
   return c;

@@ -16,6 +16,7 @@
 #include <utility>
 #include <vector>
 
+#include "cable.hpp"
 #include "inertia.hpp"
 #include "loads.hpp"
 #include "model.hpp"
@@ -46,9 +47,12 @@ class IncrementalPotential {
   std::vector<RodStretch> rod_stretch;
   std::vector<RodShear> rod_shear;
   std::vector<RodBendTwist> rod_bend_twist;
+  std::vector<CableSegment> cables;
 
-  // Fixes the per-step data (x̃, R̃, R_{k−1}) from the previous state and step.
-  void begin_step(const State& previous, const Step& previous_step);
+  // Fixes the per-step data (x̃, R̃, R_{k−1}) from the previous state and step, and the
+  // scheduled quantities (forces, torques, cable tensions, rest Darboux vectors; term.hpp) of
+  // step `frame` = k ≥ 1, the step that produces q_k.
+  void begin_step(const State& previous, const Step& previous_step, int frame = 1);
 
   // Multiplies every load (gravity, forces, torques) by λ (static load stepping).
   void set_load_scale(double lambda);
@@ -96,8 +100,22 @@ class IncrementalPotential {
     return scale;
   }
 
+  // ---- Adjoint blocks (paper §5, DESIGN.md §6; lib/adjoint.cpp) -------------------------
+  // The derivatives of C = ∇Ψ other than the Hessian, at the converged q = q_k of a step set
+  // up by begin_step(previous, previous_step, k). z is this component's adjoint vector
+  // (component layout). Whole-state tangent vectors ("full" layout) hold 3 entries per point,
+  // then 3 per rotation: point i at 3i, rotation j at 3(P + j), P = q.points.size().
+  //   a_previous  += (∂C/∂q_{k−1})ᵀ z,   da_previous += (∂C/∂Δq_{k−1})ᵀ z   (full layout);
+  // only the inertia and torque terms read q_{k−1} or Δq_{k−1}.
+  void add_step_adjoint(const State& q, const State& previous, const Step& previous_step,
+                        const Eigen::VectorXd& z, Eigen::VectorXd& a_previous,
+                        Eigen::VectorXd& da_previous) const;
+  //   dgamma += (∂C/∂γ)ᵀ z  for the parameters of step k (the terms' slots, term.hpp).
+  void add_parameter_adjoint(const State& q, int frame, const Eigen::VectorXd& z,
+                             Eigen::VectorXd& dgamma) const;
+
   // Potential energy (gravity, constant forces, springs, rod elasticity):
-  // what frames.csv reports. Inertia and torque terms are not energies of the state.
+  // what frames.csv reports. Inertia, torque and cable terms are not energies of the state.
   double potential_energy(const State& q) const;
 
  private:
@@ -112,6 +130,7 @@ class IncrementalPotential {
     f(rod_stretch);
     f(rod_shear);
     f(rod_bend_twist);
+    f(cables);
   }
 };
 

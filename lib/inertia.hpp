@@ -48,6 +48,9 @@ struct TranslationalInertia {
   // x̃ = x_{k−1} + Δx_{k−1}
   void begin_step(const State& previous, const Step& previous_step);
   double evaluate(const State& q, LocalGradient<1>* g, LocalHessian<1>* H) const;
+  // For the adjoint: the gradient m/h² (x − x_{k−1} − Δx_{k−1}) has
+  //   ∂C/∂x_{k−1} = ∂C/∂Δx_{k−1} = −(m/h²) I.
+  double step_jacobian() const { return -mass_over_h2; }
 
   static constexpr int kResiduals = 3;
   using Residual = LocalResidual<kResiduals>;
@@ -75,6 +78,16 @@ struct RotationalInertia {
   // R̃ = (2I − ΔR_{k−1}ᵀ) R_{k−1} = 2R_{k−1} − R_{k−2}   (10)
   void begin_step(const State& previous, const Step& previous_step);
   double evaluate(const State& q, LocalGradient<1>* g, LocalHessian<1>* H) const;
+
+  // For the adjoint: the Lie derivatives of the gradient C = 2 vee(M), M = R J R̃ᵀ/h², with
+  // respect to the previous rotation R_p = R_{k−1} → exp(φ) R_p and the previous step
+  // ΔR = ΔR_{k−1} → exp(ψ) ΔR (state + step formulation, paper §5; eqs. (33)–(34) of the
+  // paper are checked by finite differences instead of trusted). With B = R J R_pᵀ/h²:
+  //   R̃ → R̃ + (2I − ΔRᵀ) hat(φ) R_p,   M → M − B hat(φ) (2I − ΔR),
+  //   R̃ → R̃ + ΔRᵀ hat(ψ) R_p,          M → M − B hat(ψ) ΔR,
+  // so column j of each Jacobian is −2 vee(B hat(e_j) X), X = 2I − ΔR or ΔR.
+  void step_jacobians(const State& q, const Matrix3& R_previous, const Matrix3& dR_previous,
+                      Matrix3& dC_dR_previous, Matrix3& dC_ddR_previous) const;
 
   static constexpr int kResiduals = 9;
   using Residual = LocalResidual<kResiduals>;

@@ -26,6 +26,12 @@ double ConstantForce::evaluate(const State& q, LocalGradient<2>* g, LocalHessian
   return -F.dot(at.position(q));
 }
 
+Eigen::Matrix<double, 6, 3> ConstantForce::force_jacobian(const State& q) const {
+  Eigen::Matrix<double, 6, 3> J;
+  J << -scale * Matrix3::Identity(), -scale * so3::hat(at.lever(q));  // ∂[f; r × f]/∂F, f = −F
+  return J;
+}
+
 void ConstantTorque::begin_step(const State& previous, const Step&) {
   R_previous = previous.rotations[rotation];
 }
@@ -39,6 +45,17 @@ double ConstantTorque::evaluate(const State& q, LocalGradient<1>* g, LocalHessia
     *H = 0.25 * (P * T - T * P.transpose()) - 0.5 * (T * P).trace() * Matrix3::Identity();
   }
   return -tau.dot(so3::vee(P));
+}
+
+Matrix3 ConstantTorque::torque_jacobian(const State& q) const {
+  const Matrix3 P = q.rotations[rotation] * R_previous.transpose();
+  return -0.5 * scale * (P.trace() * Matrix3::Identity() - P.transpose());
+}
+
+Matrix3 ConstantTorque::previous_jacobian(const State& q) const {
+  const Matrix3 P = q.rotations[rotation] * R_previous.transpose();
+  const Vector3 tau = scale * torque;
+  return -(tau * so3::vee(P).transpose() + so3::hat(P.transpose() * tau));
 }
 
 }  // namespace liedyn

@@ -29,8 +29,13 @@ struct ConstantForce {
   AttachedPoint at;
   Vector3 force = Vector3::Zero();
   double scale = 1.0;
+  ScheduledParameter<3> control;  // per-step force F and its slot in γ (term.hpp)
 
+  // Step k's force from the schedule (kept constant without one).
+  void begin_frame(int k) { force = control.at(k, force); }
   double evaluate(const State& q, LocalGradient<2>* g, LocalHessian<2>* H) const;
+  // For the adjoint: ∂(Lie gradient)/∂F = −scale [I; hat(r)] (the gradient is linear in F).
+  Eigen::Matrix<double, 6, 3> force_jacobian(const State& q) const;
 };
 
 // A constant world torque τ on a rotation. A constant world torque has no potential on
@@ -48,9 +53,18 @@ struct ConstantTorque {
   Vector3 torque = Vector3::Zero();
   double scale = 1.0;
   Matrix3 R_previous = Matrix3::Identity();
+  ScheduledParameter<3> control;  // per-step torque τ and its slot in γ (term.hpp)
 
   void begin_step(const State& previous, const Step& previous_step);
+  void begin_frame(int k) { torque = control.at(k, torque); }
   double evaluate(const State& q, LocalGradient<1>* g, LocalHessian<1>* H) const;
+
+  // For the adjoint (C = the Lie gradient above, linear in τ; P = R R_{k−1}ᵀ):
+  //   ∂C/∂τ = −½ scale (tr(P) I − Pᵀ),
+  //   ∂C/∂φ for R_{k−1} → exp(φ) R_{k−1}:  P → P − P hat(φ) + O(φ²), and with
+  //   tr(P hat(φ)) = −2 vee(P)·φ,   ∂C/∂φ = −(τ vee(P)ᵀ + hat(Pᵀτ))   (τ scaled).
+  Matrix3 torque_jacobian(const State& q) const;
+  Matrix3 previous_jacobian(const State& q) const;
 };
 
 }  // namespace liedyn

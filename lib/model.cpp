@@ -226,6 +226,40 @@ void Model::validate_rod(const RodSpec& rod, const std::string& path) {
     }
     require_finite(rod.node_forces[k].force, f + ".force");
   }
+  const auto check_count = [&](std::size_t size, std::size_t expected, const std::string& member,
+                               const char* per) {
+    if (size != 0 && size != expected) {
+      throw ModelError(field(member), "has " + std::to_string(size) + " entries, but the rod has " +
+                                          std::to_string(expected) + " " + per);
+    }
+  };
+  check_count(rod.node_velocities.size(), rod.nodes.size(), "node_velocities", "nodes");
+  for (std::size_t i = 0; i < rod.node_velocities.size(); ++i) {
+    require_finite(rod.node_velocities[i], field("node_velocities") + "[" + std::to_string(i) + "]");
+  }
+  const std::size_t interior = rod.nodes.size() - 2;
+  check_count(rod.rest_darboux.size(), interior, "rest_darboux", "interior nodes");
+  for (std::size_t i = 0; i < rod.rest_darboux.size(); ++i) {
+    require_finite(rod.rest_darboux[i], field("rest_darboux") + "[" + std::to_string(i) + "]");
+  }
+  check_count(rod.rest_darboux_controls.size(), interior, "rest_darboux_controls",
+              "interior nodes");
+  for (std::size_t c = 0; c < rod.cables.size(); ++c) {
+    const CableSpec& cable = rod.cables[c];
+    const std::string f = field("cables") + "[" + std::to_string(c) + "]";
+    if (cable.route.size() < 2) throw ModelError(f + ".route", "must have at least 2 points");
+    for (std::size_t k = 0; k < cable.route.size(); ++k) {
+      const std::string point = f + ".route[" + std::to_string(k) + "]";
+      if (cable.route[k].edge < 0 || cable.route[k].edge >= rod.edge_count()) {
+        throw ModelError(point + ".edge", "refers to edge " + std::to_string(cable.route[k].edge) +
+                                              ", but the rod has " + std::to_string(rod.edge_count()));
+      }
+      require_finite(cable.route[k].local, point + ".local");
+    }
+    if (!std::isfinite(cable.tension) || cable.tension < 0.0) {
+      throw ModelError(f + ".tension", "must be finite and ≥ 0");
+    }
+  }
   validate_motions(rod, path);
 }
 
@@ -316,8 +350,12 @@ Step Model::initial_step() const {
     dq.points.push_back(time_step * b.linear_velocity);
     dq.rotations.push_back(so3::exp(time_step * b.angular_velocity));
   }
-  for (const RodSpec& rod : rods) {  // rods start at rest
-    dq.points.insert(dq.points.end(), rod.node_count(), Vector3::Zero());
+  for (const RodSpec& rod : rods) {  // edges start at rest; nodes too unless given velocities
+    if (rod.node_velocities.empty()) {
+      dq.points.insert(dq.points.end(), rod.node_count(), Vector3::Zero());
+    } else {
+      for (const Vector3& v : rod.node_velocities) dq.points.push_back(time_step * v);
+    }
     dq.rotations.insert(dq.rotations.end(), rod.edge_count(), Matrix3::Identity());
   }
   return dq;

@@ -10,6 +10,7 @@
 
 #include "rod.hpp"
 #include "state.hpp"
+#include "term.hpp"
 
 namespace liedyn {
 
@@ -44,16 +45,19 @@ struct SpringSpec {
   BodyPoint a, b;
   double stiffness = 0.0;     // N/m, ≥ 0
   double rest_length = 0.0;   // m, ≥ 0
+  int stiffness_slot = -1;    // index in an optimisation's parameter vector γ, or −1
 };
 
 struct ForceSpec {
   BodyPoint at;               // body ≥ 0 required
   Vector3 force = Vector3::Zero();  // world, N
+  ScheduledParameter<3> control;    // per-step forces and their slot in γ (lib/term.hpp)
 };
 
 struct TorqueSpec {
   int body = -1;
   Vector3 torque = Vector3::Zero();  // world, N·m
+  ScheduledParameter<3> control;     // per-step torques and their slot in γ (lib/term.hpp)
 };
 
 struct Model {

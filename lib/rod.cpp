@@ -60,7 +60,9 @@ RodDiscretization discretize(const RodSpec& rod) {
   for (int i = 1; i + 1 < n; ++i) {
     const double l = 0.5 * (d.rest_length[i - 1] + d.rest_length[i]);
     d.voronoi_length.push_back(l);
-    d.rest_darboux.push_back(darboux_vector(rest_frames[i - 1], rest_frames[i], l));
+    d.rest_darboux.push_back(rod.rest_darboux.empty()
+                                 ? darboux_vector(rest_frames[i - 1], rest_frames[i], l)
+                                 : rod.rest_darboux[i - 1]);
   }
   return d;
 }

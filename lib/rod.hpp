@@ -18,12 +18,27 @@
 
 #include "prescribed_motion.hpp"
 #include "state.hpp"
+#include "term.hpp"
 
 namespace liedyn {
 
 struct NodeForce {
   int node = -1;
   Vector3 force = Vector3::Zero();  // world, N
+  ScheduledParameter<3> control;    // per-step forces and their slot in γ (lib/term.hpp)
+};
+
+// A pulling cable along a rod (paper §7.4, lib/cable.hpp): routed through one point per edge
+// of `route`, p = x_j + R_j p̄ with x_j the edge's first node and p̄ in the edge's material
+// frame (e.g. (ρ cos φ, ρ sin φ, 0): on the rod's surface at angle φ), with tension T ≥ 0.
+struct CableRoutePoint {
+  int edge = -1;
+  Vector3 local = Vector3::Zero();
+};
+struct CableSpec {
+  std::vector<CableRoutePoint> route;  // at least 2 points
+  double tension = 0.0;                // N, ≥ 0
+  ScheduledParameter<1> control;       // per-step tensions and their slot in γ (lib/term.hpp)
 };
 
 struct RodSpec {
@@ -38,7 +53,16 @@ struct RodSpec {
   std::vector<int> fixed_nodes;        // clamped positions
   std::vector<int> fixed_edges;        // clamped rotations
   std::vector<NodeForce> node_forces;  // constant world forces on nodes
+  std::vector<CableSpec> cables;       // pulling cables
   std::vector<PrescribedMotion> prescribed_motions;  // of clamped nodes and edges
+  std::vector<Vector3> node_velocities;  // initial, world, m/s; empty: at rest (edges start at rest)
+  // Rest Darboux vectors ω̄ per interior node (1…n−2), material frame of the edge before it;
+  // empty: from the rest shape's frames.
+  std::vector<Vector3> rest_darboux;
+  // Per interior node: per-step ω̄ and slots in γ (lib/term.hpp); empty: none.
+  std::vector<ScheduledParameter<3>> rest_darboux_controls;
+  // Slots in an optimisation's parameter vector γ (−1: not a parameter); bending takes 3.
+  int stretch_stiffness_slot = -1, shear_stiffness_slot = -1, bending_stiffness_slot = -1;
 
   const std::vector<Vector3>& rest_shape() const { return rest_nodes.empty() ? nodes : rest_nodes; }
 

@@ -136,6 +136,22 @@ double RodBendTwist::evaluate(const State& q, LocalGradient<2>* g, LocalHessian<
   return value;
 }
 
+void RodBendTwist::parameter_jacobians(const State& q, Eigen::Matrix<double, 6, 3>* d_rest_darboux,
+                                       Eigen::Matrix<double, 6, 3>* d_stiffness) const {
+  const Matrix3& Ra = q.rotations[edge0];
+  const Matrix3 C = q.rotations[edge1] * Ra.transpose();
+  const Matrix3 W = 0.5 * (C.trace() * Matrix3::Identity() - C).transpose() * Ra;  // Gᵀ R_a
+  if (d_rest_darboux != nullptr) {
+    const Matrix3 WK = W * stiffness.asDiagonal();
+    *d_rest_darboux << WK, -WK;
+  }
+  if (d_stiffness != nullptr) {
+    const Vector3 dw = darboux(Ra, q.rotations[edge1], rest_length) - rest_darboux;
+    const Matrix3 Wdw = W * dw.asDiagonal();
+    *d_stiffness << -Wdw, Wdw;
+  }
+}
+
 // ---------------------------------------------------------------------------------------
 // Residual forms (derivations in rod_terms.hpp). Each r is built from the same intermediates
 // as evaluate()'s value, so ½‖r‖² equals it to round-off.

@@ -87,6 +87,7 @@ struct RodStretch {
   int node1 = -1;                            // i+1  (State::points)
   double rest_length = 0.0;                  // l   [m], > 0
   double stiffness = 0.0;                    // k_s [N]  (axial stiffness EA)
+  int stiffness_slot = -1;                   // γ index of k_s, −1: not a parameter (Ψ ∝ k_s)
 
   double evaluate(const State& q, LocalGradient<2>* g, LocalHessian<2>* H) const;
 
@@ -105,6 +106,7 @@ struct RodShear {
   int edge = -1;                                 // i    (State::rotations)
   double rest_length = 0.0;                      // l   [m]
   double stiffness = 0.0;                        // k_x [N]
+  int stiffness_slot = -1;                       // γ index of k_x, −1: not a parameter (Ψ ∝ k_x)
 
   double evaluate(const State& q, LocalGradient<3>* g, LocalHessian<3>* H) const;
 
@@ -123,8 +125,15 @@ struct RodBendTwist {
   double rest_length = 0.0;                  // l   [m], > 0
   Vector3 stiffness = Vector3::Zero();       // (K₁, K₂, K₃) [N m²]: bend, bend, twist
   Vector3 rest_darboux = Vector3::Zero();    // ω̄ [1/m], material frame of edge i−1
+  ScheduledParameter<3> rest_control;        // per-step ω̄ and its slot in γ (term.hpp)
+  int stiffness_slot = -1;                   // γ index of (K₁, K₂, K₃), −1: not a parameter
 
+  void begin_frame(int k) { rest_darboux = rest_control.at(k, rest_darboux); }
   double evaluate(const State& q, LocalGradient<2>* g, LocalHessian<2>* H) const;
+  // For the adjoint, with W = Gᵀ R_a and the gradient (−W K Δω, W K Δω):
+  //   ∂C/∂ω̄ = (W K, −W K),   ∂C/∂(K₁, K₂, K₃) = (−W diag(Δω), W diag(Δω)).
+  void parameter_jacobians(const State& q, Eigen::Matrix<double, 6, 3>* d_rest_darboux,
+                           Eigen::Matrix<double, 6, 3>* d_stiffness) const;
 
   static constexpr int kResiduals = 3;
   using Residual = LocalResidual<kResiduals>;

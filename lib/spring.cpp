@@ -2,6 +2,7 @@
 
 #include <cmath>
 
+#include "point_pair.hpp"
 #include "so3.hpp"
 
 namespace liedyn {
@@ -14,19 +15,7 @@ double Spring::evaluate(const State& q, LocalGradient<4>* g, LocalHessian<4>* H)
   }
   const auto [value, f, K] = length_spring(d, stiffness, rest_length);  // ∂V/∂d, ∂²V/∂d²
 
-  const Vector3 r_a = a.lever(q);
-  const Vector3 r_b = b.lever(q);
-  Eigen::Matrix<double, 3, 12> Jd;  // ∂d/∂(x_a, θ_a, x_b, θ_b)
-  Jd << -Matrix3::Identity(), so3::hat(r_a), Matrix3::Identity(), -so3::hat(r_b);
-  if (g != nullptr) *g = Jd.transpose() * f;
-  if (H != nullptr) {
-    // Coefficient-based (lazy) product: a plain 12×3·3×12 product is large enough for Eigen
-    // to dispatch it to its blocked GEMM kernel, whose packing costs more than the flops.
-    const Eigen::Matrix<double, 12, 3> JtK = Jd.transpose() * K;
-    H->noalias() = JtK.lazyProduct(Jd);
-    H->block<3, 3>(3, 3) += rotated_point_curvature(r_a, -f);  // f_a = ∂V/∂p_a = −f
-    H->block<3, 3>(9, 9) += rotated_point_curvature(r_b, f);
-  }
+  point_pair_derivatives(a.lever(q), b.lever(q), f, K, g, H);  // eqs. (22), (23)
   return value;
 }
 

@@ -6,7 +6,8 @@
 //   ∂V/∂d = k (l − L) n,
 //   ∂²V/∂d² = k n nᵀ + k (l − L)/l (I − n nᵀ)    (L = 0: exactly k I).
 // Blocks (x_a, θ_a, x_b, θ_b); ∂d/∂(blocks) = [−I, hat(r_a), I, −hat(r_b)], r = R p̄. Then
-//   gradient = (∂d)ᵀ ∂V/∂d,   Hessian = (∂d)ᵀ ∂²V/∂d² (∂d) + eq. (23) curvature at each rotation.
+//   gradient = (∂d)ᵀ ∂V/∂d,   Hessian = (∂d)ᵀ ∂²V/∂d² (∂d) + eq. (23) curvature at each rotation
+// (point_pair_derivatives in point_pair.hpp, shared with the cable term).
 // The Hessian is exact and indefinite for a compressed spring (l < L) and for some lever
 // configurations; the Newton solver regularises the assembled matrix (see solvers/newton.hpp).
 //
@@ -69,6 +70,7 @@ struct Spring {
   AttachedPoint a, b;
   double stiffness = 0.0;    // k  [N/m]
   double rest_length = 0.0;  // L  [m]
+  int stiffness_slot = -1;   // γ index of k, −1: not a parameter (V ∝ k)
 
   double evaluate(const State& q, LocalGradient<4>* g, LocalHessian<4>* H) const;
 

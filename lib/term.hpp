@@ -30,6 +30,7 @@
 
 #include <Eigen/Core>
 #include <array>
+#include <vector>
 
 namespace liedyn {
 
@@ -41,5 +42,28 @@ template <int R>
 using LocalResidual = Eigen::Matrix<double, R, 1>;
 template <int R, int B>
 using LocalResidualJacobian = Eigen::Matrix<double, R, 3 * B>;
+
+// A term's quantity that may change from frame to frame and may be an optimisation parameter
+// (a force, a torque, a cable tension, a rest Darboux vector; paper §5, DESIGN.md §6).
+//   * schedule: its value during step k (the step that produces q_k, k ≥ 1) is schedule[k−1];
+//     empty: the term's constant value is kept. IncrementalPotential::begin_step applies it.
+//   * slot: index in the parameter vector γ of its value during step 1 (−1: not a
+//     parameter), and stride: entries between the values of consecutive steps, so step k's
+//     value is γ[slot + stride·(k−1) …] (stride 0: one value for all steps).
+template <int P>
+struct ScheduledParameter {
+  using Value = Eigen::Matrix<double, P, 1>;
+  std::vector<Value> schedule;
+  int slot = -1;
+  int stride = 0;
+
+  // The value during step k, or `constant` without a schedule. Throws std::out_of_range past
+  // the schedule's end (a schedule covers every frame it is run for).
+  Value at(int k, const Value& constant) const {
+    return schedule.empty() ? constant : schedule.at(static_cast<std::size_t>(k - 1));
+  }
+  // Index in γ of step k's value (−1: not a parameter).
+  int slot_at(int k) const { return slot < 0 ? -1 : slot + stride * (k - 1); }
+};
 
 }  // namespace liedyn

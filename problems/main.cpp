@@ -8,6 +8,13 @@
 //                  --rotations the scene's parameterisation if --backends is given, else all
 //                  three; an unsupported pair such as ipopt + quat is a failed row)
 //   liedyn exp-jacobian --out FILE [--samples N]   (paper Fig. 3 data: σ of ∂vec(exp r)/∂r)
+//   liedyn gradcheck SCENE.json [--sample N] [--seed S] [--tolerance T] [--step E] [--verbose]
+//                  (adjoint gradient against central differences; last line
+//                  "gradcheck: max_rel_error=<float> params=<int> tolerance=<float>"; exit 0
+//                  within tolerance, 1 otherwise)
+//   liedyn optimize SCENE.json --out DIR [--optimizer nlopt-lbfgs|ceres-lbfgs|ipopt-lbfgs]
+//                  [--max-iterations N] [--resume]   (exit 0 target reached, 3 stopped
+//                  short of it, 4 failed)
 // Exit status: 0 success; 2 bad input (scene or options), nothing written; 3 some steps ended
 // at max_iterations (outputs written; --allow-unconverged makes this 0); 4 a step failed
 // (outputs written up to it; compare: a row failed or is unsupported, all rows printed); 1
@@ -21,6 +28,7 @@
 #include "analysis.hpp"
 #include "bench.hpp"
 #include "compare.hpp"
+#include "optimization.hpp"
 #include "output.hpp"
 #include "run.hpp"
 
@@ -111,6 +119,39 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(2, 1000000))
       ->capture_default_str();
 
+  liedyn::GradientCheckOptions check;
+  bool verbose = false;
+  CLI::App* gradcheck = app.add_subcommand(
+      "gradcheck", "Adjoint gradient of a scene's optimisation against central differences");
+  gradcheck->add_option("scene", scene_file, "Scene file (JSON) with an optimization block")
+      ->required();
+  gradcheck->add_option("--sample", check.sample, "Check this many random parameters (0: all)")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
+  gradcheck->add_option("--seed", check.seed, "Seed of the sample")->capture_default_str();
+  gradcheck->add_option("--tolerance", check.tolerance, "Largest relative error accepted")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
+  gradcheck->add_option("--step", check.step, "Relative finite-difference step")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  gradcheck->add_flag("--verbose", verbose, "One CSV row per checked parameter");
+
+  liedyn::OptimizeOptions optimize_options;
+  std::string optimizer_name;
+  int optimize_iterations = 0;
+  CLI::App* optimize = app.add_subcommand(
+      "optimize", "Minimise a scene's objective over its parameters (adjoint gradients, L-BFGS)");
+  optimize->add_option("scene", scene_file, "Scene file (JSON) with an optimization block")
+      ->required();
+  optimize->add_option("--out", out_dir, "Output directory")->required();
+  optimize->add_option("--optimizer", optimizer_name,
+                       "nlopt-lbfgs, ceres-lbfgs or ipopt-lbfgs (default: the scene's)");
+  optimize->add_option("--max-iterations", optimize_iterations, "Overrides the scene's")
+      ->check(CLI::PositiveNumber);
+  optimize->add_flag("--resume", optimize_options.resume,
+                     "Continue from DIR/checkpoint.json, appending to DIR/history.csv");
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -133,7 +174,26 @@ int main(int argc, char** argv) {
                       "lie, rotvec or quat", options.rotations))) {
       return 2;
     }
+    if (optimize->parsed() && !optimizer_name.empty()) {
+      optimize_options.optimizer = liedyn::parse_optimizer(optimizer_name);
+      if (!optimize_options.optimizer) {
+        std::cerr << "liedyn: --optimizer: unknown optimizer \"" << optimizer_name
+                  << "\" (expected nlopt-lbfgs, ceres-lbfgs or ipopt-lbfgs)\n";
+        return 2;
+      }
+    }
     const liedyn::Scene scene = liedyn::load_scene(scene_file);
+    if ((gradcheck->parsed() || optimize->parsed()) && !scene.optimization) {
+      std::cerr << "liedyn: " << scene_file
+                << ": optimization: is required but missing (nothing to differentiate)\n";
+      return 2;
+    }
+    if (gradcheck->parsed()) return liedyn::run_gradcheck(scene, check, verbose, std::cout);
+    if (optimize->parsed()) {
+      optimize_options.out = out_dir;
+      if (optimize_iterations > 0) optimize_options.max_iterations = optimize_iterations;
+      return liedyn::run_optimize(scene, optimize_options, std::cout);
+    }
     if (compare->parsed()) {
       options.condition_every = condition_every;
       options.repeats = compare_repeats;

@@ -13,6 +13,8 @@
 #include <vector>
 
 #include "../lib/so3.hpp"
+#include "json_reader.hpp"
+#include "optimization.hpp"
 
 namespace liedyn {
 
@@ -25,149 +27,8 @@ SceneError::SceneError(std::string file, std::string field, std::string reason)
 namespace {
 
 using nlohmann::json;
-
-// A JSON object being read, with the dotted path of its place in the file. Each key read is
-// remembered; finish() rejects the keys nobody asked for (typos must not pass silently).
-class ObjectReader {
- public:
-  ObjectReader(const json& value, std::string path, const std::string& source)
-      : value_(value), path_(std::move(path)), source_(source) {
-    if (!value_.is_object()) fail(path_, "must be a JSON object");
-  }
-
-  [[noreturn]] void fail(const std::string& field, const std::string& reason) const {
-    throw SceneError(source_, field, reason);
-  }
-
-  std::string field(const std::string& key) const {
-    return path_.empty() ? key : path_ + "." + key;
-  }
-
-  bool has(const std::string& key) {
-    known_.insert(key);
-    return value_.contains(key);
-  }
-
-  const json& get(const std::string& key) {
-    if (!has(key)) fail(field(key), "is required but missing");
-    return value_.at(key);
-  }
-
-  double number(const std::string& key) { return to_number(get(key), field(key)); }
-  double number(const std::string& key, double fallback) {
-    return has(key) ? number(key) : fallback;
-  }
-
-  double to_number(const json& v, const std::string& f) const {
-    if (!v.is_number()) fail(f, "must be a number (got " + type_of(v) + ")");
-    const double x = v.get<double>();
-    if (!std::isfinite(x)) fail(f, "must be finite");
-    return x;
-  }
-
-  int integer(const std::string& key, int lo, int hi = std::numeric_limits<int>::max()) {
-    return to_integer(get(key), field(key), lo, hi);
-  }
-
-  int to_integer(const json& v, const std::string& f, int lo,
-                 int hi = std::numeric_limits<int>::max()) const {
-    if (!v.is_number_integer()) {
-      fail(f, "must be an integer (got " + (v.is_number() ? v.dump() : type_of(v)) + ")");
-    }
-    const std::string range = "must be an integer in [" + std::to_string(lo) + ", " +
-                              std::to_string(hi) + "] (got " + v.dump() + ")";
-    // Unsigned values above the range of long long would wrap in get<long long>().
-    if (v.is_number_unsigned() &&
-        v.get<unsigned long long>() > static_cast<unsigned long long>(hi)) {
-      fail(f, range);
-    }
-    const auto x = v.get<long long>();
-    if (x < lo || x > hi) fail(f, range);
-    return static_cast<int>(x);
-  }
-
-  std::string string(const std::string& key) {
-    const json& v = get(key);
-    if (!v.is_string()) fail(field(key), "must be a string (got " + type_of(v) + ")");
-    return v.get<std::string>();
-  }
-  std::string string(const std::string& key, const std::string& fallback) {
-    return has(key) ? string(key) : fallback;
-  }
-  bool boolean(const std::string& key, bool fallback) {
-    if (!has(key)) return fallback;
-    const json& v = value_.at(key);
-    if (!v.is_boolean()) fail(field(key), "must be true or false (got " + type_of(v) + ")");
-    return v.get<bool>();
-  }
-
-  // Fixed-length array of finite numbers.
-  template <int N>
-  Eigen::Matrix<double, N, 1> vector(const std::string& key) {
-    return to_vector<N>(get(key), field(key));
-  }
-  template <int N>
-  Eigen::Matrix<double, N, 1> to_vector(const json& v, const std::string& f) const {
-    if (!v.is_array() || v.size() != N) {
-      fail(f, "must be an array of " + std::to_string(N) + " numbers");
-    }
-    Eigen::Matrix<double, N, 1> out;
-    for (int i = 0; i < N; ++i) out(i) = to_number(v[i], f + "[" + std::to_string(i) + "]");
-    return out;
-  }
-  template <int N>
-  Eigen::Matrix<double, N, 1> vector(const std::string& key,
-                                     const Eigen::Matrix<double, N, 1>& fallback) {
-    return has(key) ? vector<N>(key) : fallback;
-  }
-
-  // An inertia tensor: 3 principal moments or a 3×3 array.
-  Matrix3 inertia(const std::string& key) {
-    const json& v = get(key);
-    const std::string f = field(key);
-    if (v.is_array() && v.size() == 3 && v[0].is_number()) return vector<3>(key).asDiagonal();
-    if (v.is_array() && v.size() == 3) {
-      Matrix3 m;
-      for (int r = 0; r < 3; ++r) {
-        const std::string row = f + "[" + std::to_string(r) + "]";
-        if (!v[r].is_array() || v[r].size() != 3) fail(row, "must be an array of 3 numbers");
-        for (int c = 0; c < 3; ++c) m(r, c) = to_number(v[r][c], row + "[" + std::to_string(c) + "]");
-      }
-      return m;
-    }
-    fail(f, "must be 3 principal moments [I1, I2, I3] or a 3×3 array");
-  }
-
-  const json& array(const std::string& key) {
-    const json& v = get(key);
-    if (!v.is_array()) fail(field(key), "must be an array (got " + type_of(v) + ")");
-    return v;
-  }
-
-  void finish() const {
-    for (const auto& item : value_.items()) {
-      if (!known_.count(item.key())) {
-        std::string allowed;
-        for (const std::string& k : known_) allowed += (allowed.empty() ? "" : ", ") + k;
-        fail(field(item.key()), "unknown key (allowed here: " + allowed + ")");
-      }
-    }
-  }
-
-  static std::string type_of(const json& v) {
-    return v.is_null() ? "null" : std::string(v.type_name());
-  }
-
- private:
-  const json& value_;
-  std::string path_;
-  const std::string& source_;
-  std::set<std::string> known_;
-};
-
-std::string item_path(const std::string& array, std::size_t i) {
-  return array + "[" + std::to_string(i) + "]";
-}
+using scene_json::item_path;
+using scene_json::ObjectReader;
 
 // Body name → index, for springs, forces and torques. `rods` holds the rod names (which
 // loads cannot refer to: rods take node_forces instead).
@@ -364,6 +225,32 @@ RodSpec parse_rod(const json& value, const std::string& path, const std::string&
       rod.node_forces.push_back(force);
     }
   }
+  if (r.has("cables")) {
+    // A cable along edges first…last on the rod's surface at `angle` degrees about the edge
+    // frames' z axis (0: along the frame's x axis), `radius` from the axis (default: the rod's).
+    const json& cables = r.array("cables");
+    for (std::size_t i = 0; i < cables.size(); ++i) {
+      ObjectReader c(cables[i], item_path(r.field("cables"), i), source);
+      const Eigen::Vector2d edges = c.vector<2>("edges");
+      const int first = static_cast<int>(edges(0)), last = static_cast<int>(edges(1));
+      if (first != edges(0) || last != edges(1) || first < 0 || last <= first ||
+          last >= rod.edge_count()) {
+        c.fail(c.field("edges"), "must be two edge indices first < last < " +
+                                     std::to_string(rod.edge_count()));
+      }
+      const double angle = c.number("angle", 0.0) * std::numbers::pi / 180.0;
+      const double radius = c.number("radius", rod.radius);
+      if (!(radius >= 0.0)) c.fail(c.field("radius"), "must be ≥ 0");
+      CableSpec cable;
+      cable.tension = c.number("tension", 0.0);
+      if (cable.tension < 0.0) c.fail(c.field("tension"), "must be ≥ 0 (a cable cannot push)");
+      for (int e = first; e <= last; ++e) {
+        cable.route.push_back({e, Vector3(radius * std::cos(angle), radius * std::sin(angle), 0.0)});
+      }
+      c.finish();
+      rod.cables.push_back(cable);
+    }
+  }
   if (r.has("prescribed_motions")) {
     const json& motions = r.array("prescribed_motions");
     for (std::size_t i = 0; i < motions.size(); ++i) {
@@ -532,12 +419,14 @@ Scene parse(const json& root, const std::string& source) {
       scene.model.torques.push_back(spec);
     }
   }
+  const json* optimization = top.has("optimization") ? &top.get("optimization") : nullptr;
   top.finish();
 
   // Physical checks (positivity, inertia, …) live with the model, which names the field.
   try {
     scene.model.validate();
     scene.solver.validate();
+    if (optimization != nullptr) scene.optimization = parse_optimization(*optimization, scene);
   } catch (const ModelError& e) {
     const std::string prefix = e.field() + ": ";
     std::string reason = e.what();

@@ -3,10 +3,14 @@
 // docs/scene-format.md; every field is checked and unknown keys are rejected.
 
 #include <filesystem>
+#include <optional>
 #include <stdexcept>
 #include <string>
 
+#include "../lib/objective.hpp"
+#include "../lib/parameters.hpp"
 #include "../solvers/newton.hpp"
+#include "../solvers/optimizer.hpp"
 
 namespace liedyn {
 
@@ -22,12 +26,22 @@ class SceneError : public std::runtime_error {
   std::string file_, field_, reason_;
 };
 
+// A scene's "optimization" block (docs/scene-format.md): what γ is, the objective, and the
+// outer optimiser (solvers/optimizer.hpp).
+struct OptimizationSpec {
+  ParameterSet parameters{0};
+  Objective objective;
+  OptimizerOptions optimizer;
+  double loss_scale = 0.0;  // normalises the loss; 0: the loss at the initial parameters
+};
+
 struct Scene {
   std::string source;  // file name (or a label) used in messages
   std::string description;
   int frames = 0;      // time steps to simulate; frame 0 is the initial state
   Model model;
   SolverOptions solver;
+  std::optional<OptimizationSpec> optimization;
 };
 
 // Parses and validates JSON text; `source` names it in error messages.

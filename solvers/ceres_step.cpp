@@ -261,13 +261,6 @@ class StopOnSmallStep final : public ceres::IterationCallback {
   }
 };
 
-void initialize_logging() {
-  static std::once_flag once;
-  std::call_once(once, [] {
-    if (!google::IsGoogleLoggingInitialized()) google::InitGoogleLogging("liedyn");
-  });
-}
-
 class CeresStepSolver final : public StepSolver {
  public:
   CeresStepSolver(Component component, const SolverOptions& options) : options_(options) {
@@ -275,7 +268,7 @@ class CeresStepSolver final : public StepSolver {
     lie.rotation = RotationParameterization::kLie;
     lie.measure_condition = false;  // the check needs no eigendecomposition
     newton_ = make_newton(std::move(component), lie);
-    initialize_logging();
+    initialize_ceres_logging();
   }
 
   Component& component() override { return newton_->component(); }
@@ -532,6 +525,7 @@ class CeresStepSolver final : public StepSolver {
       }
     }
     for (const ConstantTorque& t : P.torques) add_offset_root(t, "torque (offset root)");
+    for (const CableSegment& c : P.cables) add_offset_root(c, "cable (offset root)");
     refresh_.push_back([this, folded_gravity, folded_forces, inertia_of_point](const State&) {
       for (Vector3& l : loads_) l.setZero();
       for (const Gravity* g : folded_gravity) loads_[inertia_of_point[g->point]] += g->scale * g->weight;
@@ -605,6 +599,13 @@ class CeresStepSolver final : public StepSolver {
 };
 
 }  // namespace
+
+void initialize_ceres_logging() {
+  static std::once_flag once;
+  std::call_once(once, [] {
+    if (!google::IsGoogleLoggingInitialized()) google::InitGoogleLogging("liedyn");
+  });
+}
 
 std::unique_ptr<StepSolver> make_ceres_step_solver(Component component,
                                                    const SolverOptions& options) {

@@ -55,6 +55,10 @@ namespace liedyn {
 std::unique_ptr<StepSolver> make_ceres_step_solver(Component component,
                                                    const SolverOptions& options);
 
+// Initialises glog for Ceres once per process ("liedyn"), unless the program already has:
+// Ceres logs through glog. Thread-safe; called by every Ceres-based solver here.
+void initialize_ceres_logging();
+
 // Ceres's check_gradients, done our way, on every residual block of the component's problem at
 // q (which must have had begin_step): each analytic Jacobian as Ceres sees it in tangent
 // space (J_amb · PlusJacobian) against central differences of the cost function along each

@@ -113,12 +113,17 @@ bool DenseSystem<N>::factorize(double mu) {
 
 template <int N>
 void DenseSystem<N>::solve(Vector& delta) {
-  if constexpr (N != Eigen::Dynamic) {
-    cholesky_fixed_solve<N>(factor_, g_, delta);
-  } else {
-    delta = llt_.solve(g_);
-  }
+  solve_linear(g_, delta);
   delta = -delta;
+}
+
+template <int N>
+void DenseSystem<N>::solve_linear(const Vector& b, Vector& x) {
+  if constexpr (N != Eigen::Dynamic) {
+    cholesky_fixed_solve<N>(factor_, b, x);
+  } else {
+    x = llt_.solve(b);
+  }
 }
 
 template class DenseSystem<6>;
@@ -575,9 +580,14 @@ bool SparseSystem::factorize(double mu) {
 }
 
 void SparseSystem::solve(Vector& delta) {
+  solve_linear(g_, delta);
+  delta = -delta;
+}
+
+void SparseSystem::solve_linear(const Vector& b, Vector& solution) {
   if (factorization_ == Factorization::kBanded) {
-    delta = -g_;
-    band_.solve(delta.data());
+    solution = b;
+    band_.solve(solution.data());
     return;
   }
   // Triangular solves with the simplicial LLᵀ factor of P (H + μI) Pᵀ (natural ordering:
@@ -589,8 +599,8 @@ void SparseSystem::solve(Vector& delta) {
   const auto* nz = static_cast<const int*>(c.L->nz);
   const auto* x = static_cast<const double*>(c.L->x);
   auto* y = static_cast<double*>(c.B->x);
-  for (int block = 0; block < c.dofs / 3; ++block) {  // y = P g
-    for (int r = 0; r < 3; ++r) y[3 * c.block_position[block] + r] = g_[3 * block + r];
+  for (int block = 0; block < c.dofs / 3; ++block) {  // y = P b
+    for (int r = 0; r < 3; ++r) y[3 * c.block_position[block] + r] = b[3 * block + r];
   }
   for (int j = 0; j < c.dofs; ++j) {  // L z = y; column j holds L_jj first, then rows > j
     y[j] /= x[p[j]];
@@ -600,8 +610,8 @@ void SparseSystem::solve(Vector& delta) {
     for (int k = p[j] + 1; k < p[j] + nz[j]; ++k) y[j] -= x[k] * y[i[k]];
     y[j] /= x[p[j]];
   }
-  for (int block = 0; block < c.dofs / 3; ++block) {  // δ = −Pᵀ w
-    for (int r = 0; r < 3; ++r) delta[3 * block + r] = -y[3 * c.block_position[block] + r];
+  for (int block = 0; block < c.dofs / 3; ++block) {  // solution = Pᵀ w
+    for (int r = 0; r < 3; ++r) solution[3 * block + r] = y[3 * c.block_position[block] + r];
   }
 }
 

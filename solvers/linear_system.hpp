@@ -24,6 +24,7 @@
 //   double hessian_scale() const;                   // max |H_ii|
 //   bool factorize(double mu);                      // H + μI positive definite?
 //   void solve(Vector& delta) ;                     // δ = −(H + μI)⁻¹ g, last factorisation
+//   void solve_linear(const Vector& b, Vector& x);  // x = (H + μI)⁻¹ b (the adjoint's solves)
 //   void dense_hessian(Eigen::MatrixXd& H) const;   // H, dense and symmetric (for analysis)
 
 #include <Eigen/Cholesky>
@@ -57,6 +58,7 @@ class DenseSystem {
   double hessian_scale() const;
   bool factorize(double mu);
   void solve(Vector& delta);
+  void solve_linear(const Vector& b, Vector& x);
   void dense_hessian(Eigen::MatrixXd& H) const { H = H_; }
 
  private:
@@ -105,6 +107,7 @@ class SparseSystem {
   double hessian_scale() const;
   bool factorize(double mu);
   void solve(Vector& delta);
+  void solve_linear(const Vector& b, Vector& x);
   void dense_hessian(Eigen::MatrixXd& H) const;
 
   // Known after the first assembly (kUndecided before).

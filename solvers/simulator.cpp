@@ -49,7 +49,7 @@ StepReport Simulator::step() {
 
   StepReport report;
   for (auto& solver : solvers_) {
-    solver->component().potential.begin_step(previous_, previous_step_);
+    solver->component().potential.begin_step(previous_, previous_step_, frame_ + 1);
     if (!dynamic) solver->component().potential.set_load_scale(load_scale);
     report.merge(solver->solve(state_));
   }

@@ -165,8 +165,8 @@ TEST(Backends, CeresGradientCheckAtTheExtremes) {
       b.angular_velocity = Vector3(1.0, -2.0, 0.5);
       model.bodies.push_back(b);
       model.forces.push_back(
-          ForceSpec{BodyPoint{0, Vector3(0.1, 0.0, 0.05)}, scale * Vector3(0.0, 3.0, 1.0)});
-      model.torques.push_back(TorqueSpec{0, scale * Vector3(0.2, 0.0, -0.1)});
+          ForceSpec{BodyPoint{0, Vector3(0.1, 0.0, 0.05)}, scale * Vector3(0.0, 3.0, 1.0), {}});
+      model.torques.push_back(TorqueSpec{0, scale * Vector3(0.2, 0.0, -0.1), {}});
       for (const auto rotation : {RotationParameterization::kLie,
                                   RotationParameterization::kRotationVector,
                                   RotationParameterization::kQuaternion}) {
@@ -200,8 +200,8 @@ TEST(Backends, CeresUnfoldableLoadsMatchNewton) {
   b.inertia = Vector3(0.02, 0.03, 0.04).asDiagonal();
   b.angular_velocity = Vector3(1.0, -2.0, 0.5);
   model.bodies.push_back(b);
-  model.forces.push_back(ForceSpec{BodyPoint{0, Vector3(0.1, 0.0, 0.05)}, Vector3(0.0, 3.0, 1.0)});
-  model.torques.push_back(TorqueSpec{0, Vector3(0.2, 0.0, -0.1)});
+  model.forces.push_back(ForceSpec{BodyPoint{0, Vector3(0.1, 0.0, 0.05)}, Vector3(0.0, 3.0, 1.0), {}});
+  model.torques.push_back(TorqueSpec{0, Vector3(0.2, 0.0, -0.1), {}});
   Scene scene;
   scene.model = model;
   const auto [dx, dR] =

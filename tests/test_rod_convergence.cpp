@@ -72,7 +72,7 @@ Model cantilever(int edges, double L, double mass, double radius, double EI,
   RodSpec rod = uniform_rod(edges, L, mass, radius, kStiff, kStiff, EI);
   rod.fixed_nodes = {0};
   rod.fixed_edges = {0};
-  if (tip_force != Vector3::Zero()) rod.node_forces = {{edges, tip_force}};
+  if (tip_force != Vector3::Zero()) rod.node_forces = {{edges, tip_force, {}}};
   model.rods.push_back(rod);
   return model;
 }

@@ -139,7 +139,7 @@ TEST(RodMechanics, CantileverTipDeflectionUnderSmallLoad) {
     rod.shear_stiffness = kx;
     rod.fixed_nodes = {0};
     rod.fixed_edges = {0};
-    rod.node_forces = {{edges, Vector3(0.0, 0.0, -F)}};
+    rod.node_forces = {{edges, Vector3(0.0, 0.0, -F), {}}};
     model.rods.push_back(rod);
     const Simulator sim = settle(model, 3000);
     EXPECT_LT(sim.kinetic_energy(), 1e-18) << "not at rest yet";
@@ -166,7 +166,7 @@ TEST(RodMechanics, AxialStretchUnderTipForce) {
   rod.stretch_stiffness = ks;
   rod.fixed_nodes = {0};
   rod.fixed_edges = {0};
-  rod.node_forces = {{16, Vector3(F, 0.0, 0.0)}};
+  rod.node_forces = {{16, Vector3(F, 0.0, 0.0), {}}};
   model.rods.push_back(rod);
   const Simulator sim = settle(model, 2000);
   const double stretch = sim.state().points[model.rod_point(0, 16)].x() - L;
@@ -215,7 +215,7 @@ TEST(RodStatics, CantileverLoadStepsFollowTheLinearPrediction) {
   rod.shear_stiffness = kx;
   rod.fixed_nodes = {0};
   rod.fixed_edges = {0};
-  rod.node_forces = {{edges, Vector3(0.0, 0.0, -F)}};
+  rod.node_forces = {{edges, Vector3(0.0, 0.0, -F), {}}};
   model.rods.push_back(rod);
   SolverOptions options;
   options.tolerance = 1e-12;
@@ -248,7 +248,7 @@ TEST(RodStatics, LargeDeflectionStaticEqualsTheDynamicRestState) {
     rod.bending_stiffness = Vector3(EI, EI, EI);
     rod.fixed_nodes = {0};
     rod.fixed_edges = {0};
-    rod.node_forces = {{edges, Vector3(0.0, 0.0, -F)}};
+    rod.node_forces = {{edges, Vector3(0.0, 0.0, -F), {}}};
     model.rods.push_back(rod);
     return model;
   };

@@ -127,7 +127,7 @@ TEST(RodValidation, LargeDeflectionCantileverMatchesTheElastica) {
     RodSpec rod = uniform_rod(n, L, mass, radius, ks, kx, EI);
     rod.fixed_nodes = {0};
     rod.fixed_edges = {0};
-    rod.node_forces = {{n, Vector3(0.0, 0.0, -F)}};
+    rod.node_forces = {{n, Vector3(0.0, 0.0, -F), {}}};
     model.rods.push_back(rod);
     // Tolerance 1e-10: with k = 1e7 N the gradient has a rounding floor of ~4e-7 (stretch
     // forces k_s/l · 1e-16 relative), which leaves Newton steps of ~1e-11 that never get below
@@ -278,7 +278,7 @@ TEST(RodValidation, CantileverFirstModePeriod) {
     RodSpec rod = uniform_rod(n, L, mass, radius, ks, kx, EI);
     rod.fixed_nodes = {0};
     rod.fixed_edges = {0};
-    rod.node_forces = {{n, Vector3(0.0, 0.0, -F)}};
+    rod.node_forces = {{n, Vector3(0.0, 0.0, -F), {}}};
     model.rods.push_back(rod);
     Simulator sim(model, newton(1e-12));
     // The tip oscillates about the static deflection (chain compliance plus shear 2FL/k_x).

@@ -1,0 +1,361 @@
+#include "parameters.hpp"
+
+#include <array>
+
+#include "so3.hpp"
+#include "trajectory.hpp"
+
+namespace liedyn {
+
+namespace {
+
+struct KindName {
+  ParameterKind kind;
+  const char* name;
+};
+constexpr std::array<KindName, 15> kKindNames{{
+    {ParameterKind::kBodyLinearVelocity, "body_linear_velocity"},
+    {ParameterKind::kBodyAngularVelocity, "body_angular_velocity"},
+    {ParameterKind::kBodyPosition, "body_position"},
+    {ParameterKind::kBodyOrientation, "body_orientation"},
+    {ParameterKind::kRodNodeVelocities, "rod_node_velocities"},
+    {ParameterKind::kForce, "force"},
+    {ParameterKind::kTorque, "torque"},
+    {ParameterKind::kNodeForce, "node_force"},
+    {ParameterKind::kCableTension, "cable_tension"},
+    {ParameterKind::kRestDarboux, "rest_darboux"},
+    {ParameterKind::kRestDarbouxPerFrame, "rest_darboux_per_frame"},
+    {ParameterKind::kSpringStiffness, "spring_stiffness"},
+    {ParameterKind::kStretchStiffness, "stretch_stiffness"},
+    {ParameterKind::kShearStiffness, "shear_stiffness"},
+    {ParameterKind::kBendingStiffness, "bending_stiffness"},
+}};
+
+bool on_body(ParameterKind k) {
+  return k == ParameterKind::kBodyLinearVelocity || k == ParameterKind::kBodyAngularVelocity ||
+         k == ParameterKind::kBodyPosition || k == ParameterKind::kBodyOrientation;
+}
+bool on_rod(ParameterKind k) {
+  return k == ParameterKind::kRodNodeVelocities || k == ParameterKind::kNodeForce ||
+         k == ParameterKind::kCableTension ||
+         k == ParameterKind::kRestDarboux || k == ParameterKind::kRestDarbouxPerFrame ||
+         k == ParameterKind::kStretchStiffness || k == ParameterKind::kShearStiffness ||
+         k == ParameterKind::kBendingStiffness;
+}
+
+// A per-step schedule of `frames` values read from γ at `slot` (stride 3), and its slot.
+ScheduledParameter<3> schedule_from(const Eigen::VectorXd& gamma, int slot, int frames) {
+  ScheduledParameter<3> s;
+  s.slot = slot;
+  s.stride = 3;
+  s.schedule.resize(frames);
+  for (int k = 0; k < frames; ++k) s.schedule[k] = gamma.segment<3>(slot + 3 * k);
+  return s;
+}
+
+// "[i]" (appended piecewise: GCC 12 warns falsely (-Wrestrict) on "[" + std::to_string(i)).
+std::string bracket(int i) {
+  std::string s = "[";
+  s += std::to_string(i);
+  s += ']';
+  return s;
+}
+
+}  // namespace
+
+const char* to_string(ParameterKind kind) {
+  for (const KindName& k : kKindNames) {
+    if (k.kind == kind) return k.name;
+  }
+  return "?";
+}
+
+std::optional<ParameterKind> parse_parameter_kind(std::string_view name) {
+  for (const KindName& k : kKindNames) {
+    if (name == k.name) return k.kind;
+  }
+  return std::nullopt;
+}
+
+int ParameterSet::block_size(const Model& model, ParameterKind kind, int index) const {
+  switch (kind) {
+    case ParameterKind::kBodyLinearVelocity:
+    case ParameterKind::kBodyAngularVelocity:
+    case ParameterKind::kBodyPosition:
+    case ParameterKind::kBodyOrientation:
+    case ParameterKind::kBendingStiffness:
+      return 3;
+    case ParameterKind::kRodNodeVelocities:
+      return 3 * model.rods[index].node_count();
+    case ParameterKind::kForce:
+    case ParameterKind::kTorque:
+    case ParameterKind::kNodeForce:
+      return 3 * frames_;
+    case ParameterKind::kCableTension:
+      return frames_;
+    case ParameterKind::kRestDarboux:
+      return 3 * (model.rods[index].node_count() - 2);
+    case ParameterKind::kRestDarbouxPerFrame:
+      return 3 * (model.rods[index].node_count() - 2) * frames_;
+    case ParameterKind::kSpringStiffness:
+    case ParameterKind::kStretchStiffness:
+    case ParameterKind::kShearStiffness:
+      return 1;
+  }
+  return 0;
+}
+
+void ParameterSet::add(const Model& model, ParameterKind kind, int index, int sub,
+                       const std::string& field) {
+  const auto out_of_range = [&](const char* what, std::size_t count) {
+    throw ModelError(field, std::string("refers to ") + what + " " + std::to_string(index) +
+                                ", but the model has " + std::to_string(count));
+  };
+  if (on_body(kind) && (index < 0 || index >= static_cast<int>(model.bodies.size()))) {
+    out_of_range("body", model.bodies.size());
+  }
+  if (on_rod(kind) && (index < 0 || index >= static_cast<int>(model.rods.size()))) {
+    out_of_range("rod", model.rods.size());
+  }
+  if (kind == ParameterKind::kForce && (index < 0 || index >= static_cast<int>(model.forces.size()))) {
+    out_of_range("force", model.forces.size());
+  }
+  if (kind == ParameterKind::kTorque &&
+      (index < 0 || index >= static_cast<int>(model.torques.size()))) {
+    out_of_range("torque", model.torques.size());
+  }
+  if (kind == ParameterKind::kSpringStiffness &&
+      (index < 0 || index >= static_cast<int>(model.springs.size()))) {
+    out_of_range("spring", model.springs.size());
+  }
+  if (kind == ParameterKind::kNodeForce &&
+      (sub < 0 || sub >= static_cast<int>(model.rods[index].node_forces.size()))) {
+    throw ModelError(field, "refers to node force " + std::to_string(sub) + " of rod " +
+                                std::to_string(index) + ", which has " +
+                                std::to_string(model.rods[index].node_forces.size()));
+  }
+  if (kind == ParameterKind::kCableTension &&
+      (sub < 0 || sub >= static_cast<int>(model.rods[index].cables.size()))) {
+    throw ModelError(field, "refers to cable " + std::to_string(sub) + " of rod " +
+                                std::to_string(index) + ", which has " +
+                                std::to_string(model.rods[index].cables.size()));
+  }
+  if ((kind == ParameterKind::kRestDarboux || kind == ParameterKind::kRestDarbouxPerFrame) &&
+      model.rods[index].node_count() < 3) {
+    throw ModelError(field, "rod " + std::to_string(index) + " has no interior node");
+  }
+  if ((kind == ParameterKind::kBodyLinearVelocity || kind == ParameterKind::kBodyAngularVelocity ||
+       kind == ParameterKind::kRodNodeVelocities) &&
+      model.static_equilibrium) {
+    throw ModelError(field, "initial velocities have no effect in static mode");
+  }
+  const bool per_frame_darboux = kind == ParameterKind::kRestDarbouxPerFrame;
+  for (const ParameterBlock& b : blocks_) {
+    const bool both_darboux =
+        (b.kind == ParameterKind::kRestDarboux || b.kind == ParameterKind::kRestDarbouxPerFrame) &&
+        (kind == ParameterKind::kRestDarboux || per_frame_darboux);
+    if ((b.kind == kind || both_darboux) && b.index == index && b.sub == sub) {
+      throw ModelError(field, std::string("repeats the parameter ") + to_string(kind) + " " +
+                                  std::to_string(index));
+    }
+  }
+  ParameterBlock block{kind, index, sub, size_, block_size(model, kind, index)};
+  blocks_.push_back(block);
+  size_ += block.size;
+}
+
+std::string ParameterSet::describe(const Model& model, int i) const {
+  for (const ParameterBlock& b : blocks_) {
+    if (i < b.offset || i >= b.offset + b.size) continue;
+    const int j = i - b.offset;
+    const std::string axis = bracket(j % 3);
+    const std::string rod = "rods" + bracket(b.index);
+    const std::string body = "bodies" + bracket(b.index);
+    const std::string step = ".frame" + bracket(j / 3 + 1) + axis;
+    switch (b.kind) {
+      case ParameterKind::kBodyLinearVelocity: return body + ".linear_velocity" + axis;
+      case ParameterKind::kBodyAngularVelocity: return body + ".angular_velocity" + axis;
+      case ParameterKind::kBodyPosition: return body + ".position" + axis;
+      case ParameterKind::kBodyOrientation: return body + ".orientation_increment" + axis;
+      case ParameterKind::kRodNodeVelocities:
+        return rod + ".node_velocities" + bracket(j / 3) + axis;
+      case ParameterKind::kForce: return "forces" + bracket(b.index) + step;
+      case ParameterKind::kTorque: return "torques" + bracket(b.index) + step;
+      case ParameterKind::kNodeForce:
+        return rod + ".node_forces" + bracket(b.sub) + step;
+      case ParameterKind::kCableTension:
+        return rod + ".cables" + bracket(b.sub) + ".tension.frame" + bracket(j + 1);
+      case ParameterKind::kRestDarboux:
+        return rod + ".rest_darboux" + bracket(j / 3) + axis;
+      case ParameterKind::kRestDarbouxPerFrame: {
+        const int interior = model.rods[b.index].node_count() - 2;
+        return rod + ".rest_darboux.frame" + bracket(j / (3 * interior) + 1) +
+               bracket((j / 3) % interior) + axis;
+      }
+      case ParameterKind::kSpringStiffness:
+        return "springs" + bracket(b.index) + ".stiffness";
+      case ParameterKind::kStretchStiffness: return rod + ".stretch_stiffness";
+      case ParameterKind::kShearStiffness: return rod + ".shear_stiffness";
+      case ParameterKind::kBendingStiffness: return rod + ".bending_stiffness" + axis;
+    }
+  }
+  return "?";
+}
+
+Eigen::VectorXd ParameterSet::initial_values(const Model& model) const {
+  Eigen::VectorXd gamma = Eigen::VectorXd::Zero(size_);
+  for (const ParameterBlock& b : blocks_) {
+    auto block = gamma.segment(b.offset, b.size);
+    const auto repeat = [&](const Vector3& v, int times) {
+      for (int k = 0; k < times; ++k) block.segment<3>(3 * k) = v;
+    };
+    switch (b.kind) {
+      case ParameterKind::kBodyLinearVelocity: block = model.bodies[b.index].linear_velocity; break;
+      case ParameterKind::kBodyAngularVelocity: block = model.bodies[b.index].angular_velocity; break;
+      case ParameterKind::kBodyPosition: block = model.bodies[b.index].position; break;
+      case ParameterKind::kBodyOrientation: break;  // ε = 0
+      case ParameterKind::kRodNodeVelocities: {
+        const RodSpec& rod = model.rods[b.index];
+        for (int i = 0; i < rod.node_count(); ++i) {
+          block.segment<3>(3 * i) =
+              rod.node_velocities.empty() ? Vector3::Zero() : rod.node_velocities[i];
+        }
+        break;
+      }
+      case ParameterKind::kForce: repeat(model.forces[b.index].force, frames_); break;
+      case ParameterKind::kTorque: repeat(model.torques[b.index].torque, frames_); break;
+      case ParameterKind::kNodeForce:
+        repeat(model.rods[b.index].node_forces[b.sub].force, frames_);
+        break;
+      case ParameterKind::kCableTension:
+        block.setConstant(model.rods[b.index].cables[b.sub].tension);
+        break;
+      case ParameterKind::kRestDarboux:
+      case ParameterKind::kRestDarbouxPerFrame: {
+        const std::vector<Vector3> rest = discretize(model.rods[b.index]).rest_darboux;
+        const int interior = static_cast<int>(rest.size());
+        const int copies = b.kind == ParameterKind::kRestDarboux ? 1 : frames_;
+        for (int k = 0; k < copies; ++k) {
+          for (int i = 0; i < interior; ++i) block.segment<3>(3 * (k * interior + i)) = rest[i];
+        }
+        break;
+      }
+      case ParameterKind::kSpringStiffness: block(0) = model.springs[b.index].stiffness; break;
+      case ParameterKind::kStretchStiffness: block(0) = model.rods[b.index].stretch_stiffness; break;
+      case ParameterKind::kShearStiffness: block(0) = model.rods[b.index].shear_stiffness; break;
+      case ParameterKind::kBendingStiffness: block = model.rods[b.index].bending_stiffness; break;
+    }
+  }
+  return gamma;
+}
+
+Model ParameterSet::apply(const Model& base, const Eigen::VectorXd& gamma) const {
+  Model m = base;
+  for (const ParameterBlock& b : blocks_) {
+    const auto block = gamma.segment(b.offset, b.size);
+    switch (b.kind) {
+      case ParameterKind::kBodyLinearVelocity: m.bodies[b.index].linear_velocity = block; break;
+      case ParameterKind::kBodyAngularVelocity: m.bodies[b.index].angular_velocity = block; break;
+      case ParameterKind::kBodyPosition: m.bodies[b.index].position = block; break;
+      case ParameterKind::kBodyOrientation:
+        m.bodies[b.index].orientation =
+            so3::orthonormalize(so3::exp(block) * base.bodies[b.index].orientation);
+        break;
+      case ParameterKind::kRodNodeVelocities: {
+        RodSpec& rod = m.rods[b.index];
+        rod.node_velocities.resize(rod.node_count());
+        for (int i = 0; i < rod.node_count(); ++i) rod.node_velocities[i] = block.segment<3>(3 * i);
+        break;
+      }
+      case ParameterKind::kForce:
+        m.forces[b.index].control = schedule_from(gamma, b.offset, frames_);
+        break;
+      case ParameterKind::kTorque:
+        m.torques[b.index].control = schedule_from(gamma, b.offset, frames_);
+        break;
+      case ParameterKind::kNodeForce:
+        m.rods[b.index].node_forces[b.sub].control = schedule_from(gamma, b.offset, frames_);
+        break;
+      case ParameterKind::kCableTension: {
+        ScheduledParameter<1>& c = m.rods[b.index].cables[b.sub].control;
+        c.slot = b.offset;
+        c.stride = 1;
+        c.schedule.resize(frames_);
+        for (int k = 0; k < frames_; ++k) c.schedule[k](0) = block(k);
+        break;
+      }
+      case ParameterKind::kRestDarboux:
+      case ParameterKind::kRestDarbouxPerFrame: {
+        RodSpec& rod = m.rods[b.index];
+        const int interior = rod.node_count() - 2;
+        const bool per_frame = b.kind == ParameterKind::kRestDarbouxPerFrame;
+        rod.rest_darboux.resize(interior);
+        rod.rest_darboux_controls.assign(interior, ScheduledParameter<3>{});
+        for (int i = 0; i < interior; ++i) {
+          rod.rest_darboux[i] = block.segment<3>(3 * i);  // per frame: frame 1's (and ω̄ before)
+          ScheduledParameter<3>& c = rod.rest_darboux_controls[i];
+          c.slot = b.offset + 3 * i;
+          if (!per_frame) continue;
+          c.stride = 3 * interior;
+          c.schedule.resize(frames_);
+          for (int k = 0; k < frames_; ++k) c.schedule[k] = block.segment<3>(3 * (k * interior + i));
+        }
+        break;
+      }
+      case ParameterKind::kSpringStiffness:
+        m.springs[b.index].stiffness = block(0);
+        m.springs[b.index].stiffness_slot = b.offset;
+        break;
+      case ParameterKind::kStretchStiffness:
+        m.rods[b.index].stretch_stiffness = block(0);
+        m.rods[b.index].stretch_stiffness_slot = b.offset;
+        break;
+      case ParameterKind::kShearStiffness:
+        m.rods[b.index].shear_stiffness = block(0);
+        m.rods[b.index].shear_stiffness_slot = b.offset;
+        break;
+      case ParameterKind::kBendingStiffness:
+        m.rods[b.index].bending_stiffness = block;
+        m.rods[b.index].bending_stiffness_slot = b.offset;
+        break;
+    }
+  }
+  return m;
+}
+
+void ParameterSet::add_initial_gradient(const Model& applied, const Eigen::VectorXd& gamma,
+                                        const Eigen::VectorXd& a0, const Eigen::VectorXd& da0,
+                                        Eigen::VectorXd& dgamma) const {
+  const double h = applied.time_step;
+  int rod_points = 0;  // points before each rod's first node: all bodies, then earlier rods
+  for (const RodSpec& rod : applied.rods) rod_points += rod.node_count();
+  const int point_count = static_cast<int>(applied.bodies.size()) + rod_points;
+  for (const ParameterBlock& b : blocks_) {
+    auto block = dgamma.segment(b.offset, b.size);
+    const int body_point = tangent_point(b.index);
+    const int body_rotation = 3 * (point_count + b.index);
+    switch (b.kind) {
+      case ParameterKind::kBodyLinearVelocity:  // Δx_0 = h v_0
+        block += h * da0.segment<3>(body_point);
+        break;
+      case ParameterKind::kBodyAngularVelocity:  // ΔR_0 = exp(h ω_0)
+        block += h * so3::left_jacobian(h * gamma.segment<3>(b.offset)).transpose() *
+                 da0.segment<3>(body_rotation);
+        break;
+      case ParameterKind::kBodyPosition: block += a0.segment<3>(body_point); break;
+      case ParameterKind::kBodyOrientation:  // R_0 = exp(ε) R_scene
+        block += so3::left_jacobian(gamma.segment<3>(b.offset)).transpose() *
+                 a0.segment<3>(body_rotation);
+        break;
+      case ParameterKind::kRodNodeVelocities: {  // Δx_0 = h v_0 per node
+        const int first = applied.rod_point(b.index, 0);
+        block += h * da0.segment(tangent_point(first), b.size);
+        break;
+      }
+      default:  // enters the potential, not q_0 or Δq_0
+        break;
+    }
+  }
+}
+
+}  // namespace liedyn

@@ -1,0 +1,94 @@
+#pragma once
+// The parameters γ of a trajectory optimisation (paper §5, §7.3–7.4): which numbers of a
+// Model are free, their place in the vector γ, writing γ into a Model, and the part of the
+// gradient that comes through the initial state and step,
+//   dg/dγ ⊇ (∂q_0/∂γ)ᵀ a_0 + (∂Δq_0/∂γ)ᵀ Δa_0   (DESIGN.md §6).
+// Parameters that enter the incremental potential (forces, torques, tensions, rest shape,
+// stiffnesses) are handed to the terms as slots (lib/term.hpp), and their gradient
+// (∂C_k/∂γ)ᵀ z_k is summed by IncrementalPotential::add_parameter_adjoint.
+//
+// Kinds, and their size per block (h the time step, n the number of frames):
+//   body_linear_velocity     3       v_0 of a body: Δx_0 = h v_0
+//   body_angular_velocity    3       ω_0 (world): ΔR_0 = exp(h ω_0), ∂/∂ω_0 = h J_l(h ω_0)
+//   body_position            3       x_0
+//   body_orientation         3       ε with R_0 = exp(ε) R_scene (γ starts at 0): ∂/∂ε = J_l(ε)
+//   rod_node_velocities      3·nodes initial node velocities of a rod
+//   force, torque            3·n     per-step world force (at a body point) / torque
+//   node_force               3·n     per-step world force on a rod node (rods[r].node_forces[j])
+//   cable_tension            n       per-step tension of a rod's cable (rods[r].cables[c])
+//   rest_darboux             3·(nodes−2)      static rest Darboux vectors of a rod
+//   rest_darboux_per_frame   3·(nodes−2)·n    per-step rest Darboux vectors (frame-major)
+//   spring_stiffness, stretch_stiffness, shear_stiffness   1
+//   bending_stiffness        3       (K₁, K₂, K₃)
+
+#include <Eigen/Core>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "model.hpp"
+
+namespace liedyn {
+
+enum class ParameterKind {
+  kBodyLinearVelocity,
+  kBodyAngularVelocity,
+  kBodyPosition,
+  kBodyOrientation,
+  kRodNodeVelocities,
+  kForce,
+  kTorque,
+  kNodeForce,
+  kCableTension,
+  kRestDarboux,
+  kRestDarbouxPerFrame,
+  kSpringStiffness,
+  kStretchStiffness,
+  kShearStiffness,
+  kBendingStiffness,
+};
+
+const char* to_string(ParameterKind kind);
+std::optional<ParameterKind> parse_parameter_kind(std::string_view name);
+
+struct ParameterBlock {
+  ParameterKind kind;
+  int index = 0;  // body, forces[]/torques[]/springs[] entry, or rod
+  int sub = -1;   // node_force / cable_tension: its index in rods[index].node_forces / cables
+  int offset = 0;
+  int size = 0;
+};
+
+class ParameterSet {
+ public:
+  // `frames`: the number of steps simulated (sizes the per-step kinds).
+  explicit ParameterSet(int frames) : frames_(frames) {}
+
+  // Appends a block; throws ModelError naming `field` (e.g. "optimization.parameters[2]")
+  // when the index does not exist in the model, or the block repeats one already added.
+  void add(const Model& model, ParameterKind kind, int index, int sub, const std::string& field);
+
+  int size() const { return size_; }
+  int frames() const { return frames_; }
+  const std::vector<ParameterBlock>& blocks() const { return blocks_; }
+  // e.g. "bodies[0].angular_velocity[2]", "forces[1].frame[17][0]" (for reports).
+  std::string describe(const Model& model, int i) const;
+
+  // γ as the model states it (per-step values: the constant repeated; orientation: 0).
+  Eigen::VectorXd initial_values(const Model& model) const;
+  // A copy of `base` with γ written in, and the slots of the potential's parameters set.
+  Model apply(const Model& base, const Eigen::VectorXd& gamma) const;
+  // dgamma += (∂q_0/∂γ)ᵀ a_0 + (∂Δq_0/∂γ)ᵀ Δa_0 (whole-state tangent layout).
+  void add_initial_gradient(const Model& applied, const Eigen::VectorXd& gamma,
+                            const Eigen::VectorXd& a0, const Eigen::VectorXd& da0,
+                            Eigen::VectorXd& dgamma) const;
+
+ private:
+  int block_size(const Model& model, ParameterKind kind, int index) const;
+  int frames_;
+  int size_ = 0;
+  std::vector<ParameterBlock> blocks_;
+};
+
+}  // namespace liedyn

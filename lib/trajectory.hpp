@@ -1,0 +1,50 @@
+#pragma once
+// A recorded forward simulation, for objectives and the adjoint pass (paper §5).
+// Memory: the states only (one State per frame: 3 doubles per point, 9 per rotation, about
+// 16 KB per frame for a 171-node rod, 160 MB for 10⁴ frames); the steps Δq_k, k ≥ 1, are
+// recomputed from consecutive states exactly as the simulator computes them.
+
+#include <vector>
+
+#include "so3.hpp"
+#include "state.hpp"
+
+namespace liedyn {
+
+struct Trajectory {
+  double time_step = 0.0;
+  bool static_equilibrium = false;  // load steps: every Δq is zero (Model::static_equilibrium)
+  std::vector<State> states;        // q_0 … q_n
+  Step initial_step;                // Δq_0
+
+  int frames() const { return static_cast<int>(states.size()) - 1; }
+
+  // Δq_k: Δq_0 as recorded; for k ≥ 1, Δx_k = x_k − x_{k−1}, ΔR_k = R_k R_{k−1}ᵀ
+  // (orthonormalised, as in Simulator::step); zero in static mode.
+  Step step(int k) const {
+    if (k == 0) return initial_step;
+    const State& q = states[k];
+    const State& p = states[k - 1];
+    Step dq;
+    dq.points.resize(q.points.size(), Vector3::Zero());
+    dq.rotations.resize(q.rotations.size(), Matrix3::Identity());
+    if (static_equilibrium) return dq;
+    for (std::size_t i = 0; i < q.points.size(); ++i) dq.points[i] = q.points[i] - p.points[i];
+    for (std::size_t i = 0; i < q.rotations.size(); ++i) {
+      dq.rotations[i] = so3::orthonormalize(q.rotations[i] * p.rotations[i].transpose());
+    }
+    return dq;
+  }
+};
+
+// Index of point i and rotation j in a whole-state tangent vector (3 entries per point, then
+// 3 per rotation), the layout of the adjoint vectors a_k, Δa_k.
+inline int tangent_point(int i) { return 3 * i; }
+inline int tangent_rotation(const State& q, int j) {
+  return 3 * (static_cast<int>(q.points.size()) + j);
+}
+inline int tangent_size(const State& q) {
+  return 3 * static_cast<int>(q.points.size() + q.rotations.size());
+}
+
+}  // namespace liedyn

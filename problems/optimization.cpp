@@ -1,0 +1,424 @@
+#include "optimization.hpp"
+
+#include <chrono>
+#include <cmath>
+#include <iomanip>
+#include <nlohmann/json.hpp>
+#include <ostream>
+#include <sstream>
+
+#include "../lib/so3.hpp"
+#include "json_reader.hpp"
+#include "letters.hpp"
+#include "output.hpp"
+#include "run.hpp"
+
+namespace liedyn {
+
+namespace {
+
+using nlohmann::json;
+using scene_json::item_path;
+using scene_json::ObjectReader;
+
+int body_named(ObjectReader& r, const Scene& scene) {
+  const std::string name = r.string("body");
+  for (std::size_t i = 0; i < scene.model.bodies.size(); ++i) {
+    if (scene.model.bodies[i].name == name) return static_cast<int>(i);
+  }
+  r.fail(r.field("body"), "no body is named \"" + name + "\"");
+}
+
+int rod_named(ObjectReader& r, const Scene& scene) {
+  const std::string name = r.string("rod");
+  for (std::size_t i = 0; i < scene.model.rods.size(); ++i) {
+    if (scene.model.rods[i].name == name) return static_cast<int>(i);
+  }
+  r.fail(r.field("rod"), "no rod is named \"" + name + "\"");
+}
+
+// Frame index: −1 (last) or 0 … frames.
+int frame_of(ObjectReader& r, const Scene& scene) {
+  return r.has("frame") ? r.integer("frame", -1, scene.frames) : -1;
+}
+
+std::vector<Vector3> points_of(const json& v, const std::string& field, const ObjectReader& r) {
+  if (!v.is_array() || v.size() < 2) r.fail(field, "must be an array of at least 2 points");
+  std::vector<Vector3> out;
+  for (std::size_t i = 0; i < v.size(); ++i) out.push_back(r.to_vector<3>(v[i], item_path(field, i)));
+  return out;
+}
+
+void parse_parameter(ObjectReader& r, const Scene& scene, OptimizationSpec& spec,
+                     const std::string& path) {
+  const std::string name = r.string("kind");
+  const auto kind = parse_parameter_kind(name);
+  if (!kind) r.fail(r.field("kind"), "unknown parameter kind \"" + name + "\" (see docs/scene-format.md)");
+  int index = 0, sub = -1;
+  switch (*kind) {
+    case ParameterKind::kBodyLinearVelocity:
+    case ParameterKind::kBodyAngularVelocity:
+    case ParameterKind::kBodyPosition:
+    case ParameterKind::kBodyOrientation:
+      index = body_named(r, scene);
+      break;
+    case ParameterKind::kForce:
+    case ParameterKind::kTorque:
+    case ParameterKind::kSpringStiffness:
+      index = r.integer("index", 0);
+      break;
+    case ParameterKind::kNodeForce:
+      index = rod_named(r, scene);
+      sub = r.integer("node_force", 0);
+      break;
+    case ParameterKind::kCableTension:
+      index = rod_named(r, scene);
+      sub = r.integer("cable", 0);
+      break;
+    default:
+      index = rod_named(r, scene);
+      break;
+  }
+  r.finish();
+  spec.parameters.add(scene.model, *kind, index, sub, path);
+}
+
+// The 2×3 orthographic projection onto two world axes, "xy", "xz" or "yz".
+Eigen::Matrix<double, 2, 3> projection_of(ObjectReader& r) {
+  const std::string plane = r.string("plane", "xy");
+  const std::string axes = "xyz";
+  if (plane.size() != 2 || axes.find(plane[0]) == std::string::npos ||
+      axes.find(plane[1]) == std::string::npos || plane[0] == plane[1]) {
+    r.fail(r.field("plane"), "must be two different axes such as \"xy\" or \"xz\" (got \"" + plane + "\")");
+  }
+  Eigen::Matrix<double, 2, 3> P = Eigen::Matrix<double, 2, 3>::Zero();
+  for (int row = 0; row < 2; ++row) P(row, static_cast<int>(plane[row] - 'x')) = 1.0;
+  return P;
+}
+
+void parse_term(ObjectReader& r, const Scene& scene, OptimizationSpec& spec) {
+  const std::string term = r.string("term");
+  const double weight = r.number("weight", 1.0);
+  if (!(weight >= 0.0)) r.fail(r.field("weight"), "must be ≥ 0");
+  const Model& model = scene.model;
+  if (term == "point_targets") {
+    const int rod = rod_named(r, scene);
+    const int frame = frame_of(r, scene);
+    const int n = model.rods[rod].node_count();
+    std::vector<Vector3> targets;
+    const int sources = int(r.has("targets")) + int(r.has("polyline")) + int(r.has("letter"));
+    if (sources != 1) r.fail(r.field("targets"), "give exactly one of targets, polyline or letter");
+    if (r.has("targets")) {
+      targets = points_of(r.get("targets"), r.field("targets"), r);
+      if (static_cast<int>(targets.size()) != n) {
+        r.fail(r.field("targets"), "has " + std::to_string(targets.size()) +
+                                       " points, but the rod has " + std::to_string(n) + " nodes");
+      }
+    } else if (r.has("polyline")) {
+      targets = resample_polyline(points_of(r.get("polyline"), r.field("polyline"), r), n);
+    } else {
+      const std::string letter = r.string("letter");
+      const double height = r.number("height", 1.0);
+      if (letter.size() != 1) r.fail(r.field("letter"), "must be one character");
+      if (!(height > 0.0)) r.fail(r.field("height"), "must be positive");
+      try {
+        targets = letter_target(letter[0], height, r.vector<3>("origin", Vector3::Zero()), n);
+      } catch (const std::invalid_argument& e) {
+        r.fail(r.field("letter"), e.what());
+      }
+    }
+    std::vector<int> points;
+    for (int i = 0; i < n; ++i) points.push_back(model.rod_point(rod, i));
+    r.finish();
+    spec.objective.add(std::make_shared<PointTargets>(points, targets, frame, weight));
+  } else if (term == "body_pose") {
+    const int body = body_named(r, scene);
+    const int frame = frame_of(r, scene);
+    const bool has_position = r.has("position");
+    const Vector3 position = r.vector<3>("position", Vector3::Zero());
+    const Vector3 position_weights =
+        r.vector<3>("position_weights", has_position ? Vector3::Ones() : Vector3::Zero());
+    if ((position_weights.array() < 0.0).any()) r.fail(r.field("position_weights"), "must be ≥ 0");
+    Matrix3 orientation = Matrix3::Identity();
+    const bool has_orientation = r.has("orientation");
+    if (has_orientation) {
+      const Eigen::Vector4d wxyz = r.vector<4>("orientation");
+      if (std::abs(wxyz.norm() - 1.0) > kQuaternionNormTolerance) {
+        r.fail(r.field("orientation"), "must be a unit quaternion [w, x, y, z]");
+      }
+      orientation = so3::from_quaternion(Eigen::Quaterniond(wxyz(0), wxyz(1), wxyz(2), wxyz(3)));
+    }
+    const double orientation_weight = r.number("orientation_weight", has_orientation ? 1.0 : 0.0);
+    if (!(orientation_weight >= 0.0)) r.fail(r.field("orientation_weight"), "must be ≥ 0");
+    r.finish();
+    spec.objective.add(std::make_shared<BodyPose>(body, frame, position, position_weights,
+                                                  orientation, orientation_weight * weight));
+  } else if (term == "projected_trajectory") {
+    int point = -1;
+    if (r.has("body")) {
+      point = body_named(r, scene);
+    } else {
+      const int rod = rod_named(r, scene);
+      const int node = r.integer("node", 0, model.rods[rod].node_count() - 1);
+      point = model.rod_point(rod, node);
+    }
+    const Eigen::Matrix<double, 2, 3> P = projection_of(r);
+    const json& curve = r.array("curve");
+    std::vector<Vector3> polyline;
+    for (std::size_t i = 0; i < curve.size(); ++i) {
+      const Eigen::Vector2d uv = r.to_vector<2>(curve[i], item_path(r.field("curve"), i));
+      polyline.push_back(Vector3(uv(0), uv(1), 0.0));
+    }
+    // A curve of exactly one point per frame is taken as is; any other is resampled by arc
+    // length to one point per frame.
+    if (static_cast<int>(polyline.size()) != scene.frames) {
+      if (polyline.size() < 2) r.fail(r.field("curve"), "needs at least 2 points");
+      polyline = resample_polyline(polyline, scene.frames);
+    }
+    std::vector<Eigen::Vector2d> points;
+    for (const Vector3& p : polyline) points.emplace_back(p.x(), p.y());
+    r.finish();
+    spec.objective.add(std::make_shared<ProjectedTrajectory>(point, P, points, weight));
+  } else if (term == "effort") {
+    std::vector<int> which;
+    if (r.has("parameters")) {
+      const json& list = r.array("parameters");
+      for (std::size_t i = 0; i < list.size(); ++i) {
+        which.push_back(r.to_integer(list[i], item_path(r.field("parameters"), i), 0,
+                                     static_cast<int>(spec.parameters.blocks().size()) - 1));
+      }
+    } else {
+      for (std::size_t i = 0; i < spec.parameters.blocks().size(); ++i) which.push_back(int(i));
+    }
+    r.finish();
+    for (int b : which) {
+      const ParameterBlock& block = spec.parameters.blocks()[b];
+      spec.objective.add(std::make_shared<Effort>(block.offset, block.offset + block.size, weight));
+    }
+  } else {
+    r.fail(r.field("term"), "unknown objective term \"" + term +
+                                "\" (expected point_targets, body_pose, projected_trajectory or effort)");
+  }
+}
+
+}  // namespace
+
+OptimizationSpec parse_optimization(const json& value, const Scene& scene) {
+  const std::string& source = scene.source;
+  ObjectReader o(value, "optimization", source);
+  if (scene.frames < 1) o.fail("frames", "an optimisation needs at least one frame");
+  OptimizationSpec spec;
+  spec.parameters = ParameterSet(scene.frames);
+  const json& parameters = o.array("parameters");
+  if (parameters.empty()) o.fail(o.field("parameters"), "must list at least one parameter");
+  for (std::size_t i = 0; i < parameters.size(); ++i) {
+    const std::string path = item_path(o.field("parameters"), i);
+    ObjectReader r(parameters[i], path, source);
+    parse_parameter(r, scene, spec, path);
+  }
+  const json& objective = o.array("objective");
+  if (objective.empty()) o.fail(o.field("objective"), "must list at least one term");
+  for (std::size_t i = 0; i < objective.size(); ++i) {
+    ObjectReader r(objective[i], item_path(o.field("objective"), i), source);
+    parse_term(r, scene, spec);
+  }
+  const std::string optimizer = o.string("optimizer", to_string(spec.optimizer.optimizer));
+  if (const auto parsed = parse_optimizer(optimizer)) {
+    spec.optimizer.optimizer = *parsed;
+  } else {
+    o.fail(o.field("optimizer"), "unknown optimizer \"" + optimizer +
+                                     "\" (expected nlopt-lbfgs, ceres-lbfgs or ipopt-lbfgs)");
+  }
+  if (o.has("max_iterations")) spec.optimizer.max_iterations = o.integer("max_iterations", 1);
+  spec.optimizer.target_normalized_loss =
+      o.number("target_normalized_loss", spec.optimizer.target_normalized_loss);
+  if (o.has("lbfgs_memory")) spec.optimizer.lbfgs_memory = o.integer("lbfgs_memory", 1);
+  spec.loss_scale = o.number("loss_scale", 0.0);
+  if (spec.loss_scale < 0.0) o.fail(o.field("loss_scale"), "must be > 0 (or absent: the initial loss)");
+  o.finish();
+  spec.optimizer.validate();
+  return spec;
+}
+
+DifferentiableSimulation make_differentiable_simulation(const Scene& scene) {
+  if (!scene.optimization) {
+    throw SceneError(scene.source, "optimization", "is required but missing (nothing to differentiate)");
+  }
+  return DifferentiableSimulation(scene.model, scene.optimization->parameters,
+                                  scene.optimization->objective, scene.solver);
+}
+
+int run_gradcheck(const Scene& scene, const GradientCheckOptions& options, bool verbose,
+                  std::ostream& out) {
+  const DifferentiableSimulation sim = make_differentiable_simulation(scene);
+  const GradientCheckResult r = check_gradient(sim, sim.initial_parameters(), options);
+  out << std::setprecision(6);
+  if (verbose) {
+    out << "parameter,adjoint,finite_difference,relative_error\n";
+    for (const GradientCheckEntry& e : r.entries) {
+      out << sim.parameters().describe(scene.model, e.index) << ',' << e.adjoint << ','
+          << e.finite_difference << ',' << e.relative_error << '\n';
+    }
+  }
+  out << "loss " << r.loss << "; one forward pass " << r.forward_seconds << " s, backward pass "
+      << r.backward_seconds << " s (" << (r.forward_seconds > 0 ? r.backward_seconds / r.forward_seconds : 0.0)
+      << "× forward)\n";
+  if (r.worst >= 0) {
+    out << "worst: " << sim.parameters().describe(scene.model, r.worst) << '\n';
+  }
+  out << "gradcheck: max_rel_error=" << std::setprecision(3) << std::scientific
+      << r.max_relative_error << " params=" << r.entries.size() << " tolerance=" << options.tolerance
+      << std::defaultfloat << '\n';
+  return r.passed() ? 0 : 1;
+}
+
+namespace {
+
+struct HistoryRow {
+  int iteration = 0;
+  double loss = 0, normalized_loss = 0, gradient_norm = 0, seconds = 0;
+};
+
+struct Checkpoint {
+  std::vector<HistoryRow> history;
+  Eigen::VectorXd best;
+  double best_loss = INFINITY;
+  double loss_scale = 0.0;
+  double seconds = 0.0;  // wall time of earlier runs
+};
+
+void write_history(const std::filesystem::path& file, const std::vector<HistoryRow>& rows) {
+  AtomicFile f(file);
+  f.stream() << std::setprecision(17) << "iteration,loss,normalized_loss,gradient_norm,seconds\n";
+  for (const HistoryRow& h : rows) {
+    f.stream() << h.iteration << ',' << h.loss << ',' << h.normalized_loss << ',' << h.gradient_norm
+               << ',' << h.seconds << '\n';
+  }
+  f.commit();
+}
+
+void write_checkpoint(const std::filesystem::path& file, const Checkpoint& c) {
+  json j;
+  j["best"] = std::vector<double>(c.best.data(), c.best.data() + c.best.size());
+  j["best_loss"] = c.best_loss;
+  j["loss_scale"] = c.loss_scale;
+  j["seconds"] = c.seconds;
+  json rows = json::array();
+  for (const HistoryRow& h : c.history) {
+    rows.push_back({h.iteration, h.loss, h.normalized_loss, h.gradient_norm, h.seconds});
+  }
+  j["history"] = rows;
+  AtomicFile f(file);
+  f.stream() << j.dump() << '\n';
+  f.commit();
+}
+
+Checkpoint read_checkpoint(const std::filesystem::path& file, int size) {
+  std::ifstream in(file);
+  if (!in) throw std::runtime_error(file.string() + ": cannot open the checkpoint to resume from");
+  json j;
+  try {
+    j = json::parse(in);
+  } catch (const json::exception& e) {
+    throw std::runtime_error(file.string() + ": not a checkpoint (" + e.what() + ")");
+  }
+  Checkpoint c;
+  try {
+    const std::vector<double> best = j.at("best").get<std::vector<double>>();
+    if (static_cast<int>(best.size()) != size) {
+      throw std::runtime_error("best: has " + std::to_string(best.size()) +
+                               " parameters, the scene " + std::to_string(size));
+    }
+    c.best = Eigen::Map<const Eigen::VectorXd>(best.data(), size);
+    c.best_loss = j.at("best_loss").get<double>();
+    c.loss_scale = j.at("loss_scale").get<double>();
+    c.seconds = j.at("seconds").get<double>();
+    for (const json& row : j.at("history")) {
+      c.history.push_back({row.at(0).get<int>(), row.at(1).get<double>(), row.at(2).get<double>(),
+                           row.at(3).get<double>(), row.at(4).get<double>()});
+    }
+  } catch (const json::exception& e) {
+    throw std::runtime_error(file.string() + ": not a checkpoint of this format (" + e.what() + ")");
+  } catch (const std::runtime_error& e) {
+    throw std::runtime_error(file.string() + ": " + e.what());
+  }
+  return c;
+}
+
+}  // namespace
+
+int run_optimize(const Scene& scene, const OptimizeOptions& options, std::ostream& out) {
+  const DifferentiableSimulation sim = make_differentiable_simulation(scene);
+  OptimizerOptions optimizer = scene.optimization->optimizer;
+  if (options.optimizer) optimizer.optimizer = *options.optimizer;
+  if (options.max_iterations) optimizer.max_iterations = *options.max_iterations;
+  optimizer.validate();
+  std::filesystem::create_directories(options.out);
+  const std::filesystem::path checkpoint_file = options.out / "checkpoint.json";
+  const std::filesystem::path history_file = options.out / "history.csv";
+
+  Checkpoint checkpoint;
+  Eigen::VectorXd start = sim.initial_parameters();
+  if (options.resume) {
+    checkpoint = read_checkpoint(checkpoint_file, sim.parameters().size());
+    start = checkpoint.best;
+    out << "resuming from " << checkpoint_file.string() << ": " << checkpoint.history.size()
+        << " evaluations, best normalized loss " << checkpoint.best_loss / checkpoint.loss_scale
+        << '\n';
+  } else {
+    checkpoint.loss_scale = scene.optimization->loss_scale;
+    if (checkpoint.loss_scale == 0.0) checkpoint.loss_scale = sim.evaluate(start, nullptr).loss;
+    if (!(checkpoint.loss_scale > 0.0)) {
+      out << "the initial loss is " << checkpoint.loss_scale
+          << ": nothing to minimise (set optimization.loss_scale to normalise otherwise)\n";
+      return 4;
+    }
+  }
+  const int first_iteration =
+      checkpoint.history.empty() ? 0 : checkpoint.history.back().iteration + 1;
+  const double earlier_seconds = checkpoint.seconds;
+
+  const ObjectiveFunction f = [&](const Eigen::VectorXd& gamma, Eigen::VectorXd& gradient) {
+    return sim.evaluate(gamma, &gradient).loss;
+  };
+  const EvaluationCallback record = [&](const Evaluation& e, const Eigen::VectorXd& gamma,
+                                        const Eigen::VectorXd&) {
+    checkpoint.history.push_back({first_iteration + e.evaluation - 1, e.loss, e.normalized_loss,
+                                  e.gradient_norm, earlier_seconds + e.seconds});
+    if (e.loss < checkpoint.best_loss) {
+      checkpoint.best_loss = e.loss;
+      checkpoint.best = gamma;
+    }
+    checkpoint.seconds = earlier_seconds + e.seconds;
+    write_history(history_file, checkpoint.history);
+    write_checkpoint(checkpoint_file, checkpoint);
+  };
+  const OptimizationResult result = minimize(f, start, checkpoint.loss_scale, optimizer, record);
+
+  const Eigen::VectorXd& best =
+      checkpoint.best.size() == start.size() ? checkpoint.best : result.best_x;
+  {
+    AtomicFile p(options.out / "parameters.csv");
+    p.stream() << std::setprecision(17) << "parameter,value\n";
+    for (int i = 0; i < best.size(); ++i) {
+      p.stream() << sim.parameters().describe(scene.model, i) << ',' << best(i) << '\n';
+    }
+    p.commit();
+  }
+  Scene optimized = scene;
+  optimized.model = sim.parameters().apply(scene.model, best);
+  optimized.optimization.reset();
+  simulate_scene(optimized, options.out, nullptr);
+
+  out << "optimizer " << to_string(optimizer.optimizer) << ": " << result.status
+      << (result.message.empty() ? "" : " (" + result.message + ")") << '\n'
+      << "iterations " << result.iterations << ", evaluations " << result.evaluations << ", "
+      << std::setprecision(4) << result.seconds << " s\n"
+      << "best loss " << checkpoint.best_loss << ", normalized " << checkpoint.best_loss / checkpoint.loss_scale
+      << " (target " << optimizer.target_normalized_loss << ")\n"
+      << "outputs in " << options.out.string() << '\n';
+  if (result.status == "failed") return 4;
+  return checkpoint.best_loss / checkpoint.loss_scale <= optimizer.target_normalized_loss ? 0 : 3;
+}
+
+}  // namespace liedyn

@@ -1,0 +1,51 @@
+#pragma once
+// Trajectory optimisation from a scene file (paper §5, §7.3–7.4): the scene's "optimization"
+// block (docs/scene-format.md), and the `liedyn gradcheck` and `liedyn optimize` commands.
+
+#include <filesystem>
+#include <iosfwd>
+#include <nlohmann/json_fwd.hpp>
+#include <optional>
+#include <string>
+
+#include "../solvers/adjoint.hpp"
+#include "../solvers/gradient_check.hpp"
+#include "scene.hpp"
+
+namespace liedyn {
+
+// Parses the "optimization" block of a scene whose model is already validated. Throws
+// SceneError (schema) or ModelError (indices, with the field's path).
+OptimizationSpec parse_optimization(const nlohmann::json& value, const Scene& scene);
+
+// The differentiable simulation a scene with an "optimization" block describes (SceneError
+// if it has none).
+DifferentiableSimulation make_differentiable_simulation(const Scene& scene);
+
+// `liedyn gradcheck`: prints one row per checked parameter (with --verbose) and then the
+// last line exactly
+//   gradcheck: max_rel_error=<float> params=<int> tolerance=<float>
+// Returns 0 when within tolerance, 1 otherwise.
+int run_gradcheck(const Scene& scene, const GradientCheckOptions& options, bool verbose,
+                  std::ostream& out);
+
+struct OptimizeOptions {
+  std::filesystem::path out;              // output directory (created)
+  std::optional<Optimizer> optimizer;     // overrides the scene's
+  std::optional<int> max_iterations;      // overrides the scene's
+  bool resume = false;                    // continue from out/checkpoint.json
+};
+
+// `liedyn optimize`: minimises the scene's objective. Writes, atomically (temporary file,
+// then rename) after every evaluation:
+//   out/history.csv       iteration,loss,normalized_loss,gradient_norm,seconds (one row per
+//                         evaluation of loss and gradient)
+//   out/checkpoint.json   the best parameters so far, the history and the evaluation count
+// and at the end out/parameters.csv (name,value of the best γ) and out/trajectory.csv (its
+// forward simulation, the format of `liedyn simulate`). With resume, the optimisation
+// restarts from the checkpoint's best parameters (the L-BFGS memory is not kept) and
+// appends to its history. Returns 0 when the target was reached, 3 when it stopped
+// otherwise (iterations, round-off, back-end convergence), 4 on failure.
+int run_optimize(const Scene& scene, const OptimizeOptions& options, std::ostream& out);
+
+}  // namespace liedyn

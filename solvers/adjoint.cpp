@@ -1,0 +1,176 @@
+#include "adjoint.hpp"
+
+#include <chrono>
+#include <memory>
+
+#include "linear_system.hpp"
+#include "simulator.hpp"
+
+namespace liedyn {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double seconds_since(Clock::time_point start) {
+  return std::chrono::duration<double>(Clock::now() - start).count();
+}
+
+// H_k of one component, factorised, and solves with it (the linear system the forward Newton
+// solver would pick for the component's size).
+class HessianSolve {
+ public:
+  virtual ~HessianSolve() = default;
+  // Assembles and factorises the exact Lie Hessian at q; false if not positive definite.
+  virtual bool factorize(const IncrementalPotential& potential, const State& q) = 0;
+  // x = H⁻¹ b.
+  virtual void solve(const Eigen::VectorXd& b, Eigen::VectorXd& x) = 0;
+};
+
+template <class System>
+class SystemSolve final : public HessianSolve {
+ public:
+  explicit SystemSolve(const Component& c) : system_(c) {}
+  bool factorize(const IncrementalPotential& potential, const State& q) override {
+    system_.assemble(potential, q, nullptr);
+    return system_.hessian_finite() && system_.factorize(0.0);
+  }
+  void solve(const Eigen::VectorXd& b, Eigen::VectorXd& x) override {
+    b_ = b;
+    system_.solve_linear(b_, x_);
+    x = x_;
+  }
+
+ private:
+  System system_;
+  typename System::Vector b_, x_;
+};
+
+std::unique_ptr<HessianSolve> make_hessian_solve(const Component& c) {
+  if (c.dofs == 6) return std::make_unique<SystemSolve<DenseSystem<6>>>(c);
+  if (c.dofs <= kDenseLimit) return std::make_unique<SystemSolve<DenseSystem<Eigen::Dynamic>>>(c);
+  return std::make_unique<SystemSolve<SparseSystem>>(c);
+}
+
+}  // namespace
+
+SimulationFailed::SimulationFailed(int frame, const std::string& reason)
+    : std::runtime_error("frame " + std::to_string(frame) + ": " + reason), frame_(frame) {}
+
+DifferentiableSimulation::DifferentiableSimulation(Model base, ParameterSet parameters,
+                                                   Objective objective, SolverOptions options)
+    : base_(std::move(base)),
+      parameters_(std::move(parameters)),
+      objective_(std::move(objective)),
+      options_(options) {
+  options_.validate();
+  parameters_.apply(base_, initial_parameters()).validate();
+}
+
+Trajectory DifferentiableSimulation::simulate(const Model& model, Result& result) const {
+  Simulator simulator(model, options_);
+  Trajectory t;
+  t.time_step = model.time_step;
+  t.static_equilibrium = model.static_equilibrium;
+  t.initial_step = simulator.last_step();
+  t.states.reserve(frames() + 1);
+  t.states.push_back(simulator.state());
+  for (int k = 1; k <= frames(); ++k) {
+    const StepReport report = simulator.step();
+    result.iterations += report.iterations;
+    if (!report.converged()) {
+      throw SimulationFailed(k, std::string("the forward step did not converge (") +
+                                    to_string(report.status) +
+                                    (report.message.empty() ? "" : ": " + report.message) +
+                                    "), so the adjoint gradient would not be exact");
+    }
+    t.states.push_back(simulator.state());
+  }
+  return t;
+}
+
+DifferentiableSimulation::Result DifferentiableSimulation::evaluate(const Eigen::VectorXd& gamma,
+                                                                    Eigen::VectorXd* gradient) const {
+  if (gamma.size() != parameters_.size()) {
+    throw std::invalid_argument("DifferentiableSimulation::evaluate: γ has " +
+                                std::to_string(gamma.size()) + " entries, the parameters " +
+                                std::to_string(parameters_.size()));
+  }
+  const Model model = parameters_.apply(base_, gamma);
+  Result result;
+  const Clock::time_point start = Clock::now();
+  result.trajectory = simulate(model, result);
+  result.loss = objective_.value(result.trajectory, gamma);
+  result.forward_seconds = seconds_since(start);
+  if (gradient != nullptr) {
+    const Clock::time_point backward_start = Clock::now();
+    backward(model, gamma, result.trajectory, *gradient);
+    result.backward_seconds = seconds_since(backward_start);
+  }
+  return result;
+}
+
+void DifferentiableSimulation::backward(const Model& model, const Eigen::VectorXd& gamma,
+                                        const Trajectory& trajectory,
+                                        Eigen::VectorXd& gradient) const {
+  std::vector<Component> components = build_components(model);
+  std::vector<std::unique_ptr<HessianSolve>> solves;
+  for (const Component& c : components) solves.push_back(make_hessian_solve(c));
+
+  const int n = trajectory.frames();
+  const int size = tangent_size(trajectory.states[0]);
+  gradient = Eigen::VectorXd::Zero(parameters_.size());
+  Eigen::VectorXd a = Eigen::VectorXd::Zero(size), da = Eigen::VectorXd::Zero(size);
+  Eigen::VectorXd a_previous(size), da_previous(size), rhs, b, z;
+  objective_.add_state_gradient(trajectory, n, a, da);
+  const bool dynamic = !trajectory.static_equilibrium;
+  Step step = trajectory.step(n);  // Δq_k, then Δq_{k−1}
+  for (int k = n; k >= 1; --k) {
+    const State& q = trajectory.states[k];
+    const State& previous = trajectory.states[k - 1];
+    const Step previous_step = trajectory.step(k - 1);
+    rhs = a + da;  // ∂f_k/∂q_k = I
+    a_previous.setZero();
+    da_previous.setZero();
+    objective_.add_state_gradient(trajectory, k - 1, a_previous, da_previous);
+    if (dynamic) {  // (∂f_k/∂q_{k−1})ᵀ Δa_k: −I for points, −ΔR_kᵀ for rotations
+      for (std::size_t i = 0; i < q.points.size(); ++i) {
+        const int o = tangent_point(static_cast<int>(i));
+        a_previous.segment<3>(o) -= da.segment<3>(o);
+      }
+      for (std::size_t j = 0; j < q.rotations.size(); ++j) {
+        const int o = tangent_rotation(q, static_cast<int>(j));
+        a_previous.segment<3>(o) -= step.rotations[j].transpose() * da.segment<3>(o);
+      }
+    }
+    const double load_scale =
+        dynamic ? 1.0 : std::min(1.0, double(k) / double(model.load_steps));
+    for (std::size_t c = 0; c < components.size(); ++c) {
+      IncrementalPotential& potential = components[c].potential;
+      potential.begin_step(previous, previous_step, k);
+      if (!dynamic) potential.set_load_scale(load_scale);
+      if (!solves[c]->factorize(potential, q)) {
+        throw SimulationFailed(k, "the Hessian of the converged step is not positive definite "
+                                  "(not a strict minimum): the adjoint is not defined");
+      }
+      b.resize(components[c].dofs);
+      for (const DofBlock& p : components[c].points) {
+        b.segment<3>(p.offset) = rhs.segment<3>(tangent_point(p.index));
+      }
+      for (const DofBlock& r : components[c].rotations) {
+        b.segment<3>(r.offset) = rhs.segment<3>(tangent_rotation(q, r.index));
+      }
+      solves[c]->solve(b, z);
+      z = -z;  // H z = −(a + Δa)
+      potential.add_parameter_adjoint(q, k, z, gradient);
+      potential.add_step_adjoint(q, previous, previous_step, z, a_previous, da_previous);
+    }
+    a.swap(a_previous);
+    da.swap(da_previous);
+    step = previous_step;
+  }
+  parameters_.add_initial_gradient(model, gamma, a, da, gradient);
+  objective_.add_parameter_gradient(gamma, gradient);
+}
+
+}  // namespace liedyn

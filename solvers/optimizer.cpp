@@ -1,0 +1,557 @@
+#include "optimizer.hpp"
+
+#include <ceres/ceres.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <coin/IpIpoptApplication.hpp>
+#include <coin/IpTNLP.hpp>
+#include <exception>
+#include <limits>
+#include <nlopt.hpp>
+#include <stdexcept>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "../lib/model.hpp"
+#include "ceres_step.hpp"
+#include "step_solver.hpp"  // short_number
+
+namespace liedyn {
+
+const char* to_string(Optimizer optimizer) {
+  switch (optimizer) {
+    case Optimizer::kNloptLbfgs: return "nlopt-lbfgs";
+    case Optimizer::kCeresLbfgs: return "ceres-lbfgs";
+    case Optimizer::kIpoptLbfgs: return "ipopt-lbfgs";
+  }
+  return "unknown";
+}
+
+std::optional<Optimizer> parse_optimizer(std::string_view name) {
+  for (const auto o : {Optimizer::kNloptLbfgs, Optimizer::kCeresLbfgs, Optimizer::kIpoptLbfgs}) {
+    if (name == to_string(o)) return o;
+  }
+  return std::nullopt;
+}
+
+void OptimizerOptions::validate() const {
+  if (optimizer != Optimizer::kNloptLbfgs && optimizer != Optimizer::kCeresLbfgs &&
+      optimizer != Optimizer::kIpoptLbfgs) {
+    throw ModelError("optimization.optimizer",
+                     "unknown optimizer " + std::to_string(static_cast<int>(optimizer)) +
+                         " (expected nlopt-lbfgs, ceres-lbfgs or ipopt-lbfgs)");
+  }
+  if (max_iterations < 1) {
+    throw ModelError("optimization.max_iterations",
+                     "must be at least 1 (got " + std::to_string(max_iterations) + ")");
+  }
+  if (!(target_normalized_loss >= 0.0) || !std::isfinite(target_normalized_loss)) {
+    throw ModelError("optimization.target_normalized_loss",
+                     "must be a finite number >= 0 (got " + short_number(target_normalized_loss) +
+                         "; 0: no target)");
+  }
+  if (lbfgs_memory < 1) {
+    throw ModelError("optimization.lbfgs_memory",
+                     "must be at least 1 (got " + std::to_string(lbfgs_memory) + ")");
+  }
+}
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+// ---------------------------------------------------------------------------------------
+// What the three back-ends share: one evaluation of ℓ = f / loss_scale and ∇ℓ at a point,
+// the best point, the counters, the callback, and the conversion of a failure of f into a
+// stop (see the header). Not thread-safe (the back-ends evaluate serially).
+class Evaluator {
+ public:
+  Evaluator(const ObjectiveFunction& f, const Eigen::VectorXd& x0, double loss_scale,
+            double target, const EvaluationCallback& on_evaluation, Clock::time_point start)
+      : f_(f),
+        on_evaluation_(on_evaluation),
+        loss_scale_(loss_scale),
+        target_(target),
+        start_(start),
+        x_(x0),
+        gradient_(x0.size()),
+        best_x_(x0) {}
+
+  // NLopt: an iteration is an evaluation, and at most `cap` evaluations are made.
+  void count_evaluations_as_iterations(int cap) {
+    evaluations_are_iterations_ = true;
+    cap_ = cap;
+  }
+  void set_iterations(int iterations) { iterations_ = std::max(iterations_, iterations); }
+
+  // ℓ(x) into `normalized_loss` and, if `normalized_gradient` is not null, ∇ℓ(x) into it
+  // (n doubles). Returns false, without calling f, once stopped (a failure, or NLopt's cap).
+  bool evaluate(const double* x, double& normalized_loss, double* normalized_gradient) {
+    const Eigen::Index n = x_.size();
+    if (stopped_) return false;
+    if (!cached_ || !std::equal(x, x + n, x_.data())) {
+      cached_ = false;
+      if (!call(x)) return false;
+      cached_ = true;
+    }
+    normalized_loss = loss_ / loss_scale_;
+    if (normalized_gradient != nullptr) {
+      Eigen::Map<Eigen::VectorXd>(normalized_gradient, n) = gradient_ / loss_scale_;
+    }
+    return true;
+  }
+
+  bool stopped() const { return stopped_; }
+  bool failed() const { return failed_; }
+  bool cap_reached() const { return cap_reached_; }
+  bool target_reached() const { return target_ > 0.0 && best_loss_ / loss_scale_ <= target_; }
+  const std::string& error() const { return error_; }
+  const std::exception_ptr& foreign_exception() const { return foreign_exception_; }
+  int evaluations() const { return evaluations_; }
+  int iterations() const { return evaluations_are_iterations_ ? evaluations_ : iterations_; }
+  const Eigen::VectorXd& best_x() const { return best_x_; }
+  double best_loss() const { return best_loss_; }
+
+ private:
+  // One call of f at x (copied into x_), then the bookkeeping. False: f failed.
+  bool call(const double* x) {
+    const Eigen::Index n = x_.size();
+    std::copy(x, x + n, x_.data());
+    Evaluation e;
+    e.iteration = evaluations_are_iterations_ ? evaluations_ : iterations_;
+    e.evaluation = ++evaluations_;
+    try {
+      loss_ = f_(x_, gradient_);
+    } catch (const std::exception& error) {
+      return fail(error.what());
+    } catch (...) {
+      foreign_exception_ = std::current_exception();
+      return fail("the objective threw an exception not derived from std::exception");
+    }
+    const std::string at = " at evaluation " + std::to_string(e.evaluation);
+    if (gradient_.size() != n) {
+      return fail("the objective resized its gradient to " + std::to_string(gradient_.size()) +
+                  " entries (expected " + std::to_string(n) + ")" + at);
+    }
+    if (!std::isfinite(loss_)) return fail("the objective returned a loss of " + short_number(loss_) + at);
+    if (!gradient_.allFinite()) {
+      Eigen::Index i = 0;
+      while (std::isfinite(gradient_[i])) ++i;
+      return fail("the objective returned a gradient entry [" + std::to_string(i) +
+                  "] = " + short_number(gradient_[i]) + at);
+    }
+    if (loss_ < best_loss_) {
+      best_loss_ = loss_;
+      best_x_ = x_;  // same size: a copy, no allocation
+    }
+    if (cap_ > 0 && evaluations_ >= cap_) {
+      cap_reached_ = true;
+      stopped_ = true;  // refuse later requests; this value still goes to the back-end
+    }
+    if (on_evaluation_) {
+      e.loss = loss_;
+      e.normalized_loss = loss_ / loss_scale_;
+      e.gradient_norm = gradient_.norm();
+      e.seconds = std::chrono::duration<double>(Clock::now() - start_).count();
+      try {
+        on_evaluation_(e, x_, gradient_);
+      } catch (const std::exception& error) {
+        return fail(std::string("on_evaluation: ") + error.what());
+      } catch (...) {
+        foreign_exception_ = std::current_exception();
+        return fail("on_evaluation threw an exception not derived from std::exception");
+      }
+    }
+    return true;
+  }
+
+  bool fail(std::string message) {
+    failed_ = true;
+    stopped_ = true;
+    error_ = std::move(message);
+    return false;
+  }
+
+  const ObjectiveFunction& f_;
+  const EvaluationCallback& on_evaluation_;
+  const double loss_scale_;
+  const double target_;
+  const Clock::time_point start_;
+  Eigen::VectorXd x_;         // the point of the last call of f
+  Eigen::VectorXd gradient_;  // ∇f there (raw)
+  double loss_ = 0.0;         // f there
+  bool cached_ = false;       // x_, loss_, gradient_ hold a successful evaluation
+  Eigen::VectorXd best_x_;
+  double best_loss_ = std::numeric_limits<double>::infinity();
+  int evaluations_ = 0;
+  int iterations_ = 0;
+  bool evaluations_are_iterations_ = false;
+  int cap_ = 0;  // > 0: at most this many evaluations
+  bool cap_reached_ = false;
+  bool stopped_ = false;
+  bool failed_ = false;
+  std::string error_;
+  std::exception_ptr foreign_exception_;
+};
+
+// How a back-end ended, in our terms (before the precedence of minimize: failed, target).
+struct Outcome {
+  std::string status;
+  std::string message;
+  int iterations = 0;
+};
+
+// ---------------------------------------------------------------------------------------
+// NLopt: NLOPT_LD_LBFGS on ℓ.
+
+struct NloptData {
+  Evaluator* evaluator;
+  nlopt::opt* opt;
+};
+
+double nlopt_objective(unsigned n, const double* x, double* gradient, void* data) {
+  NloptData& d = *static_cast<NloptData*>(data);
+  double value = 0.0;
+  if (!d.evaluator->evaluate(x, value, gradient)) {
+    // A failure, or a request after the cap: NLopt's line search may still ask for a few
+    // points before it checks the forced stop; they cost nothing.
+    d.opt->force_stop();
+    if (gradient != nullptr) std::fill(gradient, gradient + n, 0.0);
+    return HUGE_VAL;
+  }
+  if (d.evaluator->stopped()) d.opt->force_stop();  // this evaluation reached the cap
+  return value;
+}
+
+const char* nlopt_result_name(nlopt::result r) {
+  switch (r) {
+    case nlopt::SUCCESS: return "SUCCESS (gradient tolerance)";
+    case nlopt::STOPVAL_REACHED: return "STOPVAL_REACHED";
+    case nlopt::FTOL_REACHED: return "FTOL_REACHED";
+    case nlopt::XTOL_REACHED: return "XTOL_REACHED";
+    case nlopt::MAXEVAL_REACHED: return "MAXEVAL_REACHED";
+    case nlopt::MAXTIME_REACHED: return "MAXTIME_REACHED";
+    default: return "unexpected result";
+  }
+}
+
+Outcome run_nlopt(Evaluator& evaluator, const Eigen::VectorXd& x0,
+                  const OptimizerOptions& options) {
+  Outcome out;
+  try {
+    const auto n = static_cast<unsigned>(x0.size());
+    nlopt::opt opt(nlopt::LD_LBFGS, n);
+    NloptData data{&evaluator, &opt};
+    evaluator.count_evaluations_as_iterations(options.max_iterations);
+    opt.set_min_objective(nlopt_objective, &data);
+    opt.set_vector_storage(static_cast<unsigned>(options.lbfgs_memory));
+    opt.set_maxeval(options.max_iterations);
+    if (options.target_normalized_loss > 0.0) opt.set_stopval(options.target_normalized_loss);
+    // 0: PLIS's own floors, relative f change ≤ 1e-14 and x change ≤ 1e-16 (header).
+    opt.set_ftol_rel(0.0);
+    opt.set_xtol_rel(0.0);
+    std::vector<double> x(x0.data(), x0.data() + n);
+    double value = 0.0;
+    try {
+      const nlopt::result r = opt.optimize(x, value);
+      out.message = std::string("nlopt: ") + nlopt_result_name(r);
+      switch (r) {
+        case nlopt::MAXEVAL_REACHED: out.status = "max_iterations"; break;
+        case nlopt::STOPVAL_REACHED: out.status = "target_reached"; break;
+        case nlopt::SUCCESS:
+        case nlopt::FTOL_REACHED:
+        case nlopt::XTOL_REACHED: out.status = "converged"; break;
+        default: out.status = "failed"; break;
+      }
+    } catch (const nlopt::roundoff_limited&) {
+      out.status = "roundoff_limited";
+      out.message = "nlopt: ROUNDOFF_LIMITED (the line search found no acceptable step)";
+    } catch (const nlopt::forced_stop&) {
+      // Forced by the wrapper: a failure of f (minimize reports it) or the evaluation cap.
+      out.status = evaluator.cap_reached() ? "max_iterations" : "failed";
+      out.message = evaluator.cap_reached()
+                        ? "nlopt: FORCED_STOP at the evaluation cap (max_iterations)"
+                        : "nlopt: FORCED_STOP";
+    }
+  } catch (const std::exception& error) {  // NLOPT_FAILURE, invalid arguments, out of memory
+    out.status = "failed";
+    out.message = std::string("nlopt: ") + error.what();
+  }
+  out.iterations = evaluator.iterations();
+  return out;
+}
+
+// ---------------------------------------------------------------------------------------
+// Ceres: GradientProblemSolver, LBFGS direction, Wolfe line search, on ℓ.
+
+class CeresObjective final : public ceres::FirstOrderFunction {
+ public:
+  CeresObjective(Evaluator& evaluator, int n) : evaluator_(evaluator), n_(n) {}
+  bool Evaluate(const double* parameters, double* cost, double* gradient) const override {
+    return evaluator_.evaluate(parameters, *cost, gradient);
+  }
+  int NumParameters() const override { return n_; }
+
+ private:
+  Evaluator& evaluator_;
+  int n_;
+};
+
+// Runs between iterations (also after the initial evaluation, iteration 0).
+class CeresStopRule final : public ceres::IterationCallback {
+ public:
+  explicit CeresStopRule(Evaluator& evaluator) : evaluator_(evaluator) {}
+  ceres::CallbackReturnType operator()(const ceres::IterationSummary& summary) override {
+    evaluator_.set_iterations(summary.iteration);
+    if (evaluator_.failed()) return ceres::SOLVER_ABORT;
+    return evaluator_.target_reached() ? ceres::SOLVER_TERMINATE_SUCCESSFULLY
+                                       : ceres::SOLVER_CONTINUE;
+  }
+
+ private:
+  Evaluator& evaluator_;
+};
+
+Outcome run_ceres(Evaluator& evaluator, const Eigen::VectorXd& x0,
+                  const OptimizerOptions& options) {
+  Outcome out;
+  try {
+    initialize_ceres_logging();
+    ceres::GradientProblemSolver::Options solver;
+    solver.line_search_direction_type = ceres::LBFGS;
+    solver.line_search_type = ceres::WOLFE;
+    solver.max_lbfgs_rank = options.lbfgs_memory;
+    solver.use_approximate_eigenvalue_bfgs_scaling = true;
+    solver.max_num_iterations = options.max_iterations;
+    solver.max_solver_time_in_seconds = 1e12;
+    // Only a stationary point or an iteration that changes nothing stops Ceres (header).
+    solver.gradient_tolerance = kStationaryGradient;
+    solver.function_tolerance = 0.0;
+    solver.parameter_tolerance = 0.0;
+    solver.logging_type = ceres::SILENT;
+    solver.minimizer_progress_to_stdout = false;
+    CeresStopRule stop_rule(evaluator);
+    solver.callbacks.push_back(&stop_rule);
+    std::string error;
+    if (!solver.IsValid(&error)) {
+      out.status = "failed";
+      out.message = "ceres: invalid options: " + error;
+      return out;
+    }
+    ceres::GradientProblem problem(new CeresObjective(evaluator, static_cast<int>(x0.size())));
+    Eigen::VectorXd x = x0;
+    ceres::GradientProblemSolver::Summary summary;
+    ceres::Solve(solver, problem, x.data(), &summary);
+    if (!summary.iterations.empty()) evaluator.set_iterations(summary.iterations.back().iteration);
+    out.message = std::string("ceres: ") + ceres::TerminationTypeToString(summary.termination_type) +
+                  ": " + summary.message;
+    switch (summary.termination_type) {
+      case ceres::CONVERGENCE: out.status = "converged"; break;
+      case ceres::NO_CONVERGENCE: out.status = "max_iterations"; break;
+      case ceres::USER_SUCCESS: out.status = "target_reached"; break;
+      // A line search without an acceptable step (when f itself did not fail: minimize
+      // checks that first).
+      case ceres::FAILURE: out.status = "roundoff_limited"; break;
+      case ceres::USER_FAILURE: out.status = "failed"; break;
+    }
+  } catch (const std::exception& error) {
+    out.status = "failed";
+    out.message = std::string("ceres: ") + error.what();
+  }
+  out.iterations = evaluator.iterations();
+  return out;
+}
+
+// ---------------------------------------------------------------------------------------
+// Ipopt: min ℓ(x), m = 0, no bounds, limited-memory Hessian.
+
+class LbfgsNlp final : public Ipopt::TNLP {
+ public:
+  LbfgsNlp(Evaluator& evaluator, const Eigen::VectorXd& x0) : evaluator_(evaluator), x0_(x0) {}
+
+  bool get_nlp_info(Ipopt::Index& n, Ipopt::Index& m, Ipopt::Index& nnz_jac_g,
+                    Ipopt::Index& nnz_h_lag, IndexStyleEnum& index_style) override {
+    n = static_cast<Ipopt::Index>(x0_.size());
+    m = 0;
+    nnz_jac_g = 0;
+    nnz_h_lag = 0;  // hessian_approximation limited-memory: eval_h is never called
+    index_style = C_STYLE;
+    return true;
+  }
+
+  bool get_bounds_info(Ipopt::Index n, Ipopt::Number* x_l, Ipopt::Number* x_u, Ipopt::Index,
+                       Ipopt::Number*, Ipopt::Number*) override {
+    // Beyond ±nlp_lower/upper_bound_inf (±1e19): no bounds.
+    std::fill(x_l, x_l + n, -2e19);
+    std::fill(x_u, x_u + n, 2e19);
+    return true;
+  }
+
+  bool get_starting_point(Ipopt::Index n, bool init_x, Ipopt::Number* x, bool, Ipopt::Number*,
+                          Ipopt::Number*, Ipopt::Index, bool, Ipopt::Number*) override {
+    if (init_x) std::copy(x0_.data(), x0_.data() + n, x);
+    return true;
+  }
+
+  bool eval_f(Ipopt::Index, const Ipopt::Number* x, bool, Ipopt::Number& obj_value) override {
+    return evaluator_.evaluate(x, obj_value, nullptr);
+  }
+
+  bool eval_grad_f(Ipopt::Index, const Ipopt::Number* x, bool, Ipopt::Number* grad_f) override {
+    double value = 0.0;
+    return evaluator_.evaluate(x, value, grad_f);
+  }
+
+  bool eval_g(Ipopt::Index, const Ipopt::Number*, bool, Ipopt::Index, Ipopt::Number*) override {
+    return true;  // m = 0
+  }
+
+  bool eval_jac_g(Ipopt::Index, const Ipopt::Number*, bool, Ipopt::Index, Ipopt::Index,
+                  Ipopt::Index*, Ipopt::Index*, Ipopt::Number*) override {
+    return true;  // m = 0
+  }
+
+  void finalize_solution(Ipopt::SolverReturn, Ipopt::Index, const Ipopt::Number*,
+                         const Ipopt::Number*, const Ipopt::Number*, Ipopt::Index,
+                         const Ipopt::Number*, const Ipopt::Number*, Ipopt::Number,
+                         const Ipopt::IpoptData*, Ipopt::IpoptCalculatedQuantities*) override {
+    // Nothing: the wrapper keeps the best point of all evaluations.
+  }
+
+  // After each iteration (iter 0: after the initial evaluation), restoration phase included.
+  bool intermediate_callback(Ipopt::AlgorithmMode, Ipopt::Index iter, Ipopt::Number,
+                             Ipopt::Number, Ipopt::Number, Ipopt::Number, Ipopt::Number,
+                             Ipopt::Number, Ipopt::Number, Ipopt::Number, Ipopt::Index,
+                             const Ipopt::IpoptData*, Ipopt::IpoptCalculatedQuantities*) override {
+    evaluator_.set_iterations(static_cast<int>(iter));
+    return !evaluator_.failed() && !evaluator_.target_reached();
+  }
+
+ private:
+  Evaluator& evaluator_;
+  const Eigen::VectorXd& x0_;
+};
+
+const char* ipopt_status_name(Ipopt::ApplicationReturnStatus status) {
+  switch (status) {
+    case Ipopt::Solve_Succeeded: return "Solve_Succeeded";
+    case Ipopt::Solved_To_Acceptable_Level: return "Solved_To_Acceptable_Level";
+    case Ipopt::Infeasible_Problem_Detected: return "Infeasible_Problem_Detected";
+    case Ipopt::Search_Direction_Becomes_Too_Small: return "Search_Direction_Becomes_Too_Small";
+    case Ipopt::Diverging_Iterates: return "Diverging_Iterates";
+    case Ipopt::User_Requested_Stop: return "User_Requested_Stop";
+    case Ipopt::Feasible_Point_Found: return "Feasible_Point_Found";
+    case Ipopt::Maximum_Iterations_Exceeded: return "Maximum_Iterations_Exceeded";
+    case Ipopt::Restoration_Failed: return "Restoration_Failed";
+    case Ipopt::Error_In_Step_Computation: return "Error_In_Step_Computation";
+    case Ipopt::Maximum_CpuTime_Exceeded: return "Maximum_CpuTime_Exceeded";
+    case Ipopt::Not_Enough_Degrees_Of_Freedom: return "Not_Enough_Degrees_Of_Freedom";
+    case Ipopt::Invalid_Problem_Definition: return "Invalid_Problem_Definition";
+    case Ipopt::Invalid_Option: return "Invalid_Option";
+    case Ipopt::Invalid_Number_Detected: return "Invalid_Number_Detected";
+    case Ipopt::Unrecoverable_Exception: return "Unrecoverable_Exception";
+    case Ipopt::NonIpopt_Exception_Thrown: return "NonIpopt_Exception_Thrown";
+    case Ipopt::Insufficient_Memory: return "Insufficient_Memory";
+    case Ipopt::Internal_Error: return "Internal_Error";
+  }
+  return "unknown Ipopt status";
+}
+
+Outcome run_ipopt(Evaluator& evaluator, const Eigen::VectorXd& x0,
+                  const OptimizerOptions& options) {
+  Outcome out;
+  try {
+    Ipopt::SmartPtr<Ipopt::IpoptApplication> app = new Ipopt::IpoptApplication();
+    Ipopt::OptionsList& o = *app->Options();
+    bool ok = true;
+    // Output options are read by Initialize, so they are set before it (solvers/ipopt_step).
+    ok &= o.SetIntegerValue("print_level", 0);
+    ok &= o.SetStringValue("sb", "yes");  // no banner
+    ok &= o.SetStringValue("linear_solver", "mumps");
+    ok &= o.SetStringValue("hessian_approximation", "limited-memory");
+    ok &= o.SetIntegerValue("limited_memory_max_history", options.lbfgs_memory);
+    ok &= o.SetStringValue("nlp_scaling_method", "none");
+    // Genuine convergence only: ‖∇ℓ‖∞ ≤ kStationaryGradient; "acceptable" termination off.
+    ok &= o.SetNumericValue("tol", kStationaryGradient);
+    ok &= o.SetIntegerValue("acceptable_iter", 0);
+    ok &= o.SetIntegerValue("max_iter", options.max_iterations);
+    if (!ok) {
+      out.status = "failed";
+      out.message = "ipopt: an option was rejected";
+      return out;
+    }
+    // Initialize("") reads no options file (plain Initialize() reads ./ipopt.opt).
+    if (app->Initialize("") != Ipopt::Solve_Succeeded) {
+      out.status = "failed";
+      out.message = "ipopt: could not be initialised";
+      return out;
+    }
+    Ipopt::SmartPtr<Ipopt::TNLP> nlp = new LbfgsNlp(evaluator, x0);
+    const Ipopt::ApplicationReturnStatus status = app->OptimizeTNLP(nlp);
+    out.message = std::string("ipopt: ") + ipopt_status_name(status);
+    switch (status) {
+      case Ipopt::Solve_Succeeded:
+      case Ipopt::Solved_To_Acceptable_Level:
+      case Ipopt::Search_Direction_Becomes_Too_Small: out.status = "converged"; break;
+      case Ipopt::Maximum_Iterations_Exceeded: out.status = "max_iterations"; break;
+      case Ipopt::User_Requested_Stop: out.status = "target_reached"; break;
+      case Ipopt::Restoration_Failed: out.status = "roundoff_limited"; break;
+      default: out.status = "failed"; break;
+    }
+  } catch (const std::exception& error) {
+    out.status = "failed";
+    out.message = std::string("ipopt: ") + error.what();
+  }
+  out.iterations = evaluator.iterations();
+  return out;
+}
+
+}  // namespace
+
+OptimizationResult minimize(const ObjectiveFunction& f, const Eigen::VectorXd& x0,
+                            double loss_scale, const OptimizerOptions& options,
+                            const EvaluationCallback& on_evaluation) {
+  const Clock::time_point start = Clock::now();
+  options.validate();
+  if (!(loss_scale > 0.0) || !std::isfinite(loss_scale)) {
+    throw std::invalid_argument("minimize: loss_scale must be a finite number > 0 (got " +
+                                short_number(loss_scale) + ")");
+  }
+  if (x0.size() == 0) throw std::invalid_argument("minimize: x0 is empty (no parameters)");
+  if (!x0.allFinite()) throw std::invalid_argument("minimize: x0 has a non-finite entry");
+  if (!f) throw std::invalid_argument("minimize: no objective function");
+
+  Evaluator evaluator(f, x0, loss_scale, options.target_normalized_loss, on_evaluation, start);
+  Outcome outcome;
+  switch (options.optimizer) {
+    case Optimizer::kNloptLbfgs: outcome = run_nlopt(evaluator, x0, options); break;
+    case Optimizer::kCeresLbfgs: outcome = run_ceres(evaluator, x0, options); break;
+    case Optimizer::kIpoptLbfgs: outcome = run_ipopt(evaluator, x0, options); break;
+  }
+  if (evaluator.foreign_exception()) std::rethrow_exception(evaluator.foreign_exception());
+
+  OptimizationResult result;
+  result.best_x = evaluator.best_x();
+  result.best_loss = evaluator.best_loss();
+  result.best_normalized_loss = result.best_loss / loss_scale;
+  result.iterations = outcome.iterations;
+  result.evaluations = evaluator.evaluations();
+  result.reached_target = evaluator.target_reached();
+  if (evaluator.failed()) {
+    result.status = "failed";
+    result.message = evaluator.error();
+  } else if (result.reached_target) {
+    result.status = "target_reached";
+    result.message = std::move(outcome.message);
+  } else {
+    result.status = outcome.status == "target_reached" ? "failed" : std::move(outcome.status);
+    result.message = std::move(outcome.message);
+  }
+  result.seconds = std::chrono::duration<double>(Clock::now() - start).count();
+  return result;
+}
+
+}  // namespace liedyn

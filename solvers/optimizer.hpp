@@ -1,0 +1,164 @@
+#pragma once
+// The outer optimisers of trajectory optimisation (DESIGN.md §6, §8): three L-BFGS back-ends
+// behind one function, with the same objective, gradient and stopping rule, so that they can
+// be compared on the same problem.
+//
+// Problem. Minimise a loss f(x) over parameters x ∈ Rⁿ (initial velocities, per-frame forces,
+// rest shape, …). One call of the objective returns f(x) and its exact gradient ∇f(x) — for
+// a trajectory, one forward simulation and one adjoint pass (lib/adjoint.hpp), typically
+// 1–100 ms: evaluations are what counts, not the back-ends' own arithmetic (O(m n) per
+// iteration for memory m).
+//
+// Normalised loss. The caller gives a scale s = loss_scale > 0 (f(x₀), or a physical scale
+// such as the squared size of the target), and ℓ(x) = f(x)/s is what the back-ends see and
+// minimise (same minimiser, gradient ∇ℓ = ∇f/s). This makes every absolute tolerance inside
+// a back-end relative to s — in particular NLopt's L-BFGS stops, by a test we cannot change,
+// once ‖∇ℓ‖∞ ≤ 1e-8 (luksan/plis.c, tolg), which on the raw loss of a problem in metres and
+// seconds (f ~ 1e-6) would end the run at once. Everything reported (Evaluation,
+// OptimizationResult) gives both the raw loss f and the normalised loss ℓ.
+//
+// L-BFGS. Each back-end keeps the m = lbfgs_memory latest pairs s_k = x_{k+1} − x_k,
+// y_k = ∇ℓ(x_{k+1}) − ∇ℓ(x_k) and applies the inverse-Hessian approximation H_k (two-loop or
+// Strang recurrence, H⁰ = γ I with γ = sᵀy / yᵀy where the back-end scales) to −∇ℓ, then
+// searches along that direction:
+//   nlopt-lbfgs — NLopt 2.7 NLOPT_LD_LBFGS, Lukšan's PLIS (limited-memory variable metric,
+//                 Strang recurrences), with its own line search (safeguarded cubic/quadratic
+//                 interpolation). The default.
+//   ceres-lbfgs — Ceres 2.1 GradientProblemSolver: line_search_direction_type LBFGS,
+//                 line_search_type WOLFE (strong Wolfe conditions), Euclidean (no manifold),
+//                 H⁰ scaled by sᵀy/yᵀy (use_approximate_eigenvalue_bfgs_scaling).
+//   ipopt-lbfgs — Ipopt 3.11 with hessian_approximation limited-memory on the NLP
+//                 min ℓ(x) with m = 0 constraints and no bounds: there are no barrier terms,
+//                 and Ipopt is a line-search quasi-Newton method with its filter (Armijo)
+//                 backtracking; each step solves a KKT system with the limited-memory
+//                 Hessian (MUMPS).
+//
+// Iterations. What one iteration is depends on the back-end, and both counts are reported:
+//   ceres  — an accepted line-search step (IterationCallback / Summary::iterations);
+//   ipopt  — Ipopt's iter_count (intermediate_callback), its restoration phase included;
+//   nlopt  — NLopt has no iteration hook: there an iteration is an evaluation, and
+//            `max_iterations` caps evaluations. Lukšan's L-BFGS usually accepts the first
+//            trial step, so that is nearly one iteration per evaluation.
+// `max_iterations` becomes Ceres's max_num_iterations, Ipopt's max_iter and NLopt's maxeval
+// (enforced by the wrapper too: NLopt checks its cap only between line searches).
+//
+// Stopping rule, the same for all: stop once the best normalised loss ever evaluated is
+// ≤ target_normalized_loss (NLopt: stopval = target, on ℓ; Ceres: an IterationCallback
+// returning SOLVER_TERMINATE_SUCCESSFULLY; Ipopt: intermediate_callback returning false), or
+// after max_iterations. Ceres and Ipopt test between iterations, NLopt between line searches.
+// The back-ends' own tests are switched off as far as they can be, except genuine
+// convergence: a stationary point, ‖∇ℓ‖∞ ≤ 1e-8 (kStationaryGradient; NLopt's fixed
+// tolerance, given to Ceres as gradient_tolerance and to Ipopt as tol, with acceptable_iter
+// 0), or an iteration that changes nothing at all (Ceres's function_tolerance and
+// parameter_tolerance 0; NLopt's relative f change ≤ 1e-14 and x change ≤ 1e-16 over two
+// iterations, its floors). Those end with status "converged".
+//
+// Best point. The wrapper keeps the point with the lowest loss over all evaluations
+// (line-search trial points included) and returns it, whatever the back-end returns. A
+// point evaluated twice in a row (Ceres and Ipopt ask for f and ∇f at a point they already
+// evaluated) is served from a one-point cache and not counted again.
+//
+// Failures. If f throws a std::exception, or returns a loss or gradient that is not finite,
+// the back-end is stopped at once (later requests are refused without calling f: NLopt is
+// force-stopped, Ceres and Ipopt are told that the evaluation failed, and stop at their next
+// check), and minimize returns status "failed" with the exception's what() (or a message
+// naming the evaluation and the non-finite value) and the best point of the evaluations
+// before. An exception thrown by on_evaluation is handled the same way (its evaluation
+// counts, and its point may be the best). Exceptions not derived from std::exception are
+// rethrown by minimize once the back-end has returned. Bad input (options, loss_scale, x0)
+// throws std::invalid_argument.
+//
+// Statuses (OptimizationResult::status), in this order of precedence:
+//   "failed"           — f or on_evaluation threw, a non-finite value, or a back-end error
+//                        (NLopt failure, an Ipopt error status, a Ceres failure at the start);
+//   "target_reached"   — best normalised loss ≤ target (reached_target is set whenever that
+//                        holds, even with "failed");
+//   "max_iterations"   — NLopt maxeval, Ceres NO_CONVERGENCE, Ipopt Maximum_Iterations_Exceeded;
+//   "roundoff_limited" — the line search found no acceptable step: nlopt::roundoff_limited,
+//                        a Ceres line-search FAILURE, Ipopt's Restoration_Failed (for an
+//                        unconstrained problem its restoration phase runs only when the line
+//                        search fails);
+//   "converged"        — the back-end's own criterion (above): NLopt SUCCESS / FTOL / XTOL,
+//                        Ceres CONVERGENCE, Ipopt Solve_Succeeded, Solved_To_Acceptable_Level
+//                        or Search_Direction_Becomes_Too_Small.
+// OptimizationResult::message keeps the back-end's raw status and message.
+//
+// Allocation. The wrapper evaluates into preallocated vectors (x, gradient, best x): no
+// allocation per evaluation beyond what the objective and the back-ends do themselves
+// (Ceres builds a few vectors per line search; Ipopt allocates within its iterations).
+
+#include <Eigen/Core>
+#include <functional>
+#include <optional>
+#include <string>
+#include <string_view>
+
+namespace liedyn {
+
+enum class Optimizer {
+  kNloptLbfgs,  // "nlopt-lbfgs" (default)
+  kCeresLbfgs,  // "ceres-lbfgs"
+  kIpoptLbfgs,  // "ipopt-lbfgs"
+};
+const char* to_string(Optimizer optimizer);
+std::optional<Optimizer> parse_optimizer(std::string_view name);  // nullopt: unknown name
+
+// ‖∇ℓ‖∞ at which every back-end may report "converged" (see the header comment).
+inline constexpr double kStationaryGradient = 1e-8;
+
+struct OptimizerOptions {
+  Optimizer optimizer = Optimizer::kNloptLbfgs;
+  // ≥ 1. Iterations of the back-end (evaluations for NLopt, see above).
+  int max_iterations = 100;
+  // ≥ 0, finite. Stop once f/loss_scale ≤ this; 0: never (run to max_iterations or the
+  // back-end's own convergence).
+  double target_normalized_loss = 1e-3;
+  // ≥ 1. L-BFGS history m: NLopt vector_storage, Ceres max_lbfgs_rank, Ipopt
+  // limited_memory_max_history.
+  int lbfgs_memory = 10;
+
+  // Throws ModelError (a std::invalid_argument) whose what() names the field as
+  // "optimization.<field>", its value and the rule.
+  void validate() const;
+};
+
+// Returns f(x) and writes ∇f(x) into `gradient` (already sized like x; do not resize it).
+// May throw std::exception (e.g. a forward simulation step that did not converge).
+using ObjectiveFunction = std::function<double(const Eigen::VectorXd& x, Eigen::VectorXd& gradient)>;
+
+// One successful evaluation of f, as reported to an EvaluationCallback.
+struct Evaluation {
+  int evaluation = 0;          // 1, 2, …: calls of f so far, including this one
+  int iteration = 0;           // back-end iterations completed before this evaluation
+  double loss = 0.0;           // f(x)
+  double normalized_loss = 0.0;  // f(x) / loss_scale
+  double gradient_norm = 0.0;  // ‖∇f(x)‖₂ (raw, not normalised)
+  double seconds = 0.0;        // wall time since minimize() started
+};
+// Called after every successful evaluation (history files, checkpoints), with the point and
+// the raw gradient ∇f(x). Failed evaluations (a throw, a non-finite value) are not reported.
+using EvaluationCallback = std::function<void(const Evaluation&, const Eigen::VectorXd& x,
+                                              const Eigen::VectorXd& gradient)>;
+
+struct OptimizationResult {
+  Eigen::VectorXd best_x;            // lowest loss ever evaluated (x0 if no evaluation succeeded)
+  double best_loss = 0.0;            // f(best_x); +∞ if no evaluation succeeded
+  double best_normalized_loss = 0.0; // best_loss / loss_scale
+  int iterations = 0;                // back-end iterations (NLopt: = evaluations)
+  int evaluations = 0;               // calls of f, a failing last one included
+  bool reached_target = false;       // target > 0 and best_normalized_loss ≤ target
+  // "target_reached", "max_iterations", "roundoff_limited", "converged", "failed" (see above).
+  std::string status;
+  std::string message;               // the back-end's raw status and message / the error
+  double seconds = 0.0;              // wall time of minimize()
+};
+
+// Minimises f from x0 (finite, non-empty) with the back-end options.optimizer, reporting each
+// evaluation to on_evaluation; normalised loss = loss / loss_scale (finite, > 0). Throws
+// std::invalid_argument for bad options, loss_scale or x0; never throws for a failure of f
+// that is a std::exception (status "failed").
+OptimizationResult minimize(const ObjectiveFunction& f, const Eigen::VectorXd& x0,
+                            double loss_scale, const OptimizerOptions& options,
+                            const EvaluationCallback& on_evaluation = {});
+
+}  // namespace liedyn
