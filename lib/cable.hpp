@@ -14,7 +14,7 @@
 // general, so the segment's Lie Hessian can be indefinite: the Newton solver regularises the
 // assembled matrix (solvers/newton.hpp).
 //
-// Degenerate segment, l = 0 (including |d| ≲ 1e-154 m, where d.norm() underflows to 0): V is a
+// Degenerate segment, l = 0 (including |d| ≲ 1e-162 m, where d.norm() underflows to 0): V is a
 // cone there, V(ε u) = T ε along every unit u, and not differentiable. We return
 //   gradient 0 — the smallest element of the generalised gradient {T u : ‖u‖ ≤ 1} (the
 //             cone's minimum: a slack cable pulls nothing), and

@@ -55,7 +55,7 @@ Matrix3 ConstantTorque::torque_jacobian(const State& q) const {
 Matrix3 ConstantTorque::previous_jacobian(const State& q) const {
   const Matrix3 P = q.rotations[rotation] * R_previous.transpose();
   const Vector3 tau = scale * torque;
-  return -(tau * so3::vee(P).transpose() + so3::hat(P.transpose() * tau));
+  return -(tau * so3::vee(P).transpose() + 0.5 * so3::hat(P.transpose() * tau));
 }
 
 }  // namespace liedyn

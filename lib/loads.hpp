@@ -62,7 +62,7 @@ struct ConstantTorque {
   // For the adjoint (C = the Lie gradient above, linear in τ; P = R R_{k−1}ᵀ):
   //   ∂C/∂τ = −½ scale (tr(P) I − Pᵀ),
   //   ∂C/∂φ for R_{k−1} → exp(φ) R_{k−1}:  P → P − P hat(φ) + O(φ²), and with
-  //   tr(P hat(φ)) = −2 vee(P)·φ,   ∂C/∂φ = −(τ vee(P)ᵀ + hat(Pᵀτ))   (τ scaled).
+  //   tr(P hat(φ)) = −2 vee(P)·φ,   ∂C/∂φ = −(τ vee(P)ᵀ + ½ hat(Pᵀτ))   (τ scaled).
   Matrix3 torque_jacobian(const State& q) const;
   Matrix3 previous_jacobian(const State& q) const;
 };

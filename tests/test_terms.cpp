@@ -476,10 +476,10 @@ Model make_model(const Scales& s, std::mt19937& rng) {
       {{-1, Vector3(0.0, 0.0, 2.0)}, {0, random_vector(rng, 0.5)}, 2.0 * s.stiffness, 1.0});
   m.springs.push_back(
       {{2, random_vector(rng, 0.5)}, {-1, Vector3(3.0, 1.0, 2.0)}, 0.5 * s.stiffness, 0.5});
-  m.forces.push_back({{0, random_vector(rng, 0.5)}, random_vector(rng, 1.0)});
-  m.forces.push_back({{2, random_vector(rng, 0.5)}, random_vector(rng, 1.0)});
-  m.torques.push_back({1, random_vector(rng, 1.0)});
-  m.torques.push_back({2, random_vector(rng, 1.0)});
+  m.forces.push_back({{0, random_vector(rng, 0.5)}, random_vector(rng, 1.0), {}});
+  m.forces.push_back({{2, random_vector(rng, 0.5)}, random_vector(rng, 1.0), {}});
+  m.torques.push_back({1, random_vector(rng, 1.0), {}});
+  m.torques.push_back({2, random_vector(rng, 1.0), {}});
   return m;
 }
 
