@@ -378,8 +378,17 @@ int run_optimize(const Scene& scene, const OptimizeOptions& options, std::ostrea
       checkpoint.history.empty() ? 0 : checkpoint.history.back().iteration + 1;
   const double earlier_seconds = checkpoint.seconds;
 
+  // A parameter vector whose simulation is not defined (a forward step that does not
+  // converge, an angular velocity beyond π per step) is an infeasible trial point: Ceres and
+  // Ipopt shorten their step (solvers/optimizer.hpp).
   const ObjectiveFunction f = [&](const Eigen::VectorXd& gamma, Eigen::VectorXd& gradient) {
-    return sim.evaluate(gamma, &gradient).loss;
+    try {
+      return sim.evaluate(gamma, &gradient).loss;
+    } catch (const SimulationFailed& e) {
+      throw InfeasiblePoint(e.what());
+    } catch (const ModelError& e) {
+      throw InfeasiblePoint(e.what());
+    }
   };
   const EvaluationCallback record = [&](const Evaluation& e, const Eigen::VectorXd& gamma,
                                         const Eigen::VectorXd&) {

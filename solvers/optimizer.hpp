@@ -5,33 +5,34 @@
 //
 // Problem. Minimise a loss f(x) over parameters x ∈ Rⁿ (initial velocities, per-frame forces,
 // rest shape, …). One call of the objective returns f(x) and its exact gradient ∇f(x) — for
-// a trajectory, one forward simulation and one adjoint pass (lib/adjoint.hpp), typically
-// 1–100 ms: evaluations are what counts, not the back-ends' own arithmetic (O(m n) per
-// iteration for memory m).
+// a trajectory, one forward simulation and one adjoint pass (DESIGN.md §6), typically
+// 1–100 ms: evaluations are what counts. The back-ends' own work is O(m n) per iteration for
+// memory m, except Ipopt's fixed bookkeeping of about 1 ms per iteration and more (a KKT
+// factorisation, timing, option look-ups), which dominates for cheap objectives.
 //
 // Normalised loss. The caller gives a scale s = loss_scale > 0 (f(x₀), or a physical scale
 // such as the squared size of the target), and ℓ(x) = f(x)/s is what the back-ends see and
 // minimise (same minimiser, gradient ∇ℓ = ∇f/s). This makes every absolute tolerance inside
 // a back-end relative to s — in particular NLopt's L-BFGS stops, by a test we cannot change,
-// once ‖∇ℓ‖∞ ≤ 1e-8 (luksan/plis.c, tolg), which on the raw loss of a problem in metres and
-// seconds (f ~ 1e-6) would end the run at once. Everything reported (Evaluation,
-// OptimizationResult) gives both the raw loss f and the normalised loss ℓ.
+// once ‖∇ℓ‖∞ ≤ 1e-8 (PLIS's TOLG), which on the raw loss of a problem in metres and seconds
+// (f ~ 1e-6) would end the run at once. Everything reported (Evaluation,
+// OptimizationResult) gives the raw loss f, and the normalised loss ℓ beside it.
 //
 // L-BFGS. Each back-end keeps the m = lbfgs_memory latest pairs s_k = x_{k+1} − x_k,
-// y_k = ∇ℓ(x_{k+1}) − ∇ℓ(x_k) and applies the inverse-Hessian approximation H_k (two-loop or
-// Strang recurrence, H⁰ = γ I with γ = sᵀy / yᵀy where the back-end scales) to −∇ℓ, then
-// searches along that direction:
-//   nlopt-lbfgs — NLopt 2.7 NLOPT_LD_LBFGS, Lukšan's PLIS (limited-memory variable metric,
-//                 Strang recurrences), with its own line search (safeguarded cubic/quadratic
-//                 interpolation). The default.
+// y_k = ∇ℓ(x_{k+1}) − ∇ℓ(x_k), applies the inverse-Hessian approximation H_k built from them
+// on H⁰ = γ I, γ = sᵀy / yᵀy of the latest pair (Nocedal & Wright, Numerical Optimization,
+// eq. 7.20 — set explicitly for Ceres and Ipopt, whose defaults differ and cost 2–5× the
+// evaluations, see optimizer.cpp), to −∇ℓ, and searches along that direction:
+//   nlopt-lbfgs — NLopt 2.7 NLOPT_LD_LBFGS: Lukšan's PLIS (limited-memory variable metric by
+//                 Strang's recurrences) with its own line search. The default.
 //   ceres-lbfgs — Ceres 2.1 GradientProblemSolver: line_search_direction_type LBFGS,
 //                 line_search_type WOLFE (strong Wolfe conditions), Euclidean (no manifold),
-//                 H⁰ scaled by sᵀy/yᵀy (use_approximate_eigenvalue_bfgs_scaling).
-//   ipopt-lbfgs — Ipopt 3.11 with hessian_approximation limited-memory on the NLP
-//                 min ℓ(x) with m = 0 constraints and no bounds: there are no barrier terms,
-//                 and Ipopt is a line-search quasi-Newton method with its filter (Armijo)
-//                 backtracking; each step solves a KKT system with the limited-memory
-//                 Hessian (MUMPS).
+//                 use_approximate_eigenvalue_bfgs_scaling.
+//   ipopt-lbfgs — Ipopt 3.11 on the NLP min ℓ(x) with m = 0 constraints and no bounds
+//                 (±2e19, beyond nlp_lower/upper_bound_inf): no barrier terms remain, and
+//                 Ipopt is a line-search quasi-Newton method with hessian_approximation
+//                 limited-memory (limited_memory_initialization scalar2, B⁰ = I/γ), a KKT
+//                 solve by MUMPS per iteration and filter (Armijo) backtracking.
 //
 // Iterations. What one iteration is depends on the back-end, and both counts are reported:
 //   ceres  — an accepted line-search step (IterationCallback / Summary::iterations);
@@ -47,12 +48,13 @@
 // returning SOLVER_TERMINATE_SUCCESSFULLY; Ipopt: intermediate_callback returning false), or
 // after max_iterations. Ceres and Ipopt test between iterations, NLopt between line searches.
 // The back-ends' own tests are switched off as far as they can be, except genuine
-// convergence: a stationary point, ‖∇ℓ‖∞ ≤ 1e-8 (kStationaryGradient; NLopt's fixed
-// tolerance, given to Ceres as gradient_tolerance and to Ipopt as tol, with acceptable_iter
-// 0), or an iteration that changes nothing at all (Ceres's function_tolerance and
-// parameter_tolerance 0; NLopt's relative f change ≤ 1e-14 and x change ≤ 1e-16 over two
-// iterations, its floors). Those end with status "converged".
-//
+// convergence, a stationary point: ‖∇ℓ‖∞ ≤ kStationaryGradient = 1e-8 — NLopt's fixed
+// tolerance, given to Ceres as gradient_tolerance and to Ipopt as tol (acceptable_iter 0:
+// no "acceptable" termination). What is left of their other tests detects only a stall:
+// Ceres's function_tolerance and parameter_tolerance are 0 (an iteration that changed
+// nothing), NLopt's relative tolerances are at PLIS's floors (f change ≤ 1e-14, x change
+// ≤ 1e-16, twice in a row). Ipopt has no stall test: where round-off hides every decrease it
+// keeps iterating (to max_iterations, or until ‖∇ℓ‖∞ ≤ 1e-8 after all).
 // Best point. The wrapper keeps the point with the lowest loss over all evaluations
 // (line-search trial points included) and returns it, whatever the back-end returns. A
 // point evaluated twice in a row (Ceres and Ipopt ask for f and ∇f at a point they already
@@ -69,18 +71,23 @@
 // throws std::invalid_argument.
 //
 // Statuses (OptimizationResult::status), in this order of precedence:
-//   "failed"           — f or on_evaluation threw, a non-finite value, or a back-end error
-//                        (NLopt failure, an Ipopt error status, a Ceres failure at the start);
+//   "failed"           — f or on_evaluation threw, returned a non-finite value, or a back-end
+//                        error (invalid options, out of memory, an Ipopt error status);
 //   "target_reached"   — best normalised loss ≤ target (reached_target is set whenever that
 //                        holds, even with "failed");
 //   "max_iterations"   — NLopt maxeval, Ceres NO_CONVERGENCE, Ipopt Maximum_Iterations_Exceeded;
-//   "roundoff_limited" — the line search found no acceptable step: nlopt::roundoff_limited,
-//                        a Ceres line-search FAILURE, Ipopt's Restoration_Failed (for an
-//                        unconstrained problem its restoration phase runs only when the line
-//                        search fails);
-//   "converged"        — the back-end's own criterion (above): NLopt SUCCESS / FTOL / XTOL,
-//                        Ceres CONVERGENCE, Ipopt Solve_Succeeded, Solved_To_Acceptable_Level
-//                        or Search_Direction_Becomes_Too_Small.
+//   "converged"        — a stationary point by the back-end's own test (above): NLopt SUCCESS,
+//                        Ceres CONVERGENCE with ‖∇ℓ‖∞ ≤ 1e-8, Ipopt Solve_Succeeded (or
+//                        Solved_To_Acceptable_Level, switched off);
+//   "roundoff_limited" — no further progress, not at a stationary point: the line search found
+//                        no acceptable step or the iterate stopped changing — round-off near
+//                        a minimum, or a gradient inconsistent with the loss. NLopt
+//                        ROUNDOFF_LIMITED, FAILURE (from PLIS: its line search failed even
+//                        after a steepest-descent restart), FTOL/XTOL_REACHED at its floors;
+//                        Ceres FAILURE (line search) or CONVERGENCE by a zero change; Ipopt
+//                        Search_Direction_Becomes_Too_Small or Restoration_Failed (for an
+//                        unconstrained NLP its restoration phase runs only when the line
+//                        search fails).
 // OptimizationResult::message keeps the back-end's raw status and message.
 //
 // Allocation. The wrapper evaluates into preallocated vectors (x, gradient, best x): no
@@ -90,6 +97,7 @@
 #include <Eigen/Core>
 #include <functional>
 #include <optional>
+#include <stdexcept>
 #include <string>
 #include <string_view>
 
@@ -125,6 +133,18 @@ struct OptimizerOptions {
 // Returns f(x) and writes ∇f(x) into `gradient` (already sized like x; do not resize it).
 // May throw std::exception (e.g. a forward simulation step that did not converge).
 using ObjectiveFunction = std::function<double(const Eigen::VectorXd& x, Eigen::VectorXd& gradient)>;
+
+// Thrown by an objective for a point it cannot evaluate, typically a line-search trial step
+// so long that the simulation is not defined there (a forward time step that does not
+// converge, an initial angular velocity beyond π per step). Ceres and Ipopt are told that
+// the evaluation failed and shorten their step (Ceres's line search contracts, Ipopt "cuts
+// back alpha"); NLopt has no such mechanism, so there it is a failure like any other
+// exception. Infeasible points do not count as the best point; their number and the last
+// message are appended to OptimizationResult::message.
+class InfeasiblePoint : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
 
 // One successful evaluation of f, as reported to an EvaluationCallback.
 struct Evaluation {
