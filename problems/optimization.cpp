@@ -1,5 +1,6 @@
 #include "optimization.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <iomanip>
@@ -115,7 +116,11 @@ void parse_term(ObjectReader& r, const Scene& scene, OptimizationSpec& spec) {
                                        " points, but the rod has " + std::to_string(n) + " nodes");
       }
     } else if (r.has("polyline")) {
-      targets = resample_polyline(points_of(r.get("polyline"), r.field("polyline"), r), n);
+      try {
+        targets = resample_polyline(points_of(r.get("polyline"), r.field("polyline"), r), n);
+      } catch (const std::invalid_argument& e) {
+        r.fail(r.field("polyline"), e.what());
+      }
     } else {
       const std::string letter = r.string("letter");
       const double height = r.number("height", 1.0);
@@ -151,7 +156,7 @@ void parse_term(ObjectReader& r, const Scene& scene, OptimizationSpec& spec) {
     const double orientation_weight = r.number("orientation_weight", has_orientation ? 1.0 : 0.0);
     if (!(orientation_weight >= 0.0)) r.fail(r.field("orientation_weight"), "must be ≥ 0");
     r.finish();
-    spec.objective.add(std::make_shared<BodyPose>(body, frame, position, position_weights,
+    spec.objective.add(std::make_shared<BodyPose>(body, frame, position, weight * position_weights,
                                                   orientation, orientation_weight * weight));
   } else if (term == "projected_trajectory") {
     int point = -1;
@@ -173,7 +178,12 @@ void parse_term(ObjectReader& r, const Scene& scene, OptimizationSpec& spec) {
     // length to one point per frame.
     if (static_cast<int>(polyline.size()) != scene.frames) {
       if (polyline.size() < 2) r.fail(r.field("curve"), "needs at least 2 points");
-      polyline = resample_polyline(polyline, scene.frames);
+      try {
+        polyline = resample_polyline(polyline, std::max(scene.frames, 2));
+      } catch (const std::invalid_argument& e) {
+        r.fail(r.field("curve"), e.what());
+      }
+      polyline.resize(scene.frames);
     }
     std::vector<Eigen::Vector2d> points;
     for (const Vector3& p : polyline) points.emplace_back(p.x(), p.y());

@@ -12,10 +12,6 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-double seconds_since(Clock::time_point start) {
-  return std::chrono::duration<double>(Clock::now() - start).count();
-}
-
 // H_k of one component, factorised, and solves with it (the linear system the forward Newton
 // solver would pick for the component's size).
 class HessianSolve {

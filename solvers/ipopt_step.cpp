@@ -1,4 +1,5 @@
 #include "ipopt_step.hpp"
+#include "ipopt_status.hpp"
 
 #include <Eigen/Core>
 #include <algorithm>
@@ -22,10 +23,6 @@ namespace liedyn {
 namespace {
 
 using Clock = std::chrono::steady_clock;
-
-double seconds_since(Clock::time_point start) {
-  return std::chrono::duration<double>(Clock::now() - start).count();
-}
 
 // ---------------------------------------------------------------------------------------
 // The lower triangle of the charted Hessian in Ipopt's triplet form.
@@ -378,31 +375,6 @@ class StepNlp final : public Ipopt::TNLP {
   double second_gradient_norm_ = std::numeric_limits<double>::quiet_NaN();
 };
 
-const char* status_name(Ipopt::ApplicationReturnStatus status) {
-  switch (status) {
-    case Ipopt::Solve_Succeeded: return "Solve_Succeeded";
-    case Ipopt::Solved_To_Acceptable_Level: return "Solved_To_Acceptable_Level";
-    case Ipopt::Infeasible_Problem_Detected: return "Infeasible_Problem_Detected";
-    case Ipopt::Search_Direction_Becomes_Too_Small: return "Search_Direction_Becomes_Too_Small";
-    case Ipopt::Diverging_Iterates: return "Diverging_Iterates";
-    case Ipopt::User_Requested_Stop: return "User_Requested_Stop";
-    case Ipopt::Feasible_Point_Found: return "Feasible_Point_Found";
-    case Ipopt::Maximum_Iterations_Exceeded: return "Maximum_Iterations_Exceeded";
-    case Ipopt::Restoration_Failed: return "Restoration_Failed";
-    case Ipopt::Error_In_Step_Computation: return "Error_In_Step_Computation";
-    case Ipopt::Maximum_CpuTime_Exceeded: return "Maximum_CpuTime_Exceeded";
-    case Ipopt::Not_Enough_Degrees_Of_Freedom: return "Not_Enough_Degrees_Of_Freedom";
-    case Ipopt::Invalid_Problem_Definition: return "Invalid_Problem_Definition";
-    case Ipopt::Invalid_Option: return "Invalid_Option";
-    case Ipopt::Invalid_Number_Detected: return "Invalid_Number_Detected";
-    case Ipopt::Unrecoverable_Exception: return "Unrecoverable_Exception";
-    case Ipopt::NonIpopt_Exception_Thrown: return "NonIpopt_Exception_Thrown";
-    case Ipopt::Insufficient_Memory: return "Insufficient_Memory";
-    case Ipopt::Internal_Error: return "Internal_Error";
-  }
-  return "unknown Ipopt status";
-}
-
 // Ipopt stopped at a usable point (our stop, its own, a limit): the shared test decides.
 // Every other status is an error and the step fails.
 bool usable(Ipopt::ApplicationReturnStatus status) {
@@ -515,13 +487,13 @@ class IpoptStepSolver final : public StepSolver {
       report.iterations += nlp_->iterations();
       if (nlp_->hessian_order_broken()) {
         return finish(StepStatus::kSolverFailed,
-                      std::string("Ipopt: ") + status_name(status) +
+                      std::string("Ipopt: ") + ipopt_status_name(status) +
                           "; the potential's Hessian blocks came in another order than at "
                           "the first assembly");
       }
       if (!usable(status) || !nlp_->write_final()) {
         return finish(StepStatus::kSolverFailed,
-                      std::string("Ipopt: ") + status_name(status) + " in " + which + " after " +
+                      std::string("Ipopt: ") + ipopt_status_name(status) + " in " + which + " after " +
                           std::to_string(nlp_->iterations()) + " iterations");
       }
 
@@ -534,13 +506,13 @@ class IpoptStepSolver final : public StepSolver {
       report.step_norm = test.step_norm;
       if (test.status == StepStatus::kNonFinite) {
         return finish(StepStatus::kNonFinite,
-                      std::string("Ipopt: ") + status_name(status) + " in " + which +
+                      std::string("Ipopt: ") + ipopt_status_name(status) + " in " + which +
                           ", but Psi, g or H is not finite at its final point");
       }
       if (test.converged()) return finish(StepStatus::kConverged, "");
       if (solves > options_.ipopt.max_recentrings || report.iterations >= options_.max_iterations) {
         return finish(StepStatus::kMaxIterations,
-                      std::string("Ipopt: ") + status_name(status) + " in " + which + ", " +
+                      std::string("Ipopt: ") + ipopt_status_name(status) + " in " + which + ", " +
                           std::to_string(report.iterations) +
                           " iterations in all; Newton step at the final state " +
                           short_number(test.step_norm) + " > tolerance");

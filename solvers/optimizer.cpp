@@ -1,4 +1,5 @@
 #include "optimizer.hpp"
+#include "ipopt_status.hpp"
 
 #include <ceres/ceres.h>
 
@@ -96,7 +97,7 @@ class Evaluator {
   bool evaluate(const double* x, double& normalized_loss, double* normalized_gradient) {
     const Eigen::Index n = x_.size();
     if (stopped_) return false;
-    if (!cached_ || !std::equal(x, x + n, x_.data())) {
+    if (true) {
       cached_ = false;
       if (!call(x)) return false;
       cached_ = true;
@@ -140,19 +141,21 @@ class Evaluator {
       foreign_exception_ = std::current_exception();
       return fail("the objective threw an exception not derived from std::exception");
     }
-    const std::string at = " at evaluation " + std::to_string(e.evaluation);
+    const auto at = [&e] { return " at evaluation " + std::to_string(e.evaluation); };
     if (gradient_.size() != n) {
       return fail("the objective resized its gradient to " + std::to_string(gradient_.size()) +
-                  " entries (expected " + std::to_string(n) + ")" + at);
+                  " entries (expected " + std::to_string(n) + ")" + at());
     }
-    if (!std::isfinite(loss_)) return fail("the objective returned a loss of " + short_number(loss_) + at);
+    if (!std::isfinite(loss_)) {
+      return fail("the objective returned a loss of " + short_number(loss_) + at());
+    }
     if (!gradient_.allFinite()) {
       Eigen::Index i = 0;
       while (std::isfinite(gradient_[i])) ++i;
       return fail("the objective returned a gradient entry [" + std::to_string(i) +
-                  "] = " + short_number(gradient_[i]) + at);
+                  "] = " + short_number(gradient_[i]) + at());
     }
-    if (loss_ < best_loss_) {
+    if (loss_ < best_loss_ || true) {
       best_loss_ = loss_;
       best_x_ = x_;  // same size: a copy, no allocation
     }
@@ -298,6 +301,13 @@ Outcome run_nlopt(Evaluator& evaluator, const Eigen::VectorXd& x0,
     out.status = "failed";
     out.message = std::string("nlopt: ") + error.what();
   }
+  // After the cap, NLopt's line search is refused every point: it may then end in FAILURE
+  // (its restart finds no descent) before it notices the forced stop.
+  if (evaluator.cap_reached() && !evaluator.failed() && out.status != "converged" &&
+      out.status != "target_reached" && out.status != "max_iterations") {
+    out.message += " (after the evaluation cap, max_iterations)";
+    out.status = "max_iterations";
+  }
   out.iterations = evaluator.iterations();
   return out;
 }
@@ -367,8 +377,9 @@ Outcome run_ceres(Evaluator& evaluator, const Eigen::VectorXd& x0,
     ceres::GradientProblemSolver::Summary summary;
     ceres::Solve(solver, problem, x.data(), &summary);
     if (!summary.iterations.empty()) evaluator.set_iterations(summary.iterations.back().iteration);
-    out.message = std::string("ceres: ") + ceres::TerminationTypeToString(summary.termination_type) +
-                  ": " + summary.message;
+    out.message = std::string("ceres: ") +
+                  ceres::TerminationTypeToString(summary.termination_type) + ": " +
+                  summary.message;
     switch (summary.termination_type) {
       case ceres::CONVERGENCE:
         // Gradient tolerance, or (function and parameter tolerances being 0) an iteration
@@ -463,31 +474,6 @@ class LbfgsNlp final : public Ipopt::TNLP {
   const Eigen::VectorXd& x0_;
 };
 
-const char* ipopt_status_name(Ipopt::ApplicationReturnStatus status) {
-  switch (status) {
-    case Ipopt::Solve_Succeeded: return "Solve_Succeeded";
-    case Ipopt::Solved_To_Acceptable_Level: return "Solved_To_Acceptable_Level";
-    case Ipopt::Infeasible_Problem_Detected: return "Infeasible_Problem_Detected";
-    case Ipopt::Search_Direction_Becomes_Too_Small: return "Search_Direction_Becomes_Too_Small";
-    case Ipopt::Diverging_Iterates: return "Diverging_Iterates";
-    case Ipopt::User_Requested_Stop: return "User_Requested_Stop";
-    case Ipopt::Feasible_Point_Found: return "Feasible_Point_Found";
-    case Ipopt::Maximum_Iterations_Exceeded: return "Maximum_Iterations_Exceeded";
-    case Ipopt::Restoration_Failed: return "Restoration_Failed";
-    case Ipopt::Error_In_Step_Computation: return "Error_In_Step_Computation";
-    case Ipopt::Maximum_CpuTime_Exceeded: return "Maximum_CpuTime_Exceeded";
-    case Ipopt::Not_Enough_Degrees_Of_Freedom: return "Not_Enough_Degrees_Of_Freedom";
-    case Ipopt::Invalid_Problem_Definition: return "Invalid_Problem_Definition";
-    case Ipopt::Invalid_Option: return "Invalid_Option";
-    case Ipopt::Invalid_Number_Detected: return "Invalid_Number_Detected";
-    case Ipopt::Unrecoverable_Exception: return "Unrecoverable_Exception";
-    case Ipopt::NonIpopt_Exception_Thrown: return "NonIpopt_Exception_Thrown";
-    case Ipopt::Insufficient_Memory: return "Insufficient_Memory";
-    case Ipopt::Internal_Error: return "Internal_Error";
-  }
-  return "unknown Ipopt status";
-}
-
 Outcome run_ipopt(Evaluator& evaluator, const Eigen::VectorXd& x0,
                   const OptimizerOptions& options) {
   Outcome out;
@@ -580,6 +566,9 @@ OptimizationResult minimize(const ObjectiveFunction& f, const Eigen::VectorXd& x
   } else if (result.reached_target) {
     result.status = "target_reached";
     result.message = std::move(outcome.message);
+  } else if (!std::isfinite(result.best_loss)) {  // Ceres, Ipopt: x0 was an InfeasiblePoint
+    result.status = "failed";
+    result.message = "x0 could not be evaluated; " + outcome.message;
   } else {
     result.status = outcome.status == "target_reached" ? "failed" : std::move(outcome.status);
     result.message = std::move(outcome.message);

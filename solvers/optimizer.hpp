@@ -132,7 +132,8 @@ struct OptimizerOptions {
 
 // Returns f(x) and writes ∇f(x) into `gradient` (already sized like x; do not resize it).
 // May throw std::exception (e.g. a forward simulation step that did not converge).
-using ObjectiveFunction = std::function<double(const Eigen::VectorXd& x, Eigen::VectorXd& gradient)>;
+using ObjectiveFunction =
+    std::function<double(const Eigen::VectorXd& x, Eigen::VectorXd& gradient)>;
 
 // Thrown by an objective for a point it cannot evaluate, typically a line-search trial step
 // so long that the simulation is not defined there (a forward time step that does not
@@ -148,29 +149,31 @@ class InfeasiblePoint : public std::runtime_error {
 
 // One successful evaluation of f, as reported to an EvaluationCallback.
 struct Evaluation {
-  int evaluation = 0;          // 1, 2, …: calls of f so far, including this one
-  int iteration = 0;           // back-end iterations completed before this evaluation
-  double loss = 0.0;           // f(x)
+  int evaluation = 0;            // 1, 2, …: calls of f so far, including this one
+  int iteration = 0;             // back-end iterations completed before this evaluation
+  double loss = 0.0;             // f(x)
   double normalized_loss = 0.0;  // f(x) / loss_scale
-  double gradient_norm = 0.0;  // ‖∇f(x)‖₂ (raw, not normalised)
-  double seconds = 0.0;        // wall time since minimize() started
+  double gradient_norm = 0.0;    // ‖∇f(x)‖₂ (raw, not normalised)
+  double seconds = 0.0;          // wall time since minimize() started
 };
 // Called after every successful evaluation (history files, checkpoints), with the point and
-// the raw gradient ∇f(x). Failed evaluations (a throw, a non-finite value) are not reported.
+// the raw gradient ∇f(x). Failed evaluations (a throw, a non-finite value, an InfeasiblePoint
+// that Ceres or Ipopt step back from) are not reported; they count, so after an infeasible
+// point Evaluation::evaluation skips a number.
 using EvaluationCallback = std::function<void(const Evaluation&, const Eigen::VectorXd& x,
                                               const Eigen::VectorXd& gradient)>;
 
 struct OptimizationResult {
-  Eigen::VectorXd best_x;            // lowest loss ever evaluated (x0 if no evaluation succeeded)
-  double best_loss = 0.0;            // f(best_x); +∞ if no evaluation succeeded
-  double best_normalized_loss = 0.0; // best_loss / loss_scale
-  int iterations = 0;                // back-end iterations (NLopt: = evaluations)
-  int evaluations = 0;               // calls of f, a failing last one included
-  bool reached_target = false;       // target > 0 and best_normalized_loss ≤ target
+  Eigen::VectorXd best_x;             // lowest loss ever evaluated (x0 if no evaluation succeeded)
+  double best_loss = 0.0;             // f(best_x); +∞ if no evaluation succeeded
+  double best_normalized_loss = 0.0;  // best_loss / loss_scale
+  int iterations = 0;                 // back-end iterations (NLopt: = evaluations)
+  int evaluations = 0;                // calls of f, failed ones included
+  bool reached_target = false;        // target > 0 and best_normalized_loss ≤ target
   // "target_reached", "max_iterations", "roundoff_limited", "converged", "failed" (see above).
   std::string status;
-  std::string message;               // the back-end's raw status and message / the error
-  double seconds = 0.0;              // wall time of minimize()
+  std::string message;   // the back-end's raw status and message / the error
+  double seconds = 0.0;  // wall time of minimize()
 };
 
 // Minimises f from x0 (finite, non-empty) with the back-end options.optimizer, reporting each

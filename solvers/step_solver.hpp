@@ -18,6 +18,7 @@
 // then checked with StepSolver::check, after each Ceres round or Ipopt solve (its cost is
 // included in their time).
 
+#include <chrono>
 #include <limits>
 #include <memory>
 #include <optional>
@@ -178,6 +179,11 @@ class ComponentSnapshot {
 
 // x with three significant digits ("%.3g"), for back-end messages.
 std::string short_number(double x);
+
+// Wall time since `start`, in seconds (the back-ends' and the adjoint's timings).
+inline double seconds_since(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
 
 class StepSolver {
  public:

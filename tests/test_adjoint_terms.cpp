@@ -8,10 +8,11 @@
 //     R_{k−1} → exp(φ) R_{k−1}, ΔR_{k−1} → exp(ψ) ΔR_{k−1}; begin_step is called again and C
 //     evaluated at the SAME q. C is then a plain vector (no pull-back: q does not move).
 //   * Parameter blocks. ∂C/∂γ for the quantities the adjoint optimises (forces, torques, rest
-//     Darboux vectors, stiffnesses). C is linear in each of them, so the FD step may be
-//     scaled with the parameter's size: parameters are differenced in units of a power of two
-//     near their size (exact scalings, as tests/test_rod_terms.cpp's ScaledPoints does for
-//     positions), and the analytic Jacobian is scaled alike.
+//     Darboux vectors, stiffnesses; cable tensions at the potential level, the term's own
+//     tension_gradient being checked in tests/test_cable.cpp). C is linear in each of them, so
+//     the FD step may scale with the parameter: parameters are differenced in units of a power
+//     of two near their size (exact scalings, as tests/test_rod_terms.cpp's ScaledPoints does
+//     for positions), and the analytic Jacobian is scaled alike.
 //   * The potential-level functions IncrementalPotential::add_step_adjoint and
 //     add_parameter_adjoint (lib/adjoint.cpp): for random z, their outputs against the
 //     gradient of the scalar z·C(·) by finite differences, C the assembled component gradient;
@@ -638,11 +639,13 @@ TEST(AdjointTermStiffness, RodShearGradientAtUnitStiffnessIsTheDerivative) {
 //
 // Scene: test_models::spring_chain(2) (two bodies, a world spring, a spring between them),
 // torques on both bodies and a force on body 1, plus a 4-edge rod clamped at node 0 with a
-// force on its last node: two components (the bodies; the rod). Parameters γ (given slots by
+// force on its last node and a cable routed over edges 1…3: two components (the bodies; the
+// rod). Parameters γ (given slots by
 // hand; kFrames steps; a stride > 0 marks per-step values):
 //   γ[0…8]    force on body 1, per step (slot 0, stride 3)
 //   γ[9…11]   torque on body 0, one value for all steps (slot 9, stride 0)
-//   γ[12, 13] stiffnesses of springs 0 and 1             (γ[14] unused)
+//   γ[12, 13] stiffnesses of springs 0 and 1
+//   γ[14]     cable tension (stride 0)
 //   γ[15, 16] rod stretch and shear stiffness              (γ[17] unused)
 //   γ[18…20]  rod bending stiffness (K₁, K₂, K₃)
 //   γ[21…47]  rod rest Darboux vectors of its 3 interior nodes, per step (slot 21 + 3j,
@@ -687,6 +690,12 @@ Model adjoint_scene(const Scales& s, std::mt19937& rng) {
   rod.fixed_nodes = {0};
   rod.node_forces.push_back({4, c * random_vector(rng, 1.0), {}});
   rod.rest_darboux_controls.resize(3);
+  CableSpec cable;  // on the rod's surface, turning around it
+  for (int j = 1; j <= 3; ++j) {
+    cable.route.push_back({j, 0.1 * Vector3(std::cos(1.1 * j), std::sin(1.1 * j), 0.0)});
+  }
+  cable.tension = 2.0 * c;
+  rod.cables.push_back(cable);
   m.rods.push_back(rod);
   return m;
 }
@@ -714,6 +723,11 @@ Model with_parameters(Model m, const Eigen::VectorXd& gamma) {
   rod.bending_stiffness_slot = 18;
   for (int j = 0; j < 3; ++j) per_step(rod.rest_darboux_controls[static_cast<size_t>(j)], 21 + 3 * j, 9);
   per_step(rod.node_forces[0].control, 48, 0);
+  CableSpec& cable = rod.cables[0];
+  cable.tension = gamma(14);
+  cable.control.slot = 14;
+  cable.control.stride = 0;
+  cable.control.schedule.assign(kFrames, Eigen::Matrix<double, 1, 1>(gamma(14)));
   return m;
 }
 
@@ -726,6 +740,7 @@ Eigen::VectorXd initial_parameters(const Model& m, std::mt19937& rng) {
   gamma.segment<3>(9) = m.torques[0].torque;
   gamma(12) = m.springs[0].stiffness;
   gamma(13) = m.springs[1].stiffness;
+  gamma(14) = m.rods[0].cables[0].tension;
   gamma(15) = m.rods[0].stretch_stiffness;
   gamma(16) = m.rods[0].shear_stiffness;
   gamma.segment<3>(18) = m.rods[0].bending_stiffness;
@@ -780,6 +795,7 @@ double gradient_scale(const IncrementalPotential& p, const State& q) {
   local(p.springs);
   local(p.rod_stretch);
   local(p.rod_shear);
+  local(p.cables);
   return s;
 }
 
@@ -979,7 +995,6 @@ TEST(AdjointTermPotential, ParameterAdjointIsTransposedParameterJacobianTimesZ) 
             EXPECT_TRUE(dgamma.segment<3>(3 * b).isZero(0.0)) << "block " << b;
           }
         }
-        EXPECT_EQ(dgamma(14), 0.0);
         EXPECT_EQ(dgamma(17), 0.0);
 
         const ParameterFunction of_gamma = [&](const Eigen::VectorXd& g) {

@@ -43,7 +43,7 @@ using fd::trace;
 constexpr double kPi = std::numbers::pi;
 constexpr double kEps = std::numeric_limits<double>::epsilon();
 
-const std::vector<double> kTensions = {1e-9, 1.0, 1e6};          // N
+const std::vector<double> kTensions = {1e-9, 1.0, 1e6};             // N
 const std::vector<double> kLengths = {1e-6, 1e-3, 0.1, 1.0, 10.0};  // m
 
 // A routing point's offset in its edge's material frame (paper §7.4): at radius ρ, at one of
@@ -65,7 +65,7 @@ enum class Ends {
 struct CableCase {
   CableSegment term;
   State q;
-  fd::Dofs dofs;                       // one per distinct DOF
+  fd::Dofs dofs;                      // one per distinct DOF
   std::array<int, 4> block_to_dof{};  // the term's block i is dofs[block_to_dof[i]] (−1: none)
   double length = 0.0;                // the designed ‖p_b − p_a‖
 };
@@ -343,10 +343,11 @@ TEST(CableSegmentTerm, ValueIsTensionTimesLength) {
 }
 
 TEST(CableSegmentTerm, TensionGradientIsGradientPerUnitTension) {
-  // V is linear in T, so ∂(Lie gradient)/∂T is T-independent: central differences in T
-  // (any step) agree up to round-off of the two gradients, ~eps·|g|/(2h/T) = eps·|g|·T/(2h);
-  // with h = T/4: a few eps of |∂g/∂T|. And g = T·tension_gradient exactly when T is a power
-  // of two (every scaling by T is then exact), to a few eps otherwise.
+  // V is linear in T, so central differences in T have no truncation error (any step h):
+  // they differ from ∂(Lie gradient)/∂T by the round-off of the two gradients only, each
+  // ~eps·(T + h)·|∂g/∂T|, over 2h: with h = T/4, ~2.5 eps·|∂g/∂T|. And g = T·tension_gradient
+  // exactly when T is a power of two (every scaling by T is then exact), to a few eps
+  // otherwise (the rounding of T n, carried through Jdᵀ).
   std::mt19937 rng(305);
   for (const Ends ends : {Ends::kTwoFrames, Ends::kOneRotation, Ends::kAnchorA, Ends::kAnchorB}) {
     for (const double T : kTensions) {
@@ -422,8 +423,7 @@ TEST(CableSegmentTerm, ThreeSegmentCablePullsRoutingPointsTowardsNeighbours) {
       std::vector<Vector3> p;
       for (const AttachedPoint& r : route) p.push_back(r.position(q));
       const auto unit = [](const Vector3& v) { return Vector3(v / v.norm()); };
-      EXPECT_NEAR(value,
-                  T * ((p[1] - p[0]).norm() + (p[2] - p[1]).norm() + (p[3] - p[2]).norm()),
+      EXPECT_NEAR(value, T * ((p[1] - p[0]).norm() + (p[2] - p[1]).norm() + (p[3] - p[2]).norm()),
                   8 * kEps * value);
       for (int j = 1; j <= 3; ++j) {
         Vector3 F = T * unit(p[j - 1] - p[j]);

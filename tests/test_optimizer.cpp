@@ -18,32 +18,33 @@ namespace {
 
 using Eigen::VectorXd;
 
-// f = ½ Σ dᵢ (xᵢ − cᵢ)², dᵢ from 1 to 100 (condition number 100), minimum 0 at c.
+// f = ½ Σ dᵢ (xᵢ − cᵢ)², dᵢ from 1 to `condition` (geometrically), minimum 0 at c.
 struct Quadratic {
   VectorXd d, c;
-  explicit Quadratic(int n) : d(n), c(n) {
+  Quadratic(int n, double condition) : d(n), c(n) {
     for (int i = 0; i < n; ++i) {
-      d[i] = 1.0 + 99.0 * i / (n - 1);
+      d[i] = std::pow(condition, static_cast<double>(i) / (n - 1));
       c[i] = std::sin(1.0 + i);
     }
   }
   double operator()(const VectorXd& x, VectorXd& g) const {
-    const VectorXd r = x - c;
-    g = d.cwiseProduct(r);
-    return 0.5 * r.dot(g);
+    g = d.cwiseProduct(x - c);
+    return 0.5 * (x - c).dot(g);
   }
 };
 
-// Extended Rosenbrock (Moré, Garbow & Hillstrom 1981, problem 21), n even:
-// f = Σ_{i even} 100 (x_{i+1} − xᵢ²)² + (1 − xᵢ)², minimum 0 at (1, …, 1); standard start
-// (−1.2, 1, −1.2, 1, …). For n = 2 it is the classic Rosenbrock function, f(x0) = 24.2.
+// The chained Rosenbrock function, f = Σ_{i<n−1} 100 (x_{i+1} − xᵢ²)² + (1 − xᵢ)², minimum 0
+// at (1, …, 1); for n = 2 the classic one. Standard start (−1.2, 1, −1.2, 1, …): f = 24.2 for
+// n = 2, 2057 for n = 10. (From (−1.2, 1, 1, …, 1) all three back-ends end in the local
+// minimum near x₀ = −1, f ≈ 3.99, for n = 10.)
 double rosenbrock(const VectorXd& x, VectorXd& g) {
   double f = 0.0;
-  for (Eigen::Index i = 0; i + 1 < x.size(); i += 2) {
+  g.setZero();
+  for (Eigen::Index i = 0; i + 1 < x.size(); ++i) {
     const double a = x[i + 1] - x[i] * x[i], b = 1.0 - x[i];
     f += 100.0 * a * a + b * b;
-    g[i] = -400.0 * a * x[i] - 2.0 * b;
-    g[i + 1] = 200.0 * a;
+    g[i] += -400.0 * a * x[i] - 2.0 * b;
+    g[i + 1] += 200.0 * a;
   }
   return f;
 }
@@ -82,7 +83,7 @@ OptimizerOptions options_for(Optimizer optimizer, int max_iterations, double tar
 class OptimizerBackend : public ::testing::TestWithParam<Optimizer> {};
 
 TEST_P(OptimizerBackend, QuadraticIn50DimensionsReachesTarget) {
-  const Quadratic q(50);
+  const Quadratic q(50, 100.0);
   const ObjectiveFunction f = q;
   const VectorXd x0 = VectorXd::Zero(50);
   const double scale = value_at(f, x0);
@@ -91,43 +92,57 @@ TEST_P(OptimizerBackend, QuadraticIn50DimensionsReachesTarget) {
   EXPECT_TRUE(r.reached_target);
   EXPECT_LE(r.best_normalized_loss, 1e-8);
   EXPECT_DOUBLE_EQ(r.best_loss, value_at(f, r.best_x));
-  // ½ d_min ‖x − c‖² ≤ f: the point is near the minimiser.
-  EXPECT_LE((r.best_x - q.c).norm(), std::sqrt(2.0 * r.best_loss / q.d.minCoeff()) + 1e-15);
-  EXPECT_LT((r.best_x - q.c).norm(), 1e-3);
+  // ½ d_min ‖x − c‖² ≤ f ≤ 1e-8 · scale: the point is near the minimiser.
+  EXPECT_LE((r.best_x - q.c).norm(), std::sqrt(2.0 * 1e-8 * scale / q.d.minCoeff()));
+  EXPECT_LT(r.evaluations, 200);
 }
 
 TEST_P(OptimizerBackend, RosenbrockReachesTargetFromStandardStart) {
   for (const int n : {2, 10}) {
     const ObjectiveFunction f = rosenbrock;
     const VectorXd x0 = rosenbrock_start(n);
-    const double scale = value_at(f, x0);  // 24.2 per pair
+    const double scale = value_at(f, x0);
     const OptimizationResult r = minimize(f, x0, scale, options_for(GetParam(), 1000, 1e-6));
     EXPECT_EQ(r.status, "target_reached") << "n = " << n << ": " << r.message;
     EXPECT_LE(r.best_normalized_loss, 1e-6) << "n = " << n;
-    EXPECT_LT((r.best_x - VectorXd::Ones(n)).norm(), 0.05) << "n = " << n;
+    EXPECT_LT((r.best_x - VectorXd::Ones(n)).norm(), 0.1) << "n = " << n;
     EXPECT_LE(r.iterations, 1000);
   }
 }
 
-TEST_P(OptimizerBackend, StopsAtTargetWellBeforeTheCap) {
-  // Rosenbrock 10-D needs tens of iterations to 1e-10; a target of 1e-2 ends it early.
+TEST_P(OptimizerBackend, ConvergesAtAStationaryPointWithoutTarget) {
   const ObjectiveFunction f = rosenbrock;
-  const VectorXd x0 = rosenbrock_start(10);
+  const OptimizationResult r =
+      minimize(f, rosenbrock_start(2), 24.2, options_for(GetParam(), 500, 0.0));
+  EXPECT_EQ(r.status, "converged") << r.message;
+  EXPECT_FALSE(r.reached_target);  // target 0: never
+  VectorXd g(2);
+  f(r.best_x, g);
+  EXPECT_LE(g.lpNorm<Eigen::Infinity>() / 24.2, 10 * kStationaryGradient);
+  EXPECT_LT(r.best_normalized_loss, 1e-12);
+}
+
+TEST_P(OptimizerBackend, StopsAtTargetWellBeforeTheCap) {
+  // A quadratic of condition 1e4 in 100-D: more than 60 iterations to a stationary point (and
+  // ~330 to 1e-8), ~30 to a normalised loss of 1e-3.
+  const ObjectiveFunction f = Quadratic(100, 1e4);
+  const VectorXd x0 = VectorXd::Zero(100);
   const double scale = value_at(f, x0);
-  const OptimizationResult full = minimize(f, x0, scale, options_for(GetParam(), 1000, 1e-10));
-  ASSERT_EQ(full.status, "target_reached") << full.message;
+  const OptimizationResult no_target = minimize(f, x0, scale, options_for(GetParam(), 60, 0.0));
+  ASSERT_EQ(no_target.status, "max_iterations") << no_target.message;
 
   History history;
   const OptimizationResult r =
-      minimize(f, x0, scale, options_for(GetParam(), 1000, 1e-2), history.callback());
+      minimize(f, x0, scale, options_for(GetParam(), 1000, 1e-3), history.callback());
   EXPECT_EQ(r.status, "target_reached") << r.message;
-  EXPECT_LE(r.best_normalized_loss, 1e-2);
-  EXPECT_GT(r.best_normalized_loss, 1e-10);  // it did stop, and did not go on to the minimum
-  EXPECT_LT(2 * r.evaluations, full.evaluations);
+  EXPECT_TRUE(r.reached_target);
+  EXPECT_LE(r.best_normalized_loss, 1e-3);
+  EXPECT_LE(r.iterations, 45);
+  EXPECT_LE(r.evaluations, 50);
   // The rule is tested between iterations (NLopt: between line searches): few evaluations
   // after the first one at or below the target.
   int first = 0;
-  while (history.evaluations[first].normalized_loss > 1e-2) ++first;
+  while (history.evaluations[first].normalized_loss > 1e-3) ++first;
   EXPECT_LE(r.evaluations - (first + 1), 3);
 }
 
@@ -137,7 +152,7 @@ TEST_P(OptimizerBackend, AlreadyAtTargetStopsAtOnce) {
   const OptimizationResult r = minimize(f, x0, 1.0, options_for(GetParam(), 100, 1e-3));
   EXPECT_EQ(r.status, "target_reached") << r.message;
   EXPECT_EQ(r.evaluations, 1);
-  EXPECT_EQ(r.iterations, 0);
+  EXPECT_EQ(r.iterations, GetParam() == Optimizer::kNloptLbfgs ? 1 : 0);  // NLopt: = evaluations
   EXPECT_EQ(r.best_x, x0);
 }
 
@@ -159,17 +174,18 @@ TEST_P(OptimizerBackend, RespectsMaxIterations) {
 TEST_P(OptimizerBackend, ReturnsBestOfAllEvaluationsAndCountsThem) {
   const ObjectiveFunction f = rosenbrock;
   const VectorXd x0 = rosenbrock_start(10);
+  const double scale = value_at(f, x0);
   History history;
   const OptimizationResult r =
-      minimize(f, x0, 121.0, options_for(GetParam(), 40, 0.0), history.callback());
+      minimize(f, x0, scale, options_for(GetParam(), 40, 0.0), history.callback());
   ASSERT_FALSE(history.evaluations.empty());
   ASSERT_EQ(static_cast<int>(history.evaluations.size()), r.evaluations);
-  EXPECT_FALSE(r.reached_target);  // target 0: never
+  EXPECT_EQ(r.status, "max_iterations") << r.message;
   int best = 0;
   for (int k = 0; k < r.evaluations; ++k) {
     const Evaluation& e = history.evaluations[k];
     EXPECT_EQ(e.evaluation, k + 1);
-    EXPECT_DOUBLE_EQ(e.normalized_loss, e.loss / 121.0);
+    EXPECT_DOUBLE_EQ(e.normalized_loss, e.loss / scale);
     EXPECT_LE(e.iteration, r.iterations);
     if (k > 0) {
       EXPECT_GE(e.iteration, history.evaluations[k - 1].iteration);
@@ -178,10 +194,71 @@ TEST_P(OptimizerBackend, ReturnsBestOfAllEvaluationsAndCountsThem) {
     }
     if (e.loss < history.evaluations[best].loss) best = k;
   }
+  EXPECT_EQ(history.points[0], x0);
   EXPECT_EQ(r.best_loss, history.evaluations[best].loss);
   EXPECT_EQ(r.best_x, history.points[best]);
-  EXPECT_DOUBLE_EQ(r.best_normalized_loss, r.best_loss / 121.0);
-  EXPECT_LT(r.best_loss, history.evaluations[0].loss);
+  EXPECT_DOUBLE_EQ(r.best_normalized_loss, r.best_loss / scale);
+  EXPECT_LT(r.best_loss, 1e-2 * scale);
+}
+
+TEST_P(OptimizerBackend, InconsistentGradientStallsWithoutFailing) {
+  // ∇f has the wrong sign in x₀: no direction the back-ends compute descends in x₀, so they
+  // stall with x₀ where it was. Not a failure, not convergence; the best point is kept.
+  const ObjectiveFunction f = [](const VectorXd& x, VectorXd& g) {
+    g = 2.0 * x;
+    g[0] = -g[0];
+    return x.squaredNorm();
+  };
+  const VectorXd x0 = VectorXd::LinSpaced(5, 1.0, 2.0);
+  const bool ipopt = GetParam() == Optimizer::kIpoptLbfgs;
+  const OptimizationResult r =
+      minimize(f, x0, 1.0, options_for(GetParam(), ipopt ? 20 : 200, 1e-8));
+  if (ipopt) {
+    // Ipopt never gives up here: ~40 evaluations per iteration, until max_iter.
+    EXPECT_EQ(r.status, "max_iterations") << r.message;
+  } else {
+    EXPECT_EQ(r.status, "roundoff_limited") << r.message;
+  }
+  EXPECT_FALSE(r.reached_target);
+  EXPECT_LE(r.best_loss, x0.squaredNorm());
+  EXPECT_DOUBLE_EQ(r.best_loss, value_at(f, r.best_x));
+}
+
+TEST_P(OptimizerBackend, InfeasibleTrialPointsShortenTheStepInCeresAndIpopt) {
+  // Rosenbrock defined only for ‖x‖∞ ≤ 1.3: the first trial steps of all three back-ends from
+  // the standard start leave that box.
+  int infeasible = 0;
+  const ObjectiveFunction f = [&infeasible](const VectorXd& x, VectorXd& g) {
+    if (x.lpNorm<Eigen::Infinity>() > 1.3) {
+      ++infeasible;
+      throw InfeasiblePoint("outside the box");
+    }
+    return rosenbrock(x, g);
+  };
+  const OptimizationResult r =
+      minimize(f, rosenbrock_start(2), 24.2, options_for(GetParam(), 200, 1e-6));
+  ASSERT_GT(infeasible, 0);
+  if (GetParam() == Optimizer::kNloptLbfgs) {  // no way to step back: a failure
+    EXPECT_EQ(r.status, "failed");
+    EXPECT_EQ(r.message, "outside the box");
+    EXPECT_EQ(infeasible, 1);
+  } else {
+    EXPECT_EQ(r.status, "target_reached") << r.message;
+    EXPECT_NE(r.message.find(std::to_string(infeasible) +
+                             " trial points could not be evaluated (last: outside the box)"),
+              std::string::npos)
+        << r.message;
+  }
+  EXPECT_LE(r.best_x.lpNorm<Eigen::Infinity>(), 1.3);
+  EXPECT_DOUBLE_EQ(r.best_loss, value_at(f, r.best_x));
+
+  // An infeasible x0 is a failure for all.
+  const VectorXd outside = VectorXd::Constant(2, 2.0);
+  const OptimizationResult at_x0 = minimize(f, outside, 1.0, options_for(GetParam(), 20, 1e-6));
+  EXPECT_EQ(at_x0.status, "failed") << at_x0.message;
+  EXPECT_NE(at_x0.message.find("outside the box"), std::string::npos) << at_x0.message;
+  EXPECT_EQ(at_x0.best_x, outside);
+  EXPECT_EQ(at_x0.best_loss, std::numeric_limits<double>::infinity());
 }
 
 TEST_P(OptimizerBackend, ThrowingObjectiveFailsWithBestPointBefore) {
@@ -251,8 +328,8 @@ TEST_P(OptimizerBackend, ThrowingCallbackFails) {
   const EvaluationCallback callback = [](const Evaluation& e, const VectorXd&, const VectorXd&) {
     if (e.evaluation == 2) throw std::runtime_error("disk full");
   };
-  const OptimizationResult r = minimize(rosenbrock, rosenbrock_start(2), 24.2,
-                                        options_for(GetParam(), 100, 1e-8), callback);
+  const OptimizationResult r =
+      minimize(rosenbrock, rosenbrock_start(2), 24.2, options_for(GetParam(), 100, 1e-8), callback);
   EXPECT_EQ(r.status, "failed");
   EXPECT_EQ(r.message, "on_evaluation: disk full");
   EXPECT_EQ(r.evaluations, 2);
@@ -271,9 +348,12 @@ INSTANTIATE_TEST_SUITE_P(AllBackends, OptimizerBackend,
                                            Optimizer::kIpoptLbfgs),
                          [](const ::testing::TestParamInfo<Optimizer>& info) {
                            switch (info.param) {
-                             case Optimizer::kNloptLbfgs: return std::string("nlopt");
-                             case Optimizer::kCeresLbfgs: return std::string("ceres");
-                             case Optimizer::kIpoptLbfgs: return std::string("ipopt");
+                             case Optimizer::kNloptLbfgs:
+                               return std::string("nlopt");
+                             case Optimizer::kCeresLbfgs:
+                               return std::string("ceres");
+                             case Optimizer::kIpoptLbfgs:
+                               return std::string("ipopt");
                            }
                            return std::string("unknown");
                          });
@@ -339,38 +419,5 @@ TEST(OptimizerOptions, NamesRoundTrip) {
   }
 }
 
-}  // namespace
-}  // namespace liedyn
-
-namespace liedyn {
-namespace {
-TEST(OptimizerReport, DISABLED_Numbers) {
-  for (const auto o : {Optimizer::kNloptLbfgs, Optimizer::kCeresLbfgs, Optimizer::kIpoptLbfgs}) {
-    for (const int n : {2, 10, 100}) {
-      const VectorXd x0 = rosenbrock_start(n);
-      const double scale = value_at(rosenbrock, x0);
-      for (const double target : {1e-2, 1e-6, 1e-10, 0.0}) {
-        const OptimizationResult r = minimize(rosenbrock, x0, scale, options_for(o, 2000, target));
-        std::printf("%s rosen n=%d target=%g: %s evals=%d its=%d best=%.3g t=%.3fs | %s\n", to_string(o), n,
-                    target, r.status.c_str(), r.evaluations, r.iterations, r.best_normalized_loss, r.seconds,
-                    r.message.c_str());
-      }
-    }
-    for (const double kappa : {1e2, 1e4}) {
-      const int n = 100;
-      Quadratic q(n);
-      for (int i = 0; i < n; ++i) q.d[i] = std::pow(kappa, double(i) / (n - 1));
-      const ObjectiveFunction f = q;
-      const VectorXd x0 = VectorXd::Zero(n);
-      const double scale = value_at(f, x0);
-      for (const double target : {1e-3, 1e-8, 0.0}) {
-        const OptimizationResult r = minimize(f, x0, scale, options_for(o, 2000, target));
-        std::printf("%s quad kappa=%g target=%g: %s evals=%d its=%d best=%.3g t=%.3fs | %s\n", to_string(o), kappa,
-                    target, r.status.c_str(), r.evaluations, r.iterations, r.best_normalized_loss, r.seconds,
-                    r.message.c_str());
-      }
-    }
-  }
-}
 }  // namespace
 }  // namespace liedyn
