@@ -325,12 +325,12 @@ void write_checkpoint(const std::filesystem::path& file, const Checkpoint& c) {
 
 Checkpoint read_checkpoint(const std::filesystem::path& file, int size) {
   std::ifstream in(file);
-  if (!in) throw std::runtime_error(file.string() + ": cannot open the checkpoint to resume from");
+  if (!in) throw std::runtime_error("cannot open the checkpoint to resume from");
   json j;
   try {
     j = json::parse(in);
   } catch (const json::exception& e) {
-    throw std::runtime_error(file.string() + ": not a checkpoint (" + e.what() + ")");
+    throw std::runtime_error(std::string("not a checkpoint (") + e.what() + ")");
   }
   Checkpoint c;
   try {
@@ -348,9 +348,7 @@ Checkpoint read_checkpoint(const std::filesystem::path& file, int size) {
                            row.at(3).get<double>(), row.at(4).get<double>()});
     }
   } catch (const json::exception& e) {
-    throw std::runtime_error(file.string() + ": not a checkpoint of this format (" + e.what() + ")");
-  } catch (const std::runtime_error& e) {
-    throw std::runtime_error(file.string() + ": " + e.what());
+    throw std::runtime_error(std::string("not a checkpoint of this format (") + e.what() + ")");
   }
   return c;
 }
@@ -363,14 +361,18 @@ int run_optimize(const Scene& scene, const OptimizeOptions& options, std::ostrea
   if (options.optimizer) optimizer.optimizer = *options.optimizer;
   if (options.max_iterations) optimizer.max_iterations = *options.max_iterations;
   optimizer.validate();
-  std::filesystem::create_directories(options.out);
   const std::filesystem::path checkpoint_file = options.out / "checkpoint.json";
   const std::filesystem::path history_file = options.out / "history.csv";
 
   Checkpoint checkpoint;
   Eigen::VectorXd start = sim.initial_parameters();
   if (options.resume) {
-    checkpoint = read_checkpoint(checkpoint_file, sim.parameters().size());
+    // Before anything is written: a missing or foreign checkpoint is bad input (exit 2).
+    try {
+      checkpoint = read_checkpoint(checkpoint_file, sim.parameters().size());
+    } catch (const std::runtime_error& e) {
+      throw SceneError(checkpoint_file.string(), "", e.what());
+    }
     start = checkpoint.best;
     out << "resuming from " << checkpoint_file.string() << ": " << checkpoint.history.size()
         << " evaluations, best normalized loss " << checkpoint.best_loss / checkpoint.loss_scale
@@ -384,6 +386,7 @@ int run_optimize(const Scene& scene, const OptimizeOptions& options, std::ostrea
       return 4;
     }
   }
+  std::filesystem::create_directories(options.out);
   const int first_iteration =
       checkpoint.history.empty() ? 0 : checkpoint.history.back().iteration + 1;
   const double earlier_seconds = checkpoint.seconds;

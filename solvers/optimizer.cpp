@@ -97,7 +97,7 @@ class Evaluator {
   bool evaluate(const double* x, double& normalized_loss, double* normalized_gradient) {
     const Eigen::Index n = x_.size();
     if (stopped_) return false;
-    if (true) {
+    if (!cached_ || !std::equal(x, x + n, x_.data())) {
       cached_ = false;
       if (!call(x)) return false;
       cached_ = true;
@@ -155,7 +155,7 @@ class Evaluator {
       return fail("the objective returned a gradient entry [" + std::to_string(i) +
                   "] = " + short_number(gradient_[i]) + at());
     }
-    if (loss_ < best_loss_ || true) {
+    if (loss_ < best_loss_) {
       best_loss_ = loss_;
       best_x_ = x_;  // same size: a copy, no allocation
     }

@@ -80,7 +80,8 @@ std::string scene_text(const std::string& optimization, int frames = kFrames,
 // extra members `extra` (must start with ", " when given).
 std::string block(const std::string& parameters, const std::string& objective,
                   const std::string& extra = "") {
-  return R"({ "parameters": [)" + parameters + R"(], "objective": [)" + objective + "]" + extra + " }";
+  return R"({ "parameters": [)" + parameters + R"(], "objective": [)" + objective + "]" + extra +
+         " }";
 }
 
 const std::string kForceParameter = R"({ "kind": "force", "index": 1 })";
@@ -124,7 +125,8 @@ void expect_rejected(const std::string& text, const std::string& field,
 }
 
 void expect_parameter_rejected(const std::string& parameters, const std::string& field,
-                               const std::string& reason_part, const std::string& mode = "dynamic") {
+                               const std::string& reason_part,
+                               const std::string& mode = "dynamic") {
   expect_rejected(scene_text(block(parameters, kEffortTerm), kFrames, mode), field, reason_part);
 }
 
@@ -167,13 +169,14 @@ struct KindCase {
   std::string json;
   ParameterKind kind;
   int index, sub, size;
-  std::string first_name;      // ParameterSet::describe of its first entry
-  std::vector<double> head;    // its first initial values (the scene's)
-  int period;                  // per-step kinds: the initial values repeat with this period
+  std::string first_name;    // ParameterSet::describe of its first entry
+  std::vector<double> head;  // its first initial values (the scene's)
+  int period;                // per-step kinds: the initial values repeat with this period
 };
 
 std::vector<KindCase> kind_cases() {
   const int n = kFrames, nodes = 4;
+  // clang-format off
   return {
       {R"({"kind": "body_linear_velocity", "body": "box"})", ParameterKind::kBodyLinearVelocity,
        1, -1, 3, "bodies[1].linear_velocity[0]", {1, 2, 2}, 0},
@@ -206,6 +209,7 @@ std::vector<KindCase> kind_cases() {
       {R"({"kind": "bending_stiffness", "rod": "arm"})", ParameterKind::kBendingStiffness, 1, -1,
        3, "rods[1].bending_stiffness[0]", {1, 2, 3}, 0},
   };
+  // clang-format on
 }
 
 TEST(OptimizationParse, EveryParameterKindGivesItsDocumentedBlock) {
@@ -229,7 +233,8 @@ TEST(OptimizationParse, EveryParameterKindGivesItsDocumentedBlock) {
     EXPECT_EQ(p.describe(s.model, 0), c.first_name);
     const Eigen::VectorXd gamma = p.initial_values(s.model);
     ASSERT_EQ(gamma.size(), c.size);
-    for (std::size_t i = 0; i < c.head.size(); ++i) EXPECT_NEAR(gamma(int(i)), c.head[i], 1e-12) << i;
+    for (std::size_t i = 0; i < c.head.size(); ++i)
+      EXPECT_NEAR(gamma(int(i)), c.head[i], 1e-12) << i;
     if (c.period > 0) {
       for (int i = c.period; i < gamma.size(); ++i) EXPECT_EQ(gamma(i), gamma(i % c.period)) << i;
     }
@@ -288,18 +293,19 @@ TEST(OptimizationParse, OptimizerSettingsAndDefaults) {
   EXPECT_EQ(d.optimization->optimizer.lbfgs_memory, defaults.lbfgs_memory);
   EXPECT_EQ(d.optimization->loss_scale, 0.0);
 
-  const Scene s = parsed(scene_text(block(
-      kForceParameter, kEffortTerm,
-      R"(, "optimizer": "ipopt-lbfgs", "max_iterations": 7, "target_normalized_loss": 0,
+  const Scene s = parsed(scene_text(
+      block(kForceParameter, kEffortTerm,
+            R"(, "optimizer": "ipopt-lbfgs", "max_iterations": 7, "target_normalized_loss": 0,
          "lbfgs_memory": 3, "loss_scale": 2.5)")));
   EXPECT_EQ(s.optimization->optimizer.optimizer, Optimizer::kIpoptLbfgs);
   EXPECT_EQ(s.optimization->optimizer.max_iterations, 7);
   EXPECT_EQ(s.optimization->optimizer.target_normalized_loss, 0.0);
   EXPECT_EQ(s.optimization->optimizer.lbfgs_memory, 3);
   EXPECT_EQ(s.optimization->loss_scale, 2.5);
-  EXPECT_EQ(parsed(scene_text(block(kForceParameter, kEffortTerm, R"(, "optimizer": "ceres-lbfgs")")))
-                .optimization->optimizer.optimizer,
-            Optimizer::kCeresLbfgs);
+  EXPECT_EQ(
+      parsed(scene_text(block(kForceParameter, kEffortTerm, R"(, "optimizer": "ceres-lbfgs")")))
+          .optimization->optimizer.optimizer,
+      Optimizer::kCeresLbfgs);
 
   // Without the block there is none.
   EXPECT_FALSE(parsed(scene_text("")).optimization.has_value());
@@ -319,12 +325,14 @@ TEST(OptimizationParse, PointTargetsFromTargets) {
   EXPECT_EQ(s.optimization->objective.terms()[0]->name(), "point_targets");
   EXPECT_NEAR(lifted_loss(s), 0.5 * 4 * 16, 1e-12);
   // "frame": 3: 2 above.
-  EXPECT_NEAR(lifted_loss(scene_with_term(R"({"term": "point_targets", "rod": "arm", "frame": 3, "targets": )" +
-                                          kArmLifted1 + "}")),
+  EXPECT_NEAR(lifted_loss(scene_with_term(
+                  R"({"term": "point_targets", "rod": "arm", "frame": 3, "targets": )" +
+                  kArmLifted1 + "}")),
               4 * 4, 1e-12);
   // "frame": 0 (the initial state): 1 below.
-  EXPECT_NEAR(lifted_loss(scene_with_term(R"({"term": "point_targets", "rod": "arm", "frame": 0, "targets": )" +
-                                          kArmLifted1 + "}")),
+  EXPECT_NEAR(lifted_loss(scene_with_term(
+                  R"({"term": "point_targets", "rod": "arm", "frame": 0, "targets": )" +
+                  kArmLifted1 + "}")),
               4 * 1, 1e-12);
 }
 
@@ -333,8 +341,8 @@ TEST(OptimizationParse, PointTargetsFromAPolylineAreResampledByArcLength) {
   for (const std::string polyline :
        {"[[0, 0, 1], [0.3, 0, 1]]", "[[0, 0, 1], [0.25, 0, 1], [0.3, 0, 1]]"}) {
     SCOPED_TRACE(polyline);
-    const Scene s = scene_with_term(R"({"term": "point_targets", "rod": "arm", "frame": 1, "polyline": )" +
-                                    polyline + "}");
+    const Scene s = scene_with_term(
+        R"({"term": "point_targets", "rod": "arm", "frame": 1, "polyline": )" + polyline + "}");
     EXPECT_EQ(s.optimization->objective.terms()[0]->name(), "point_targets");
     EXPECT_NEAR(lifted_loss(s), 0.0, 1e-24);
   }
@@ -368,17 +376,19 @@ TEST(OptimizationParse, BodyPoseTerm) {
   const std::string quarter_turn = "[0.7071067811865476, 0, 0, 0.7071067811865476]";
   const Scene s = scene_with_term(
       R"({"term": "body_pose", "body": "box", "position": [0, 0, 0.5], "position_weights": [0, 0, 2],
-          "orientation": )" + quarter_turn + R"(, "orientation_weight": 3})");
+          "orientation": )" +
+      quarter_turn + R"(, "orientation_weight": 3})");
   ASSERT_EQ(s.optimization->objective.terms().size(), 1u);
   EXPECT_EQ(s.optimization->objective.terms()[0]->name(), "body_pose");
   const double quarter = std::numbers::pi / 2;
   EXPECT_NEAR(lifted_loss(s), 2 * 5.5 * 5.5 + 3 * quarter * quarter, 1e-9);
   // A position alone: weights 1 on every axis, no orientation term.
-  EXPECT_NEAR(lifted_loss(scene_with_term(R"({"term": "body_pose", "body": "box", "position": [1, 0, 6]})")),
+  EXPECT_NEAR(lifted_loss(scene_with_term(
+                  R"({"term": "body_pose", "body": "box", "position": [1, 0, 6]})")),
               1.0, 1e-12);
   // An orientation alone: weight 1, no position term.
-  EXPECT_NEAR(lifted_loss(scene_with_term(R"({"term": "body_pose", "body": "box", "orientation": )" +
-                                          quarter_turn + "}")),
+  EXPECT_NEAR(lifted_loss(scene_with_term(
+                  R"({"term": "body_pose", "body": "box", "orientation": )" + quarter_turn + "}")),
               quarter * quarter, 1e-9);
   // At frame 2 the box is at (0, 0, 3).
   EXPECT_NEAR(lifted_loss(scene_with_term(
@@ -392,9 +402,11 @@ TEST(OptimizationParse, BodyPoseWeightScalesTheWholeTerm) {
   const std::string quarter_turn = "[0.7071067811865476, 0, 0, 0.7071067811865476]";
   const std::string pose =
       R"("term": "body_pose", "body": "box", "position": [0, 0, 0.5], "position_weights": [0, 0, 2],
-         "orientation": )" + quarter_turn;
+         "orientation": )" +
+      quarter_turn;
   const double once = lifted_loss(scene_with_term("{" + pose + "}"));
-  EXPECT_NEAR(lifted_loss(scene_with_term("{" + pose + R"(, "weight": 2})")), 2 * once, 1e-9 * once);
+  EXPECT_NEAR(lifted_loss(scene_with_term("{" + pose + R"(, "weight": 2})")), 2 * once,
+              1e-9 * once);
   // Position only: weight 2 doubles it.
   EXPECT_NEAR(lifted_loss(scene_with_term(
                   R"({"term": "body_pose", "body": "box", "position": [1, 0, 6], "weight": 2})")),
@@ -441,7 +453,8 @@ TEST(OptimizationParse, ProjectedTrajectoryResamplesOtherCurves) {
 TEST(OptimizationParse, EffortOverAllOrSomeParameters) {
   // γ: the box's force (0, 1, 0) in each of 5 frames (Σγ² = 5), then its velocity (1, 2, 2)
   // (Σγ² = 9).
-  const std::string parameters = kForceParameter + R"(, {"kind": "body_linear_velocity", "body": "box"})";
+  const std::string parameters =
+      kForceParameter + R"(, {"kind": "body_linear_velocity", "body": "box"})";
   const Scene all = scene_with_term(R"({"term": "effort", "weight": 0.1})", parameters);
   ASSERT_EQ(all.optimization->objective.terms().size(), 2u);  // one per block
   for (const auto& t : all.optimization->objective.terms()) EXPECT_EQ(t->name(), "effort");
@@ -467,7 +480,8 @@ TEST(OptimizationParse, EffortOverAllOrSomeParameters) {
 
 TEST(OptimizationErrors, UnknownKindTermOrKey) {
   expect_parameter_rejected(kForceParameter + R"(, {"kind": "velocity", "body": "box"})",
-                            "optimization.parameters[1].kind", "unknown parameter kind \"velocity\"");
+                            "optimization.parameters[1].kind",
+                            "unknown parameter kind \"velocity\"");
   expect_term_rejected(R"({"term": "distance"})", "optimization.objective[0].term",
                        "unknown objective term \"distance\"");
   expect_parameter_rejected(R"({"kind": "body_position", "body": "box", "axis": 0})",
@@ -476,13 +490,15 @@ TEST(OptimizationErrors, UnknownKindTermOrKey) {
                             "optimization.parameters[0].rod", "unknown key");
   expect_term_rejected(R"({"term": "effort", "scale": 2})", "optimization.objective[0].scale",
                        "unknown key");
-  expect_term_rejected(kEffortTerm + R"(, {"term": "body_pose", "body": "box", "positon": [0, 0, 0]})",
-                       "optimization.objective[1].positon", "unknown key");
+  expect_term_rejected(
+      kEffortTerm + R"(, {"term": "body_pose", "body": "box", "positon": [0, 0, 0]})",
+      "optimization.objective[1].positon", "unknown key");
   expect_rejected(scene_text(block(kForceParameter, kEffortTerm, R"(, "colour": "red")")),
                   "optimization.colour", "unknown key");
   expect_parameter_rejected(R"({"body": "box"})", "optimization.parameters[0].kind",
                             "required but missing");
-  expect_term_rejected(R"({"rod": "arm"})", "optimization.objective[0].term", "required but missing");
+  expect_term_rejected(R"({"rod": "arm"})", "optimization.objective[0].term",
+                       "required but missing");
 }
 
 TEST(OptimizationErrors, NamesThatDoNotExist) {
@@ -498,8 +514,9 @@ TEST(OptimizationErrors, NamesThatDoNotExist) {
                        "optimization.objective[0].body", "no body is named \"crate\"");
   expect_term_rejected(R"({"term": "point_targets", "rod": "whip", "letter": "S"})",
                        "optimization.objective[0].rod", "no rod is named \"whip\"");
-  expect_term_rejected(R"({"term": "projected_trajectory", "rod": "whip", "node": 0, "curve": [[0, 0], [1, 1]]})",
-                       "optimization.objective[0].rod", "no rod is named \"whip\"");
+  expect_term_rejected(
+      R"({"term": "projected_trajectory", "rod": "whip", "node": 0, "curve": [[0, 0], [1, 1]]})",
+      "optimization.objective[0].rod", "no rod is named \"whip\"");
 }
 
 TEST(OptimizationErrors, IndicesOutOfRange) {
@@ -521,8 +538,9 @@ TEST(OptimizationErrors, IndicesOutOfRange) {
                             "optimization.parameters[0]", "spring 2");
   expect_parameter_rejected(R"({"kind": "rest_darboux", "rod": "stub"})",
                             "optimization.parameters[0]", "no interior node");
-  expect_term_rejected(R"({"term": "projected_trajectory", "rod": "arm", "node": 4, "curve": [[0, 0], [1, 1]]})",
-                       "optimization.objective[0].node", "must be an integer in [0, 3]");
+  expect_term_rejected(
+      R"({"term": "projected_trajectory", "rod": "arm", "node": 4, "curve": [[0, 0], [1, 1]]})",
+      "optimization.objective[0].node", "must be an integer in [0, 3]");
   expect_term_rejected(R"({"term": "body_pose", "body": "box", "frame": 6, "position": [0, 0, 0]})",
                        "optimization.objective[0].frame", "must be an integer in [-1, 5]");
   expect_term_rejected(R"({"term": "effort", "parameters": [1]})",
@@ -535,19 +553,23 @@ TEST(OptimizationErrors, PointTargetSources) {
       "optimization.objective[0].targets", "has 3 points, but the rod has 4 nodes");
   expect_term_rejected(R"({"term": "point_targets", "rod": "arm", "targets": )" + kArmLifted1 +
                            R"(, "letter": "S"})",
-                       "optimization.objective[0].targets", "exactly one of targets, polyline or letter");
-  expect_term_rejected(R"({"term": "point_targets", "rod": "arm", "polyline": [[0, 0, 0], [1, 0, 0]], "letter": "S"})",
-                       "optimization.objective[0].targets", "exactly one of targets, polyline or letter");
+                       "optimization.objective[0].targets",
+                       "exactly one of targets, polyline or letter");
+  expect_term_rejected(
+      R"({"term": "point_targets", "rod": "arm", "polyline": [[0, 0, 0], [1, 0, 0]], "letter": "S"})",
+      "optimization.objective[0].targets", "exactly one of targets, polyline or letter");
   expect_term_rejected(R"({"term": "point_targets", "rod": "arm"})",
-                       "optimization.objective[0].targets", "exactly one of targets, polyline or letter");
+                       "optimization.objective[0].targets",
+                       "exactly one of targets, polyline or letter");
   expect_term_rejected(R"({"term": "point_targets", "rod": "arm", "targets": [[0, 0, 0], [1, 0]]})",
                        "optimization.objective[0].targets[1]", "must be an array of 3 numbers");
   expect_term_rejected(R"({"term": "point_targets", "rod": "arm", "polyline": [[0, 0, 0]]})",
                        "optimization.objective[0].polyline", "at least 2 points");
   for (const std::string letter : {"1", "?", "\u00e9"}) {
     SCOPED_TRACE(letter);
-    const std::optional<SceneError> e = rejected(scene_text(block(
-        kForceParameter, R"({"term": "point_targets", "rod": "arm", "letter": ")" + letter + "\"}")));
+    const std::optional<SceneError> e = rejected(
+        scene_text(block(kForceParameter, R"({"term": "point_targets", "rod": "arm", "letter": ")" +
+                                              letter + "\"}")));
     if (e) {
       EXPECT_EQ(e->field(), "optimization.objective[0].letter") << e->what();
     }
@@ -564,29 +586,35 @@ TEST(OptimizationErrors, DegenerateCurvesAreSceneErrors) {
   // A polyline or curve of zero length cannot be resampled: bad input, named like the rest
   // (not a bare std::invalid_argument from resample_polyline, which the CLI reports as an
   // I/O error with exit status 1).
-  expect_term_rejected(R"({"term": "point_targets", "rod": "arm", "polyline": [[1, 0, 0], [1, 0, 0]]})",
-                       "optimization.objective[0].polyline", "");
+  expect_term_rejected(
+      R"({"term": "point_targets", "rod": "arm", "polyline": [[1, 0, 0], [1, 0, 0]]})",
+      "optimization.objective[0].polyline", "");
   expect_term_rejected(
       R"({"term": "projected_trajectory", "rod": "arm", "node": 3, "curve": [[1, 0], [1, 0]]})",
       "optimization.objective[0].curve", "");
 }
 
 TEST(OptimizationErrors, BadWeightsAndTermFields) {
-  expect_term_rejected(R"({"term": "effort", "weight": -1})", "optimization.objective[0].weight", "≥ 0");
+  expect_term_rejected(R"({"term": "effort", "weight": -1})", "optimization.objective[0].weight",
+                       "≥ 0");
   expect_term_rejected(R"({"term": "point_targets", "rod": "arm", "letter": "S", "weight": -0.5})",
                        "optimization.objective[0].weight", "≥ 0");
-  expect_term_rejected(R"({"term": "body_pose", "body": "box", "position": [0, 0, 0], "position_weights": [1, -1, 1]})",
-                       "optimization.objective[0].position_weights", "≥ 0");
+  expect_term_rejected(
+      R"({"term": "body_pose", "body": "box", "position": [0, 0, 0], "position_weights": [1, -1, 1]})",
+      "optimization.objective[0].position_weights", "≥ 0");
   expect_term_rejected(R"({"term": "body_pose", "body": "box", "orientation": [1, 1, 0, 0]})",
                        "optimization.objective[0].orientation", "unit quaternion");
-  expect_term_rejected(R"({"term": "body_pose", "body": "box", "orientation": [1, 0, 0, 0], "orientation_weight": -1})",
-                       "optimization.objective[0].orientation_weight", "≥ 0");
-  expect_term_rejected(R"({"term": "projected_trajectory", "body": "box", "plane": "xx", "curve": [[0, 0], [1, 1]]})",
-                       "optimization.objective[0].plane", "two different axes");
+  expect_term_rejected(
+      R"({"term": "body_pose", "body": "box", "orientation": [1, 0, 0, 0], "orientation_weight": -1})",
+      "optimization.objective[0].orientation_weight", "≥ 0");
+  expect_term_rejected(
+      R"({"term": "projected_trajectory", "body": "box", "plane": "xx", "curve": [[0, 0], [1, 1]]})",
+      "optimization.objective[0].plane", "two different axes");
   expect_term_rejected(R"({"term": "projected_trajectory", "body": "box", "curve": [[0, 0]]})",
                        "optimization.objective[0].curve", "at least 2 points");
-  expect_term_rejected(R"({"term": "projected_trajectory", "body": "box", "curve": [[0, 0], [1, 1, 1]]})",
-                       "optimization.objective[0].curve[1]", "must be an array of 2 numbers");
+  expect_term_rejected(
+      R"({"term": "projected_trajectory", "body": "box", "curve": [[0, 0], [1, 1, 1]]})",
+      "optimization.objective[0].curve[1]", "must be an array of 2 numbers");
 }
 
 TEST(OptimizationErrors, OptimizerSettings) {
@@ -607,9 +635,12 @@ TEST(OptimizationErrors, OptimizerSettings) {
 }
 
 TEST(OptimizationErrors, BlockStructure) {
-  expect_rejected(scene_text(block(kForceParameter, kEffortTerm), 0), "frames", "at least one frame");
-  expect_rejected(scene_text(block("", kEffortTerm)), "optimization.parameters", "at least one parameter");
-  expect_rejected(scene_text(block(kForceParameter, "")), "optimization.objective", "at least one term");
+  expect_rejected(scene_text(block(kForceParameter, kEffortTerm), 0), "frames",
+                  "at least one frame");
+  expect_rejected(scene_text(block("", kEffortTerm)), "optimization.parameters",
+                  "at least one parameter");
+  expect_rejected(scene_text(block(kForceParameter, "")), "optimization.objective",
+                  "at least one term");
   expect_rejected(scene_text(R"({"objective": [{"term": "effort"}]})"), "optimization.parameters",
                   "required but missing");
   expect_rejected(scene_text(R"({"parameters": [{"kind": "force", "index": 1}]})"),
@@ -650,8 +681,9 @@ TEST(OptimizationErrors, InitialVelocitiesInAStaticScene) {
                             "optimization.parameters[1]", "static mode", "static");
   // Other kinds are fine in static mode.
   const Scene s = parsed(scene_text(
-      block(R"({"kind": "body_position", "body": "box"}, {"kind": "node_force", "rod": "arm", "node_force": 0})",
-            kEffortTerm),
+      block(
+          R"({"kind": "body_position", "body": "box"}, {"kind": "node_force", "rod": "arm", "node_force": 0})",
+          kEffortTerm),
       kFrames, "static"));
   EXPECT_EQ(s.optimization->parameters.size(), 3 + 3 * kFrames);
 }
@@ -678,8 +710,8 @@ double rod_length(const RodSpec& rod) {
 
 TEST(OptimizationScenes, BundledProblemsLoad) {
   const std::map<std::string, int> sizes = {
-      {"die_throw.json", 6},                     // ω_0 and v_0
-      {"cable_tip_curve.json", 8 * 100},         // 8 cables × 100 frames
+      {"die_throw.json", 6},                         // ω_0 and v_0
+      {"cable_tip_curve.json", 8 * 100},             // 8 cables × 100 frames
       {"rest_shape_tip_curve.json", 3 * 13 * 100}};  // 13 interior nodes × 100 frames
   std::vector<fs::path> files = scene_files(kSourceDir / "problems/scenes/optimization");
   const std::vector<fs::path> letters = scene_files(kSourceDir / "problems/scenes/letters");
@@ -795,7 +827,8 @@ double max_point_difference(const Trajectory& a, const Trajectory& b) {
   EXPECT_EQ(a.states.size(), b.states.size());
   for (std::size_t k = 0; k < std::min(a.states.size(), b.states.size()); ++k) {
     EXPECT_EQ(a.states[k].points.size(), b.states[k].points.size());
-    for (std::size_t i = 0; i < std::min(a.states[k].points.size(), b.states[k].points.size()); ++i) {
+    for (std::size_t i = 0; i < std::min(a.states[k].points.size(), b.states[k].points.size());
+         ++i) {
       d = std::max(d, (a.states[k].points[i] - b.states[k].points[i]).norm());
     }
   }
@@ -886,8 +919,9 @@ struct History {
   std::vector<int> iteration;
   std::vector<double> loss, normalized_loss, gradient_norm, seconds;
   double best_normalized_loss() const {
-    return normalized_loss.empty() ? INFINITY
-                                   : *std::min_element(normalized_loss.begin(), normalized_loss.end());
+    return normalized_loss.empty()
+               ? INFINITY
+               : *std::min_element(normalized_loss.begin(), normalized_loss.end());
   }
 };
 
@@ -937,7 +971,8 @@ class OptimizationCli : public ::testing::Test {
   Result run(const std::vector<std::string>& args) {
     std::string command = "cd '" + dir_.string() + "' && '" + std::string(LIEDYN_CLI) + "'";
     for (const std::string& a : args) command += " '" + a + "'";
-    command += " > '" + (dir_ / "stdout.txt").string() + "' 2> '" + (dir_ / "stderr.txt").string() + "'";
+    command +=
+        " > '" + (dir_ / "stdout.txt").string() + "' 2> '" + (dir_ / "stderr.txt").string() + "'";
     Result r;
     const int status = std::system(command.c_str());
     if (status != -1 && WIFEXITED(status)) r.exit_code = WEXITSTATUS(status);
@@ -974,7 +1009,8 @@ class OptimizationCli : public ::testing::Test {
         EXPECT_EQ(h.iteration[i], h.iteration[i - 1] + 1);
         EXPECT_GE(h.seconds[i], h.seconds[i - 1]);
       }
-      EXPECT_NEAR(h.normalized_loss[i], h.loss[i] / h.loss[0], 1e-12 * h.normalized_loss[i] + 1e-300);
+      EXPECT_NEAR(h.normalized_loss[i], h.loss[i] / h.loss[0],
+                  1e-12 * h.normalized_loss[i] + 1e-300);
       EXPECT_GE(h.gradient_norm[i], 0.0);
       EXPECT_TRUE(std::isfinite(h.loss[i]) && std::isfinite(h.gradient_norm[i]));
     }
@@ -1003,8 +1039,10 @@ TEST_F(OptimizationCli, GradcheckOfTheDieThrowPasses) {
   // --verbose adds one row per parameter, named.
   const Result v = run({"gradcheck", die(), "--verbose"});
   ASSERT_EQ(v.exit_code, 0) << v.out << v.err;
-  EXPECT_NE(v.out.find("parameter,adjoint,finite_difference,relative_error\n"), std::string::npos) << v.out;
-  for (const std::string name : {"bodies[0].angular_velocity[0],", "bodies[0].linear_velocity[2],"}) {
+  EXPECT_NE(v.out.find("parameter,adjoint,finite_difference,relative_error\n"), std::string::npos)
+      << v.out;
+  for (const std::string name :
+       {"bodies[0].angular_velocity[0],", "bodies[0].linear_velocity[2],"}) {
     EXPECT_NE(v.out.find("\n" + name), std::string::npos) << name << "\n" << v.out;
   }
   EXPECT_TRUE(std::regex_match(last_line(v.out), kGradcheckLine)) << v.out;
@@ -1026,9 +1064,7 @@ TEST_F(OptimizationCli, GradcheckSampleChecksThatMany) {
 }
 
 TEST_F(OptimizationCli, SceneWithoutOptimizationBlockExits2) {
-  {
-    std::ofstream(dir_ / "plain.json") << scene_text("");
-  }
+  { std::ofstream(dir_ / "plain.json") << scene_text(""); }
   const Result g = run({"gradcheck", "plain.json"});
   EXPECT_EQ(g.exit_code, 2) << g.out << g.err;
   EXPECT_NE(g.err.find("optimization"), std::string::npos) << g.err;
@@ -1072,8 +1108,9 @@ TEST_F(OptimizationCli, OptimizeTheDieThrowReachesTheTarget) {
   ASSERT_EQ(lines.size(), 7u) << read_text(out / "parameters.csv");
   EXPECT_EQ(lines[0], "parameter,value");
   const std::vector<std::string> names = {
-      "bodies[0].angular_velocity[0]", "bodies[0].angular_velocity[1]", "bodies[0].angular_velocity[2]",
-      "bodies[0].linear_velocity[0]",  "bodies[0].linear_velocity[1]",  "bodies[0].linear_velocity[2]"};
+      "bodies[0].angular_velocity[0]", "bodies[0].angular_velocity[1]",
+      "bodies[0].angular_velocity[2]", "bodies[0].linear_velocity[0]",
+      "bodies[0].linear_velocity[1]",  "bodies[0].linear_velocity[2]"};
   std::vector<double> best;
   for (std::size_t i = 0; i < names.size(); ++i) {
     const std::vector<std::string> f = split(lines[i + 1], ',');
@@ -1094,12 +1131,15 @@ TEST_F(OptimizationCli, OptimizeTheDieThrowReachesTheTarget) {
   EXPECT_EQ(checkpoint.at("history").size(), h.lines.size());
   const std::vector<double> stored = checkpoint.at("best").get<std::vector<double>>();
   ASSERT_EQ(stored.size(), 6u);
-  for (std::size_t i = 0; i < 6; ++i) EXPECT_NEAR(stored[i], best[i], 1e-12 * (1 + std::abs(best[i])));
-  EXPECT_NEAR(checkpoint.at("best_loss").get<double>() / h.loss[0], h.best_normalized_loss(), 1e-12);
+  for (std::size_t i = 0; i < 6; ++i)
+    EXPECT_NEAR(stored[i], best[i], 1e-12 * (1 + std::abs(best[i])));
+  EXPECT_NEAR(checkpoint.at("best_loss").get<double>() / h.loss[0], h.best_normalized_loss(),
+              1e-12);
 
   // trajectory.csv of the optimised throw, and nothing half-written.
   ASSERT_TRUE(fs::exists(out / "trajectory.csv"));
-  EXPECT_EQ(split(read_text(out / "trajectory.csv"), '\n').size(), 1u + 51u);  // header + frames 0…50
+  EXPECT_EQ(split(read_text(out / "trajectory.csv"), '\n').size(),
+            1u + 51u);  // header + frames 0…50
   expect_no_temporaries(out);
 }
 
@@ -1115,7 +1155,8 @@ TEST_F(OptimizationCli, OtherOptimizers) {
   // π per time step): every documented outcome is legitimate, with its history written.
   const Result ipopt = run({"optimize", die(), "--out", "ipopt", "--optimizer", "ipopt-lbfgs"});
   EXPECT_TRUE(ipopt.exit_code == 0 || ipopt.exit_code == 3 || ipopt.exit_code == 4)
-      << ipopt.exit_code << "\n" << ipopt.out << ipopt.err;
+      << ipopt.exit_code << "\n"
+      << ipopt.out << ipopt.err;
   EXPECT_NE(ipopt.out.find("ipopt-lbfgs"), std::string::npos) << ipopt.out;
   ASSERT_TRUE(fs::exists(dir_ / "ipopt/history.csv"));
   checked_history(dir_ / "ipopt");

@@ -201,6 +201,32 @@ TEST_P(OptimizerBackend, ReturnsBestOfAllEvaluationsAndCountsThem) {
   EXPECT_LT(r.best_loss, 1e-2 * scale);
 }
 
+TEST_P(OptimizerBackend, BestPointIsKeptWhenTheLastEvaluationIsWorse) {
+  // Stop (by a throw) right after the first evaluation that is worse than an earlier one, a
+  // line-search trial point: the result must be the earlier point, not the last one.
+  double lowest = std::numeric_limits<double>::infinity();
+  bool worse_seen = false;
+  VectorXd lowest_x;
+  const ObjectiveFunction f = [&](const VectorXd& x, VectorXd& g) {
+    if (worse_seen) throw std::runtime_error("stop");
+    const double v = rosenbrock(x, g);
+    if (v > lowest) worse_seen = true;
+    if (v < lowest) {
+      lowest = v;
+      lowest_x = x;
+    }
+    return v;
+  };
+  History history;
+  const OptimizationResult r = minimize(f, rosenbrock_start(10), 2057.0,
+                                        options_for(GetParam(), 200, 1e-12), history.callback());
+  ASSERT_TRUE(worse_seen) << "no evaluation was worse than an earlier one";
+  EXPECT_EQ(r.status, "failed");
+  EXPECT_GT(history.evaluations.back().loss, r.best_loss);
+  EXPECT_EQ(r.best_loss, lowest);
+  EXPECT_EQ(r.best_x, lowest_x);
+}
+
 TEST_P(OptimizerBackend, InconsistentGradientStallsWithoutFailing) {
   // ∇f has the wrong sign in x₀: no direction the back-ends compute descends in x₀, so they
   // stall with x₀ where it was. Not a failure, not convergence; the best point is kept.
