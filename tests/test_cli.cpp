@@ -4,6 +4,8 @@
 // and `liedyn compare` (rows per back-end and parameterisation).
 
 #include <gtest/gtest.h>
+
+#include "cli_fixture.hpp"
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -25,13 +27,6 @@ const char* const kTrajectoryHeader = "frame,time,object,kind,index,x,y,z,qw,qx,
 const char* const kFramesHeaderStart =
     "frame,time,newton_iterations,gradient_norm,converged,kinetic_energy,potential_energy,"
     "angular_momentum_x,angular_momentum_y,angular_momentum_z";
-
-std::string read_file(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::ostringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
 
 void write_file(const fs::path& p, const std::string& text) {
   std::ofstream out(p, std::ios::binary);
@@ -72,7 +67,7 @@ Csv parse_csv(const std::string& text, const std::string& what) {
   return csv;
 }
 
-Csv read_csv(const fs::path& p) { return parse_csv(read_file(p), p.string()); }
+Csv read_csv(const fs::path& p) { return parse_csv(liedyn::test::read_file(p), p.string()); }
 
 std::set<std::string> listing(const fs::path& dir) {
   std::set<std::string> names;
@@ -83,7 +78,7 @@ std::set<std::string> listing(const fs::path& dir) {
 }
 
 std::string butterfly_bolt() {
-  return read_file(fs::path(LIEDYN_SOURCE_DIR) / "problems/scenes/butterfly_bolt.json");
+  return liedyn::test::read_file(fs::path(LIEDYN_SOURCE_DIR) / "problems/scenes/butterfly_bolt.json");
 }
 
 // Replaces exactly one occurrence of `from` (the test scene is derived from the example).
@@ -105,39 +100,9 @@ const char* const kCompareFramesHeader =
     "backend,rotation,frame,iterations,first_gradient_norm,second_gradient_norm,"
     "residual_reduction,final_gradient_norm,condition";
 
-class Cli : public ::testing::Test {
+class Cli : public liedyn::test::CliFixture {
  protected:
-  void SetUp() override {
-    dir_ = fs::temp_directory_path() /
-           ("liedyn_cli_test_" + std::to_string(::getpid()) + "_" +
-            ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
-  void TearDown() override {
-    if (!HasFailure()) fs::remove_all(dir_);  // kept for inspection on failure
-  }
-
-  struct Result {
-    int exit_code = -1;
-    std::string out, err;
-  };
-
-  // Runs `liedyn <args>` (arguments single-quoted) from the test directory.
-  Result run(const std::vector<std::string>& args) {
-    std::string command = "cd '" + dir_.string() + "' && '" + std::string(LIEDYN_CLI) + "'";
-    for (const std::string& a : args) command += " '" + a + "'";
-    command +=
-        " > '" + (dir_ / "stdout.txt").string() + "' 2> '" + (dir_ / "stderr.txt").string() + "'";
-    Result r;
-    const int status = std::system(command.c_str());
-    if (status != -1 && WIFEXITED(status)) r.exit_code = WEXITSTATUS(status);
-    r.out = read_file(dir_ / "stdout.txt");
-    r.err = read_file(dir_ / "stderr.txt");
-    fs::remove(dir_ / "stdout.txt");
-    fs::remove(dir_ / "stderr.txt");
-    return r;
-  }
+  Cli() : CliFixture("liedyn_cli_test_") {}
 
   Result simulate(const std::string& scene_text, const std::string& out,
                   std::vector<std::string> extra = {}) {
@@ -162,7 +127,6 @@ class Cli : public ::testing::Test {
     return c;
   }
 
-  fs::path dir_;
 };
 
 TEST_F(Cli, ButterflyBoltWritesTrajectoryAndFrames) {
@@ -228,7 +192,7 @@ TEST_F(Cli, SuccessfulRunReplacesEarlierOutputs) {
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_EQ(read_csv(dir_ / "out/trajectory.csv").rows.size(), 4u);
   EXPECT_EQ(read_csv(dir_ / "out/frames.csv").rows.size(), 4u);
-  EXPECT_EQ(read_file(dir_ / "out/notes.txt"), "mine\n");
+  EXPECT_EQ(liedyn::test::read_file(dir_ / "out/notes.txt"), "mine\n");
   EXPECT_EQ(listing(dir_ / "out"),
             (std::set<std::string>{"frames.csv", "notes.txt", "trajectory.csv"}));
 }
@@ -255,7 +219,7 @@ TEST_F(Cli, BadSceneLeavesExistingOutputsUntouched) {
   EXPECT_EQ(r.exit_code, 2) << r.out << r.err;
   EXPECT_NE(r.err.find("scene.json"), std::string::npos) << r.err;
   EXPECT_NE(r.err.find("solver.tolerance"), std::string::npos) << r.err;
-  EXPECT_EQ(read_file(out / "trajectory.csv"), sentinel);
+  EXPECT_EQ(liedyn::test::read_file(out / "trajectory.csv"), sentinel);
   EXPECT_EQ(fs::last_write_time(out / "trajectory.csv"), before);
   EXPECT_EQ(listing(out), std::set<std::string>{"trajectory.csv"});
 }
@@ -292,7 +256,7 @@ TEST_F(Cli, OtherBadInputExits2) {
 }
 
 std::string cantilever() {
-  return read_file(fs::path(LIEDYN_SOURCE_DIR) / "problems/scenes/cantilever.json");
+  return liedyn::test::read_file(fs::path(LIEDYN_SOURCE_DIR) / "problems/scenes/cantilever.json");
 }
 
 // Rows of one frame of a rod, by kind ("node" / "edge") and index.

@@ -7,6 +7,8 @@
 // plain Simulator run of the same scene.
 
 #include <gtest/gtest.h>
+
+#include "cli_fixture.hpp"
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -892,13 +894,6 @@ TEST(OptimizationSimulation, WrongSizeOfGammaThrows) {
 // ---------------------------------------------------------------------------------------
 // `liedyn gradcheck` and `liedyn optimize`, run as processes.
 
-std::string read_text(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::ostringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
-
 std::vector<std::string> split(const std::string& s, char sep) {
   std::vector<std::string> out;
   std::string item;
@@ -927,7 +922,7 @@ struct History {
 
 History read_history(const fs::path& file) {
   History h;
-  const std::vector<std::string> lines = split(read_text(file), '\n');
+  const std::vector<std::string> lines = split(liedyn::test::read_file(file), '\n');
   if (lines.empty()) {
     ADD_FAILURE() << file << " is empty";
     return h;
@@ -949,39 +944,9 @@ History read_history(const fs::path& file) {
   return h;
 }
 
-class OptimizationCli : public ::testing::Test {
+class OptimizationCli : public liedyn::test::CliFixture {
  protected:
-  void SetUp() override {
-    dir_ = fs::temp_directory_path() /
-           ("liedyn_optimization_test_" + std::to_string(::getpid()) + "_" +
-            ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
-  void TearDown() override {
-    if (!HasFailure()) fs::remove_all(dir_);  // kept for inspection on failure
-  }
-
-  struct Result {
-    int exit_code = -1;
-    std::string out, err;
-  };
-
-  // Runs `liedyn <args>` (arguments single-quoted) from the test directory.
-  Result run(const std::vector<std::string>& args) {
-    std::string command = "cd '" + dir_.string() + "' && '" + std::string(LIEDYN_CLI) + "'";
-    for (const std::string& a : args) command += " '" + a + "'";
-    command +=
-        " > '" + (dir_ / "stdout.txt").string() + "' 2> '" + (dir_ / "stderr.txt").string() + "'";
-    Result r;
-    const int status = std::system(command.c_str());
-    if (status != -1 && WIFEXITED(status)) r.exit_code = WEXITSTATUS(status);
-    r.out = read_text(dir_ / "stdout.txt");
-    r.err = read_text(dir_ / "stderr.txt");
-    fs::remove(dir_ / "stdout.txt");
-    fs::remove(dir_ / "stderr.txt");
-    return r;
-  }
+  OptimizationCli() : CliFixture("liedyn_optimization_test_") {}
 
   static std::string die() {
     return (kSourceDir / "problems/scenes/optimization/die_throw.json").string();
@@ -1017,7 +982,6 @@ class OptimizationCli : public ::testing::Test {
     return h;
   }
 
-  fs::path dir_;
 };
 
 const std::regex kGradcheckLine(
@@ -1104,8 +1068,8 @@ TEST_F(OptimizationCli, OptimizeTheDieThrowReachesTheTarget) {
   EXPECT_LE(h.best_normalized_loss(), 1e-4);
 
   // parameters.csv: the 6 named parameters of the best γ.
-  const std::vector<std::string> lines = split(read_text(out / "parameters.csv"), '\n');
-  ASSERT_EQ(lines.size(), 7u) << read_text(out / "parameters.csv");
+  const std::vector<std::string> lines = split(liedyn::test::read_file(out / "parameters.csv"), '\n');
+  ASSERT_EQ(lines.size(), 7u) << liedyn::test::read_file(out / "parameters.csv");
   EXPECT_EQ(lines[0], "parameter,value");
   const std::vector<std::string> names = {
       "bodies[0].angular_velocity[0]", "bodies[0].angular_velocity[1]",
@@ -1126,7 +1090,7 @@ TEST_F(OptimizationCli, OptimizeTheDieThrowReachesTheTarget) {
 
   // The checkpoint holds the same history and the best parameters.
   ASSERT_TRUE(fs::exists(out / "checkpoint.json"));
-  const nlohmann::json checkpoint = nlohmann::json::parse(read_text(out / "checkpoint.json"));
+  const nlohmann::json checkpoint = nlohmann::json::parse(liedyn::test::read_file(out / "checkpoint.json"));
   ASSERT_TRUE(checkpoint.contains("best") && checkpoint.contains("history"));
   EXPECT_EQ(checkpoint.at("history").size(), h.lines.size());
   const std::vector<double> stored = checkpoint.at("best").get<std::vector<double>>();
@@ -1138,7 +1102,7 @@ TEST_F(OptimizationCli, OptimizeTheDieThrowReachesTheTarget) {
 
   // trajectory.csv of the optimised throw, and nothing half-written.
   ASSERT_TRUE(fs::exists(out / "trajectory.csv"));
-  EXPECT_EQ(split(read_text(out / "trajectory.csv"), '\n').size(),
+  EXPECT_EQ(split(liedyn::test::read_file(out / "trajectory.csv"), '\n').size(),
             1u + 51u);  // header + frames 0…50
   expect_no_temporaries(out);
 }
@@ -1188,7 +1152,7 @@ TEST_F(OptimizationCli, ResumeContinuesTheHistory) {
   EXPECT_LE(after.best_normalized_loss(), 1e-4);
   // The resumed run starts from the best point so far: its first loss is the best before.
   EXPECT_LE(after.normalized_loss[before.lines.size()], before.best_normalized_loss() * (1 + 1e-9));
-  const nlohmann::json checkpoint = nlohmann::json::parse(read_text(dir_ / "die/checkpoint.json"));
+  const nlohmann::json checkpoint = nlohmann::json::parse(liedyn::test::read_file(dir_ / "die/checkpoint.json"));
   EXPECT_EQ(checkpoint.at("history").size(), after.lines.size());
   expect_no_temporaries(dir_ / "die");
 }
