@@ -34,6 +34,30 @@ Model thrown_box() {
   return m;
 }
 
+// A free 7-node rod with initial node velocities, no gravity.
+Model moving_rod() {
+  Model m;
+  m.time_step = 0.01;
+  RodSpec rod = test_models::uniform_rod(6, 0.6, 0.3, 0.01, 4e2, 1e2, 0.5);
+  rod.node_velocities.assign(7, Vector3(0.0, 0.1, 0.05));
+  rod.node_velocities[3] = Vector3(0.0, 0.6, -0.2);
+  m.rods.push_back(rod);
+  return m;
+}
+
+// Its nodes against a curved target shape at the last frame.
+Objective rod_targets(const Model& m) {
+  std::vector<int> points;
+  std::vector<Vector3> targets;
+  for (int i = 0; i < 7; ++i) {
+    points.push_back(m.rod_point(0, i));
+    targets.push_back(Vector3(0.1 * i, 0.05 * std::sin(i), 0.02 * i * i));
+  }
+  Objective g;
+  g.add(std::make_shared<PointTargets>(points, targets, -1, 1.0));
+  return g;
+}
+
 SolverOptions options_for(RotationParameterization rotation, double tolerance) {
   SolverOptions o = test_models::newton(tolerance);
   o.rotation = rotation;
@@ -131,26 +155,14 @@ TEST_P(AdjointGradient, SpringChainForcesTorquesAndStiffness) {
 // A free rod whose initial node velocities, rest shape and stiffnesses are parameters, against
 // a target shape (the letters of paper Fig. 1 in miniature).
 TEST_P(AdjointGradient, RodNodeVelocitiesRestShapeAndStiffness) {
-  Model m;
-  m.time_step = 0.01;
-  RodSpec rod = test_models::uniform_rod(6, 0.6, 0.3, 0.01, 4e2, 1e2, 0.5);
-  rod.node_velocities.assign(7, Vector3(0.0, 0.1, 0.05));
-  rod.node_velocities[3] = Vector3(0.0, 0.6, -0.2);
-  m.rods.push_back(rod);
+  const Model m = moving_rod();
   ParameterSet p(12);
   p.add(m, ParameterKind::kRodNodeVelocities, 0, -1, "p[0]");
   p.add(m, ParameterKind::kRestDarboux, 0, -1, "p[1]");
   p.add(m, ParameterKind::kStretchStiffness, 0, -1, "p[2]");
   p.add(m, ParameterKind::kShearStiffness, 0, -1, "p[3]");
   p.add(m, ParameterKind::kBendingStiffness, 0, -1, "p[4]");
-  std::vector<int> points;
-  std::vector<Vector3> targets;
-  for (int i = 0; i < 7; ++i) {
-    points.push_back(m.rod_point(0, i));
-    targets.push_back(Vector3(0.1 * i, 0.05 * std::sin(i), 0.02 * i * i));
-  }
-  Objective g;
-  g.add(std::make_shared<PointTargets>(points, targets, -1, 1.0));
+  const Objective g = rod_targets(m);
   expect_matches(m, p, g);
 }
 
@@ -185,22 +197,10 @@ TEST_P(AdjointGradient, CantileverPerFrameControls) {
 // the differences; see the README); asserted: the error falls by at least 100× from 1e-4 to
 // 1e-12 and ends below 1e-5.
 TEST(AdjointAccuracy, ErrorFollowsTheNewtonTolerance) {
-  Model m;
-  m.time_step = 0.01;
-  RodSpec rod = test_models::uniform_rod(6, 0.6, 0.3, 0.01, 4e2, 1e2, 0.5);
-  rod.node_velocities.assign(7, Vector3(0.0, 0.1, 0.05));
-  rod.node_velocities[3] = Vector3(0.0, 0.6, -0.2);
-  m.rods.push_back(rod);
+  const Model m = moving_rod();
   ParameterSet p(12);
   p.add(m, ParameterKind::kRodNodeVelocities, 0, -1, "p[0]");
-  std::vector<int> points;
-  std::vector<Vector3> targets;
-  for (int i = 0; i < 7; ++i) {
-    points.push_back(m.rod_point(0, i));
-    targets.push_back(Vector3(0.1 * i, 0.05 * std::sin(i), 0.02 * i * i));
-  }
-  Objective g;
-  g.add(std::make_shared<PointTargets>(points, targets, -1, 1.0));
+  const Objective g = rod_targets(m);
   const DifferentiableSimulation reference(m, p, g, options_for(RotationParameterization::kLie, 1e-12));
   std::vector<double> errors;
   for (double tolerance : {1e-4, 1e-6, 1e-8, 1e-10, 1e-12}) {
