@@ -11,6 +11,12 @@
 
 namespace liedyn {
 
+// ΔR_k = R_k R_{k−1}ᵀ (eq. 6), re-orthonormalised: the one formula of the simulator's steps
+// and the adjoint's recomputed ones, so that both agree bit for bit.
+inline Matrix3 rotation_step(const Matrix3& R, const Matrix3& R_previous) {
+  return so3::orthonormalize(R * R_previous.transpose());
+}
+
 struct Trajectory {
   double time_step = 0.0;
   bool static_equilibrium = false;  // load steps: every Δq is zero (Model::static_equilibrium)
@@ -31,7 +37,7 @@ struct Trajectory {
     if (static_equilibrium) return dq;
     for (std::size_t i = 0; i < q.points.size(); ++i) dq.points[i] = q.points[i] - p.points[i];
     for (std::size_t i = 0; i < q.rotations.size(); ++i) {
-      dq.rotations[i] = so3::orthonormalize(q.rotations[i] * p.rotations[i].transpose());
+      dq.rotations[i] = rotation_step(q.rotations[i], p.rotations[i]);
     }
     return dq;
   }

@@ -3,6 +3,7 @@
 #include <algorithm>
 
 #include "../lib/so3.hpp"
+#include "../lib/trajectory.hpp"
 
 namespace liedyn {
 
@@ -64,8 +65,7 @@ StepReport Simulator::step() {
   }
   for (std::size_t i = 0; i < state_.rotations.size(); ++i) {
     step_.rotations[i] =
-        dynamic ? so3::orthonormalize(state_.rotations[i] * previous_.rotations[i].transpose())
-                : Matrix3::Identity();
+        dynamic ? rotation_step(state_.rotations[i], previous_.rotations[i]) : Matrix3::Identity();
   }
   ++frame_;
   return report;
