@@ -8,6 +8,7 @@
 
 #include "../solvers/simulator.hpp"
 #include "output.hpp"
+#include "run.hpp"
 
 namespace liedyn {
 double median(std::vector<double> v) {
@@ -21,30 +22,31 @@ double TimedRun::assembly_us() const {
 }
 double TimedRun::solve_us() const { return 1e6 * sum.solve_seconds / std::max(sum.assemblies, 1); }
 
-TimedRun time_scene(const Scene& scene, SolverOptions options, std::vector<State>* trajectory) {
+TimedRun time_scene(const Scene& scene, SolverOptions options,
+                    const std::function<void(const Simulator&)>& observe) {
+  using Clock = std::chrono::steady_clock;
   options.measure_time = true;
   TimedRun run;
   Simulator sim(scene.model, options);
-  const auto start = std::chrono::steady_clock::now();
   for (int k = 1; k <= scene.frames; ++k) {
+    const auto start = Clock::now();
     const StepReport report = sim.step();
+    run.total_seconds += std::chrono::duration<double>(Clock::now() - start).count();
     if (!report.state_updated()) {
       run.failed = true;
-      run.failure = "step " + std::to_string(k) + " failed: " + to_string(report.status) +
-                    (report.message.empty() ? "" : " (" + report.message + ")");
+      run.failure = step_failure_message(k, scene.model.time_step, options.backend, report);
       break;
     }
     ++run.frames;
     run.sum.iterations += report.iterations;
+    run.sum.factorizations += report.factorizations;
     run.sum.assemblies += report.assemblies;
     run.sum.assembly_seconds += report.assembly_seconds;
     run.sum.solve_seconds += report.solve_seconds;
     run.max_iterations_in_frame = std::max(run.max_iterations_in_frame, report.iterations);
     if (!report.converged()) ++run.unconverged_steps;
-    if (trajectory != nullptr) trajectory->push_back(sim.state());
+    if (observe) observe(sim);
   }
-  run.total_seconds =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return run;
 }
 
@@ -58,7 +60,7 @@ BenchResult bench_scene(const Scene& scene, int repeats) {
 
   std::vector<double> total, assembly, solve, iterations, assemblies;
   for (int r = 0; r < result.repeats; ++r) {
-    const TimedRun run = time_scene(scene, scene.solver, nullptr);
+    const TimedRun run = time_scene(scene, scene.solver);
     total.push_back(run.total_seconds);
     assembly.push_back(run.assembly_us());
     solve.push_back(run.solve_us());

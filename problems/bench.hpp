@@ -2,9 +2,11 @@
 // `liedyn bench`: runs a scene (no output files) several times and reports the cost of its
 // Newton iterations, split into assembly and linear solve, as paper Table 1 does.
 
+#include <functional>
 #include <string>
 #include <vector>
 
+#include "../solvers/simulator.hpp"
 #include "scene.hpp"
 
 namespace liedyn {
@@ -31,12 +33,12 @@ struct BenchResult {
 // The median of a non-empty list.
 double median(std::vector<double> values);
 
-// One timed run of a scene with the given solver options (measure_time is forced on);
-// `trajectory`, if non-null, receives the state after every completed frame.
+// One timed run of a scene with the given solver options (measure_time is forced on).
+// `observe`, if set, is called after every completed frame; its time is not counted.
 struct TimedRun {
-  double total_seconds = 0.0;
+  double total_seconds = 0.0;  // in the time steps
   int frames = 0;  // completed
-  StepReport sum;  // iterations, assemblies and seconds summed over frames
+  StepReport sum;  // iterations, factorisations, assemblies and seconds summed over frames
   int max_iterations_in_frame = 0;
   int unconverged_steps = 0;
   bool failed = false;
@@ -44,7 +46,8 @@ struct TimedRun {
   double assembly_us() const;  // per assembly
   double solve_us() const;     // per factorisation + solve
 };
-TimedRun time_scene(const Scene& scene, SolverOptions options, std::vector<State>* trajectory);
+TimedRun time_scene(const Scene& scene, SolverOptions options,
+                    const std::function<void(const Simulator&)>& observe = {});
 
 // Runs the scene `repeats` times (≥ 1), with timing on.
 BenchResult bench_scene(const Scene& scene, int repeats);

@@ -79,11 +79,12 @@ CompareRow run_row(const Scene& scene, SolverOptions solver, int repeats, int co
     row.failure = e.what();
     return row;
   }
-  const TimedRun run = time_scene(scene, solver, &trajectory);
+  const TimedRun run =
+      time_scene(scene, solver, [&](const Simulator& sim) { trajectory.push_back(sim.state()); });
   std::vector<double> assembly{run.assembly_us()}, solve{run.solve_us()},
       total{run.total_seconds};
   for (int r = 1; r < repeats && !run.failed; ++r) {
-    const TimedRun again = time_scene(scene, solver, nullptr);
+    const TimedRun again = time_scene(scene, solver);
     assembly.push_back(again.assembly_us());
     solve.push_back(again.solve_us());
     total.push_back(again.total_seconds);
@@ -138,21 +139,6 @@ std::vector<Field> fields(const CompareRow& r) {
   };
 }
 
-std::string number(double v, int digits) {
-  if (std::isnan(v)) return "nan";
-  std::ostringstream os;
-  os << std::setprecision(digits) << v;
-  return os.str();
-}
-
-// RFC 4180: a field holding a comma, a quote or a line break is quoted, its quotes doubled.
-std::string csv_field(const std::string& text) {
-  if (text.find_first_of(",\"\r\n") == std::string::npos) return text;
-  std::string out = "\"";
-  for (const char ch : text) out += ch == '"' ? std::string("\"\"") : std::string(1, ch);
-  return out + "\"";
-}
-
 // How each output writes a value: table (4 digits, "-" for NaN or empty text, yes/no), CSV
 // (9 digits, nan, 1/0, quoted text) and JSON (9 digits, null for NaN, true/false).
 enum class Format { kTable, kCsv, kJson };
@@ -171,7 +157,7 @@ std::string format_value(const Field& field, Format format) {
       if (format == Format::kTable) return "-";
       if (format == Format::kJson) return "null";  // JSON has no NaN
     }
-    return number(*d, format == Format::kTable ? 4 : 9);
+    return format_number(*d, format == Format::kTable ? 4 : 9);
   }
   const std::string& text = std::get<std::string>(field.value);
   switch (format) {
@@ -325,10 +311,10 @@ std::string compare_frames_csv(const std::vector<CompareRow>& rows) {
   for (const CompareRow& r : rows) {
     for (const CompareFrame& f : r.per_frame) {
       os << to_string(r.backend) << "," << to_string(r.rotation) << "," << f.frame << ","
-         << f.iterations << "," << number(f.first_gradient_norm, 9) << ","
-         << number(f.second_gradient_norm, 9) << ","
-         << number(f.second_gradient_norm / f.first_gradient_norm, 9) << ","
-         << number(f.final_gradient_norm, 9) << "," << number(f.condition, 9) << "\n";
+         << f.iterations << "," << format_number(f.first_gradient_norm, 9) << ","
+         << format_number(f.second_gradient_norm, 9) << ","
+         << format_number(f.second_gradient_norm / f.first_gradient_norm, 9) << ","
+         << format_number(f.final_gradient_norm, 9) << "," << format_number(f.condition, 9) << "\n";
     }
   }
   return os.str();

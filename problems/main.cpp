@@ -12,6 +12,11 @@
 //                  (adjoint gradient against central differences; last line
 //                  "gradcheck: max_rel_error=<float> params=<int> tolerance=<float>"; exit 0
 //                  within tolerance, 1 otherwise)
+//   liedyn sweep SCENE.json --set PATH=V1,V2,… [--set …] [--rotations …] [--backends …]
+//                  --out DIR [--refine N] [--gradient-sample N] [--repeat N] [--quiet]
+//                  (every combination of the settings, each measured for cost and accuracy
+//                  against the scene's analytic solution or a finer reference run; writes
+//                  DIR/sweep.csv and DIR/*_vs_time.png; exit 4 if a run failed)
 //   liedyn optimize SCENE.json --out DIR [--optimizer nlopt-lbfgs|ceres-lbfgs|ipopt-lbfgs]
 //                  [--max-iterations N] [--resume]   (exit 0 target reached, 3 stopped
 //                  short of it, 4 failed)
@@ -21,6 +26,7 @@
 // other errors (I/O).
 
 #include <CLI/CLI.hpp>
+#include <algorithm>
 #include <iostream>
 #include <optional>
 #include <string_view>
@@ -31,6 +37,9 @@
 #include "optimization.hpp"
 #include "output.hpp"
 #include "run.hpp"
+#include "sweep.hpp"
+
+#include <unistd.h>
 
 namespace {
 
@@ -51,6 +60,40 @@ bool parse_names(const std::vector<std::string>& names,
     out.push_back(*value);
   }
   return true;
+}
+
+// `liedyn sweep`: the axes from --set, --rotations and --backends, the runs, the outputs.
+int run_sweep_command(const std::string& scene_file, const std::vector<std::string>& set_texts,
+                      const std::vector<std::string>& backend_names,
+                      const std::vector<std::string>& rotation_names, const std::string& out_dir,
+                      bool quiet, liedyn::SweepOptions options) {
+  std::vector<liedyn::Backend> backends;
+  std::vector<liedyn::RotationParameterization> rotations;
+  if (!parse_names(backend_names, liedyn::parse_backend, "--backends", "back-end",
+                   "newton, ceres or ipopt", backends) ||
+      !parse_names(rotation_names, liedyn::parse_rotation, "--rotations", "parameterisation",
+                   "lie, rotvec or quat", rotations)) {
+    return 2;
+  }
+  try {
+    for (const std::string& text : set_texts) options.axes.push_back(liedyn::parse_sweep_axis(text));
+  } catch (const std::invalid_argument& e) {
+    std::cerr << "liedyn: " << e.what() << "\n";
+    return 2;
+  }
+  if (!backend_names.empty()) options.axes.push_back({"solver.backend", backend_names});
+  if (!rotation_names.empty()) options.axes.push_back({"solver.rotation", rotation_names});
+  options.progress = quiet ? nullptr : &std::cerr;
+  options.progress_bar = ::isatty(STDERR_FILENO) != 0;
+  const liedyn::SweepResult result = liedyn::run_sweep(liedyn::read_scene_file(scene_file), scene_file, options);
+  liedyn::write_sweep(result, out_dir);
+  std::cout << liedyn::format_sweep(result);
+  std::cout << "outputs: " << out_dir << "/sweep.csv and the *_vs_time.png plots\n";
+  const bool failed = std::any_of(result.runs.begin(), result.runs.end(),
+                                  [](const liedyn::SweepRun& r) { return r.failed; }) ||
+                      std::any_of(result.references.begin(), result.references.end(),
+                                  [](const liedyn::SweepRun& r) { return r.failed; });
+  return failed ? 4 : 0;
 }
 
 }  // namespace
@@ -152,6 +195,37 @@ int main(int argc, char** argv) {
   optimize->add_flag("--resume", optimize_options.resume,
                      "Continue from DIR/checkpoint.json, appending to DIR/history.csv");
 
+  std::vector<std::string> set_texts;
+  liedyn::SweepOptions sweep_options;
+  CLI::App* sweep = app.add_subcommand(
+      "sweep",
+      "Run a scene over a grid of settings, each run measured for cost and for accuracy "
+      "(against the scene's analytic solution or a finer reference run)");
+  sweep->add_option("scene", scene_file, "Scene file (JSON)")->required();
+  sweep->add_option("--set", set_texts,
+                    "An axis of the grid: PATH=V1,V2,… (dotted path into the scene, e.g. "
+                    "time_step=0.02,0.01 or solver.tolerance=1e-4,1e-8); repeatable");
+  sweep
+      ->add_option("--rotations", rotation_names,
+                   "Parameterisations as an axis (solver.rotation): lie, rotvec, quat")
+      ->delimiter(',');
+  sweep->add_option("--backends", backend_names,
+                    "Back-ends as an axis (solver.backend): newton, ceres, ipopt")
+      ->delimiter(',');
+  sweep->add_option("--out", out_dir, "Output directory")->required();
+  sweep->add_option("--refine", sweep_options.reference_refinement,
+                    "Reference time step = smallest on the grid / N")
+      ->check(CLI::Range(1, 1000))
+      ->capture_default_str();
+  sweep->add_option("--gradient-sample", sweep_options.gradient_sample,
+                    "Optimisation scenes: parameters checked for the gradient error (0: all)")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
+  sweep->add_option("--repeat", sweep_options.repeats, "Timed runs per grid point (median)")
+      ->check(CLI::Range(1, 1000))
+      ->capture_default_str();
+  sweep->add_flag("--quiet", quiet, "No progress on stderr");
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -181,6 +255,10 @@ int main(int argc, char** argv) {
                   << "\" (expected nlopt-lbfgs, ceres-lbfgs or ipopt-lbfgs)\n";
         return 2;
       }
+    }
+    if (sweep->parsed()) {
+      return run_sweep_command(scene_file, set_texts, backend_names, rotation_names, out_dir,
+                               quiet, sweep_options);
     }
     const liedyn::Scene scene = liedyn::load_scene(scene_file);
     if ((gradcheck->parsed() || optimize->parsed()) && !scene.optimization) {

@@ -1,6 +1,9 @@
 #include "output.hpp"
 
+#include <cmath>
 #include <cstdio>
+#include <iomanip>
+#include <sstream>
 
 #include <unistd.h>
 
@@ -12,7 +15,7 @@ namespace liedyn {
 AtomicFile::AtomicFile(std::filesystem::path target)
     : target_(std::move(target)),
       temporary_(target_.string() + ".tmp-" + std::to_string(::getpid())) {
-  stream_.open(temporary_, std::ios::out | std::ios::trunc);
+  stream_.open(temporary_, std::ios::out | std::ios::trunc | std::ios::binary);
   if (!stream_) throw std::runtime_error(temporary_.string() + ": cannot open for writing");
   stream_.precision(17);
 }
@@ -36,6 +39,20 @@ void AtomicFile::commit() {
     throw std::runtime_error(target_.string() + ": cannot rename into place: " + error.message());
   }
   committed_ = true;
+}
+
+std::string csv_field(const std::string& text) {
+  if (text.find_first_of(",\"\r\n") == std::string::npos) return text;
+  std::string out = "\"";
+  for (const char ch : text) out += ch == '"' ? std::string("\"\"") : std::string(1, ch);
+  return out + "\"";
+}
+
+std::string format_number(double value, int digits) {
+  if (std::isnan(value)) return "nan";
+  std::ostringstream os;
+  os << std::setprecision(digits) << value;
+  return os.str();
 }
 
 std::string json_quoted(const std::string& text) {

@@ -85,13 +85,8 @@ SimulationSummary simulate_scene(const Scene& scene, const std::filesystem::path
     const StepReport report = sim.step();
     if (!report.state_updated()) {
       summary.failed = true;
-      std::ostringstream os;
-      os << "step " << k << " (t = " << k * scene.model.time_step
-         << " s) failed: " << to_string(report.status) << " after " << report.iterations
-         << " " << to_string(scene.solver.backend) << " iterations, gradient norm "
-         << report.gradient_norm;
-      if (!report.message.empty()) os << " (" << report.message << ")";
-      summary.failure = os.str();
+      summary.failure =
+          step_failure_message(k, scene.model.time_step, scene.solver.backend, report);
       break;
     }
     ++summary.frames_completed;
@@ -120,6 +115,16 @@ SimulationSummary simulate_scene(const Scene& scene, const std::filesystem::path
   trajectory.commit();
   frames.commit();
   return summary;
+}
+
+std::string step_failure_message(int k, double time_step, Backend backend,
+                                 const StepReport& report) {
+  std::ostringstream os;
+  os << "step " << k << " (t = " << k * time_step << " s) failed: " << to_string(report.status)
+     << " after " << report.iterations << " " << to_string(backend)
+     << " iterations, gradient norm " << report.gradient_norm;
+  if (!report.message.empty()) os << " (" << report.message << ")";
+  return os.str();
 }
 
 std::string format_summary(const Scene& scene, const SimulationSummary& s) {

@@ -30,6 +30,11 @@ struct SimulationSummary {
 SimulationSummary simulate_scene(const Scene& scene, const std::filesystem::path& out_dir,
                                  std::ostream* progress);
 
+// "step k (t = … s) failed: <status> after n <backend> iterations, gradient norm g (message)":
+// why step k did not update the state (every command that runs a scene says it this way).
+std::string step_failure_message(int k, double time_step, Backend backend,
+                                 const StepReport& report);
+
 // One-screen text summary.
 std::string format_summary(const Scene& scene, const SimulationSummary& summary);
 

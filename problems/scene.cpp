@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "../lib/so3.hpp"
+#include "analytic.hpp"
 #include "json_reader.hpp"
 #include "optimization.hpp"
 
@@ -420,6 +421,14 @@ Scene parse(const json& root, const std::string& source) {
     }
   }
   const json* optimization = top.has("optimization") ? &top.get("optimization") : nullptr;
+  const std::string analytic = top.string("analytic", "none");
+  if (const auto parsed = parse_analytic(analytic)) {
+    scene.analytic = *parsed;
+  } else {
+    top.fail("analytic", "unknown solution \"" + analytic +
+                             "\" (expected \"none\", \"free_body\", \"cantilever\" or "
+                             "\"axial_stretch\")");
+  }
   top.finish();
 
   // Physical checks (positivity, inertia, …) live with the model, which names the field.
@@ -433,6 +442,7 @@ Scene parse(const json& root, const std::string& source) {
     if (reason.rfind(prefix, 0) == 0) reason = reason.substr(prefix.size());
     throw SceneError(source, e.field(), reason);
   }
+  check_analytic(scene);
   return scene;
 }
 
@@ -515,7 +525,7 @@ Scene parse_scene(const std::string& json_text, const std::string& source) {
   return parse(root, source);
 }
 
-Scene load_scene(const std::filesystem::path& file) {
+std::string read_scene_file(const std::filesystem::path& file) {
   std::error_code ec;
   if (std::filesystem::is_directory(file, ec)) {
     throw SceneError(file.string(), "", "is a directory, not a scene file");
@@ -524,7 +534,11 @@ Scene load_scene(const std::filesystem::path& file) {
   if (!in) throw SceneError(file.string(), "", "cannot open the file for reading");
   std::ostringstream text;
   text << in.rdbuf();
-  return parse_scene(text.str(), file.string());
+  return text.str();
+}
+
+Scene load_scene(const std::filesystem::path& file) {
+  return parse_scene(read_scene_file(file), file.string());
 }
 
 }  // namespace liedyn

@@ -35,6 +35,15 @@ struct OptimizationSpec {
   double loss_scale = 0.0;  // normalises the loss; 0: the loss at the initial parameters
 };
 
+// Closed-form solutions a scene can declare with "analytic" (problems/analytic.hpp), which
+// `liedyn sweep` measures errors against.
+enum class AnalyticSolution {
+  kNone,
+  kFreeBody,      // "free_body": a torque-free axisymmetric rigid body (gravity allowed)
+  kCantilever,    // "cantilever": small tip load on a clamped straight rod (Euler–Bernoulli)
+  kAxialStretch,  // "axial_stretch": axial tip load on a straight rod fixed at node 0
+};
+
 struct Scene {
   std::string source;  // file name (or a label) used in messages
   std::string description;
@@ -42,10 +51,14 @@ struct Scene {
   Model model;
   SolverOptions solver;
   std::optional<OptimizationSpec> optimization;
+  AnalyticSolution analytic = AnalyticSolution::kNone;
 };
 
 // Parses and validates JSON text; `source` names it in error messages.
 Scene parse_scene(const std::string& json_text, const std::string& source);
+
+// The text of a scene file. Throws SceneError (unreadable file, a directory).
+std::string read_scene_file(const std::filesystem::path& file);
 
 // Reads and parses a scene file. Throws SceneError (also for an unreadable file).
 Scene load_scene(const std::filesystem::path& file);

@@ -42,6 +42,17 @@ struct GradientCheckResult {
   double tolerance = 0.0;
 };
 
+// The pieces check_gradient is made of, for callers that compare other gradients (liedyn
+// sweep: a cheap run's adjoint against a fine run's differences).
+// Indices 0 … n−1, or `sample` of them drawn at random with `seed` (0 or ≥ n: all), sorted.
+std::vector<int> sample_indices(int n, int sample, unsigned seed);
+// d_j of the formula above for each j in `indices`.
+std::vector<double> central_differences(const DifferentiableSimulation& simulation,
+                                        const Eigen::VectorXd& gamma,
+                                        const std::vector<int>& indices, double step);
+// error_j of the formula above, with `scale` = floor · max_i |a_i|; ∞ if a value is not finite.
+double relative_error(double adjoint, double finite_difference, double scale);
+
 GradientCheckResult check_gradient(const DifferentiableSimulation& simulation,
                                    const Eigen::VectorXd& gamma, const GradientCheckOptions& options);
 

@@ -1,0 +1,682 @@
+#include "sweep.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <iomanip>
+#include <map>
+#include <nlohmann/json.hpp>
+#include <ostream>
+#include <sstream>
+
+#include "../lib/so3.hpp"
+#include "../solvers/gradient_check.hpp"
+#include "analytic.hpp"
+#include "bench.hpp"
+#include "optimization.hpp"
+#include "output.hpp"
+#include "plot.hpp"
+
+namespace liedyn {
+namespace {
+
+using nlohmann::json;
+
+// What an axis is to the reference (sweep.hpp): a fidelity setting with a finest value, a
+// solver setting the reference keeps at the scene's value, or part of the model (a group).
+enum class AxisKind {
+  kTimeStep,
+  kTolerance,
+  kMaxIterations,
+  kBackend,
+  kRotation,
+  kLoadSteps,
+  kSolverSetting,
+  kModel
+};
+
+AxisKind classify(const std::string& path, bool static_scene) {
+  if (path == "time_step") return AxisKind::kTimeStep;
+  if (path == "solver.tolerance") return AxisKind::kTolerance;
+  if (path == "solver.max_iterations") return AxisKind::kMaxIterations;
+  if (path == "solver.backend") return AxisKind::kBackend;
+  if (path == "solver.rotation") return AxisKind::kRotation;
+  if (path == "frames" && static_scene) return AxisKind::kLoadSteps;
+  if (path.rfind("solver.", 0) == 0) return AxisKind::kSolverSetting;
+  return AxisKind::kModel;
+}
+
+// Commas inside brackets or braces belong to a JSON value, not to the list.
+std::vector<std::string> split_values(const std::string& text) {
+  std::vector<std::string> values(1);
+  int depth = 0;
+  for (const char ch : text) {
+    if (ch == '[' || ch == '{') ++depth;
+    if (ch == ']' || ch == '}') --depth;
+    if (ch == ',' && depth == 0) {
+      values.emplace_back();
+    } else {
+      values.back() += ch;
+    }
+  }
+  return values;
+}
+
+// A value as JSON if it is JSON ("1e-4", "[1, 1, 2]", "\"lie\""), else as a bare string ("lie").
+json parse_value(const std::string& text) {
+  try {
+    return json::parse(text);
+  } catch (const json::exception&) {
+    return json(text);
+  }
+}
+
+// root[path] = value, creating missing object keys; array indices must exist.
+void set_path(json& root, const std::string& path, const json& value, const std::string& source) {
+  const std::string field = "--set " + path;
+  json* node = &root;
+  std::size_t begin = 0;
+  std::string walked;
+  while (true) {
+    const std::size_t end = path.find('.', begin);
+    const std::string key = path.substr(begin, end == std::string::npos ? end : end - begin);
+    if (key.empty()) throw SceneError(source, field, "empty segment in the dotted path");
+    const bool last = end == std::string::npos;
+    if (node->is_array()) {
+      if (key.find_first_not_of("0123456789") != std::string::npos || key.size() > 9) {
+        throw SceneError(source, field,
+                         "\"" + walked + "\" is an array: \"" + key + "\" must be an index");
+      }
+      const std::size_t index = std::stoul(key);
+      if (index >= node->size()) {
+        throw SceneError(source, field,
+                         "index " + key + " is out of range (\"" + walked + "\" has " +
+                             std::to_string(node->size()) + " items)");
+      }
+      node = &(*node)[index];
+    } else if (node->is_object()) {
+      if (!last && !node->contains(key)) (*node)[key] = json::object();
+      node = &(*node)[key];
+    } else {
+      throw SceneError(source, field,
+                       "\"" + walked + "\" is a " + node->type_name() +
+                           ", not an object or an array");
+    }
+    walked += (walked.empty() ? "" : ".") + key;
+    if (last) break;
+    begin = end + 1;
+  }
+  *node = value;
+}
+
+std::string describe(const std::vector<std::string>& names, const std::vector<std::string>& values) {
+  std::string text;
+  for (std::size_t i = 0; i < names.size(); ++i) {
+    text += (i > 0 ? " " : "") + names[i] + "=" + values[i];
+  }
+  return text;
+}
+
+// One scene of the grid (or a reference) with the overrides that made it.
+struct GridScene {
+  std::vector<std::string> settings;
+  std::string label;  // "path=value …"
+  Scene scene;
+};
+
+GridScene make_scene(const json& base, const std::string& source,
+                     const std::vector<std::string>& paths, const std::vector<std::string>& values) {
+  json root = base;
+  for (std::size_t i = 0; i < paths.size(); ++i) {
+    set_path(root, paths[i], parse_value(values[i]), source);
+  }
+  GridScene g;
+  g.settings = values;
+  g.label = describe(paths, values);
+  g.scene = parse_scene(root.dump(), source + " [" + g.label + "]");
+  return g;
+}
+
+// Where a frame sits on the common axis of comparisons: time (dynamic) or load fraction.
+double frame_position(const Scene& scene, int k) {
+  return scene.model.static_equilibrium ? double(k) / std::max(scene.frames, 1)
+                                        : k * scene.model.time_step;
+}
+
+// The recorded run: states, energy and momentum per completed frame (0 included).
+struct Recording {
+  TimedRun run;
+  std::vector<State> states;
+  std::vector<double> energy;
+  std::vector<Vector3> momentum;
+};
+
+Recording record(const Scene& scene, int repeats) {
+  Recording r;
+  auto observe = [&](const Simulator& sim) {
+    r.states.push_back(sim.state());
+    r.energy.push_back(sim.kinetic_energy() + sim.potential_energy());
+    r.momentum.push_back(sim.angular_momentum());
+  };
+  try {
+    observe(Simulator(scene.model, scene.solver));
+    r.run = time_scene(scene, scene.solver, observe);
+    std::vector<double> seconds{r.run.total_seconds};
+    for (int i = 1; i < repeats && !r.run.failed; ++i) {
+      seconds.push_back(time_scene(scene, scene.solver).total_seconds);
+    }
+    r.run.total_seconds = median(seconds);
+  } catch (const std::exception& e) {  // ModelError: e.g. a back-end that lacks the rotation
+    r.run.failed = true;
+    r.run.failure = e.what();
+  }
+  return r;
+}
+
+void fill_cost(const Scene& scene, const Recording& r, SweepRun& run) {
+  run.frames = scene.frames;
+  run.frames_completed = r.run.frames;
+  run.wall_seconds = r.run.total_seconds;
+  run.newton_iterations = r.run.sum.iterations;
+  run.factorizations = r.run.sum.factorizations;
+  run.unconverged_steps = r.run.unconverged_steps;
+  run.failed = r.run.failed;
+  run.failure = r.run.failure;
+  if (scene.model.static_equilibrium || r.energy.empty()) return;
+  run.energy_drift = run.momentum_drift = 0.0;
+  for (std::size_t k = 0; k < r.energy.size(); ++k) {
+    run.energy_drift = std::max(run.energy_drift, std::abs(r.energy[k] - r.energy[0]));
+    run.momentum_drift = std::max(run.momentum_drift, (r.momentum[k] - r.momentum[0]).norm());
+  }
+}
+
+// Largest errors over the frames; each starts at NaN and becomes a max once compared.
+struct ErrorMax {
+  double position = SweepRun::kNaN, orientation = SweepRun::kNaN;
+  void point(const Vector3& x, const Vector3& exact) {
+    position = std::fmax(position, (x - exact).cwiseAbs().maxCoeff());
+  }
+  void rotation(const Matrix3& R, const Matrix3& exact) {
+    orientation = std::fmax(orientation, so3::distance(R, exact));
+  }
+};
+
+void against_analytic(const Scene& scene, const Recording& r, SweepRun& run) {
+  const std::vector<ExactFrame> exact = exact_trajectory(scene);
+  ErrorMax e;
+  for (std::size_t k = 0; k < r.states.size() && k < exact.size(); ++k) {
+    for (const auto& [i, x] : exact[k].points) e.point(r.states[k].points[i], x);
+    for (const auto& [i, R] : exact[k].rotations) e.rotation(r.states[k].rotations[i], R);
+  }
+  run.position_error = e.position;
+  run.orientation_error = e.orientation;
+}
+
+// Compares at the run's frames, interpolating the reference between its two nearest frames.
+void against_reference(const Scene& scene, const Recording& r, const Scene& reference_scene,
+                       const Recording& reference, SweepRun& run) {
+  if (reference.states.empty()) return;
+  const double unit = frame_position(reference_scene, 1);  // one reference frame
+  ErrorMax e;
+  for (std::size_t k = 0; k < r.states.size(); ++k) {
+    const double j = frame_position(scene, static_cast<int>(k)) / unit;
+    std::size_t j0 = static_cast<std::size_t>(std::floor(j + 1e-9));
+    double f = j - double(j0);
+    if (f < 1e-9) f = 0.0;
+    if (j0 >= reference.states.size() || (f > 0.0 && j0 + 1 >= reference.states.size())) break;
+    const State& a = reference.states[j0];
+    const State& b = reference.states[f > 0.0 ? j0 + 1 : j0];
+    const State& q = r.states[k];
+    if (q.points.size() != a.points.size() || q.rotations.size() != a.rotations.size()) return;
+    for (std::size_t i = 0; i < q.points.size(); ++i) {
+      e.point(q.points[i], (1.0 - f) * a.points[i] + f * b.points[i]);
+    }
+    for (std::size_t i = 0; i < q.rotations.size(); ++i) {
+      const Matrix3& Ra = a.rotations[i];
+      e.rotation(q.rotations[i], so3::exp(f * so3::log(b.rotations[i] * Ra.transpose())) * Ra);
+    }
+  }
+  run.position_error = e.position;
+  run.orientation_error = e.orientation;
+}
+
+// A reference gradient: central differences of the reference run's loss.
+struct ReferenceGradient {
+  Eigen::VectorXd gamma;
+  std::vector<int> indices;
+  std::vector<double> differences;
+  std::string failure;
+};
+
+ReferenceGradient reference_gradient(const Scene& scene, int sample) {
+  ReferenceGradient g;
+  try {
+    const DifferentiableSimulation sim = make_differentiable_simulation(scene);
+    g.gamma = sim.initial_parameters();
+    g.indices = sample_indices(static_cast<int>(g.gamma.size()), sample, 1);
+    const GradientCheckOptions defaults;
+    g.differences = central_differences(sim, g.gamma, g.indices, defaults.step);
+  } catch (const std::exception& e) {
+    g.failure = e.what();
+  }
+  return g;
+}
+
+void gradient_error(const Scene& scene, const ReferenceGradient& reference, SweepRun& run) {
+  if (!reference.failure.empty() || reference.differences.empty()) return;
+  try {
+    const DifferentiableSimulation sim = make_differentiable_simulation(scene);
+    const Eigen::VectorXd gamma = sim.initial_parameters();
+    if (gamma.size() != reference.gamma.size()) return;  // e.g. per-frame controls, other h
+    Eigen::VectorXd adjoint;
+    const DifferentiableSimulation::Result pass = sim.evaluate(gamma, &adjoint);
+    run.gradient_seconds = pass.forward_seconds + pass.backward_seconds;
+    double largest = 0.0;
+    for (const double d : reference.differences) largest = std::max(largest, std::abs(d));
+    const double scale = GradientCheckOptions{}.floor * largest;
+    run.gradient_error = 0.0;
+    for (std::size_t i = 0; i < reference.indices.size(); ++i) {
+      run.gradient_error =
+          std::max(run.gradient_error,
+                   relative_error(adjoint(reference.indices[i]), reference.differences[i], scale));
+    }
+  } catch (const std::exception& e) {  // SimulationFailed: an unconverged step, say
+    run.failed = true;
+    run.failure += std::string(run.failure.empty() ? "" : "; ") + "gradient: " + e.what();
+  }
+}
+
+// A progress bar on a terminal, else one line per finished task.
+class Progress {
+ public:
+  Progress(std::ostream* out, bool bar, int total) : out_(out), bar_(bar), total_(total) {}
+  void start(const std::string& what) {
+    if (out_ == nullptr || !bar_) return;
+    const int width = 30;
+    const int filled = total_ > 0 ? width * done_ / total_ : width;
+    *out_ << "\r[" << std::string(filled, '#') << std::string(width - filled, '.') << "] "
+          << done_ << "/" << total_ << " " << what << "\033[K" << std::flush;
+  }
+  void finish(const std::string& what, double seconds) {
+    ++done_;
+    if (out_ == nullptr) return;
+    if (bar_) {
+      if (done_ == total_) *out_ << "\r\033[K" << std::flush;
+      return;
+    }
+    *out_ << "sweep " << done_ << "/" << total_ << ": " << what << " (" << std::setprecision(3)
+          << seconds << " s)\n";
+  }
+
+ private:
+  std::ostream* out_;
+  bool bar_;
+  int total_, done_ = 0;
+};
+
+// Overrides of the reference of a group of runs (see sweep.hpp).
+std::vector<std::pair<std::string, std::string>> reference_overrides(
+    const std::vector<SweepAxis>& axes, const std::vector<AxisKind>& kinds,
+    const std::vector<const GridScene*>& group, int refinement) {
+  std::vector<std::pair<std::string, std::string>> overrides;
+  auto number = [](double x) {
+    std::ostringstream os;
+    os << std::setprecision(15) << x;  // 15: h/4 and tolerance/100 without binary noise
+    return os.str();
+  };
+  const Scene& first = group.front()->scene;
+  double h = first.model.time_step, duration = 0.0, tolerance = first.solver.tolerance;
+  int iterations = first.solver.max_iterations, load_steps = first.frames;
+  for (const GridScene* g : group) {
+    h = std::min(h, g->scene.model.time_step);
+    duration = std::max(duration, g->scene.frames * g->scene.model.time_step);
+    tolerance = std::min(tolerance, g->scene.solver.tolerance);
+    iterations = std::max(iterations, g->scene.solver.max_iterations);
+    load_steps = std::max(load_steps, g->scene.frames);
+  }
+  for (std::size_t a = 0; a < axes.size(); ++a) {
+    switch (kinds[a]) {
+      case AxisKind::kTimeStep: {
+        const double h_ref = h / refinement;
+        overrides.emplace_back("time_step", number(h_ref));
+        if (!first.model.static_equilibrium) {
+          overrides.emplace_back(
+              "frames", std::to_string(static_cast<int>(std::ceil(duration / h_ref - 1e-9))));
+        }
+        break;
+      }
+      case AxisKind::kTolerance: overrides.emplace_back("solver.tolerance", number(tolerance / 100)); break;
+      case AxisKind::kMaxIterations:
+        overrides.emplace_back("solver.max_iterations", std::to_string(iterations));
+        break;
+      case AxisKind::kBackend: overrides.emplace_back("solver.backend", "newton"); break;
+      case AxisKind::kRotation: overrides.emplace_back("solver.rotation", "lie"); break;
+      case AxisKind::kLoadSteps: overrides.emplace_back("frames", std::to_string(load_steps)); break;
+      case AxisKind::kModel:
+        overrides.emplace_back(axes[a].path, group.front()->settings[a]);
+        break;
+      case AxisKind::kSolverSetting: break;  // the scene's own value
+    }
+  }
+  return overrides;
+}
+
+}  // namespace
+
+SweepAxis parse_sweep_axis(const std::string& text) {
+  const std::size_t equals = text.find('=');
+  if (equals == std::string::npos || equals == 0 || equals + 1 == text.size()) {
+    throw std::invalid_argument("--set " + text + ": expected PATH=VALUE[,VALUE…]");
+  }
+  SweepAxis axis{text.substr(0, equals), split_values(text.substr(equals + 1))};
+  for (const std::string& v : axis.values) {
+    if (v.empty()) throw std::invalid_argument("--set " + text + ": empty value");
+  }
+  return axis;
+}
+
+SweepResult run_sweep(const std::string& scene_text, const std::string& source,
+                      const SweepOptions& options) {
+  if (options.reference_refinement < 1 || options.gradient_sample < 0 || options.repeats < 1) {
+    throw std::invalid_argument(
+        "sweep: reference_refinement ≥ 1, gradient_sample ≥ 0 and repeats ≥ 1");
+  }
+  const Scene base_scene = parse_scene(scene_text, source);  // its errors name the file itself
+  const json base = json::parse(scene_text);
+  const bool static_scene = base_scene.model.static_equilibrium;
+  SweepResult result;
+  result.scene = source;
+  std::vector<AxisKind> kinds;
+  bool frames_axis = false, time_step_axis = false;
+  std::size_t time_step_index = 0;
+  for (const SweepAxis& axis : options.axes) {
+    if (std::find(result.axis_names.begin(), result.axis_names.end(), axis.path) !=
+        result.axis_names.end()) {
+      throw SceneError(source, "--set " + axis.path, "is given twice");
+    }
+    result.axis_names.push_back(axis.path);
+    kinds.push_back(classify(axis.path, static_scene));
+    frames_axis |= axis.path == "frames";
+    if (axis.path == "time_step") {
+      time_step_axis = true;
+      time_step_index = result.axis_names.size() - 1;
+    }
+  }
+  // With h on the grid, frames follow it so that every run covers the scene's duration.
+  std::vector<std::string> paths = result.axis_names;
+  const bool rescale = time_step_axis && !frames_axis && !static_scene;
+  if (rescale) {
+    paths.push_back("frames");
+    result.notes.push_back("frames = round(T/h) for the scene's duration T = " +
+                           format_number(base_scene.frames * base_scene.model.time_step, 6) +
+                           " s");
+  }
+
+  // Every grid point, parsed before anything runs.
+  std::vector<GridScene> grid;
+  std::vector<std::size_t> at(options.axes.size(), 0);
+  std::size_t count = 1;
+  for (const SweepAxis& axis : options.axes) count *= axis.values.size();
+  for (std::size_t n = 0; n < count; ++n) {
+    std::vector<std::string> values;
+    for (std::size_t a = 0; a < options.axes.size(); ++a) values.push_back(options.axes[a].values[at[a]]);
+    if (rescale) {
+      const json h = parse_value(values[time_step_index]);
+      const double frames = h.is_number() && h.get<double>() > 0.0
+                                ? std::round(base_scene.frames * base_scene.model.time_step /
+                                             h.get<double>())
+                                : 1.0;  // a bad h: parse_scene names it
+      values.push_back(std::to_string(static_cast<long long>(std::max(frames, 1.0))));
+    }
+    GridScene g = make_scene(base, source, paths, values);
+    g.settings.resize(options.axes.size());
+    grid.push_back(std::move(g));
+    // The first axis outermost: count up from the last.
+    for (std::size_t a = options.axes.size(); a-- > 0;) {
+      if (++at[a] < options.axes[a].values.size()) break;
+      at[a] = 0;
+    }
+  }
+
+  // Groups of runs that share a reference: the same values on every model axis.
+  std::map<std::string, std::vector<std::size_t>> groups;
+  for (std::size_t i = 0; i < grid.size(); ++i) {
+    std::string key;
+    for (std::size_t a = 0; a < kinds.size(); ++a) {
+      if (kinds[a] == AxisKind::kModel) key += grid[i].settings[a] + "\n";
+    }
+    groups[key].push_back(i);
+  }
+  const bool analytic = base_scene.analytic != AnalyticSolution::kNone;
+  const bool optimization = base_scene.optimization.has_value();
+  struct Reference {
+    GridScene scene;
+    Recording recording;
+    ReferenceGradient gradient;
+  };
+  std::vector<Reference> references;
+  std::vector<std::size_t> reference_of(grid.size());
+  for (const auto& [key, members] : groups) {
+    std::vector<const GridScene*> group;
+    for (const std::size_t i : members) group.push_back(&grid[i]);
+    std::vector<std::string> ref_paths, ref_values;
+    for (const auto& [path, value] :
+         reference_overrides(options.axes, kinds, group, options.reference_refinement)) {
+      ref_paths.push_back(path);
+      ref_values.push_back(value);
+    }
+    for (const std::size_t i : members) reference_of[i] = references.size();
+    references.push_back({make_scene(base, source + " reference", ref_paths, ref_values), {}, {}});
+  }
+  if (analytic) {
+    result.notes.push_back(std::string("errors against the scene's analytic solution \"") +
+                           to_string(base_scene.analytic) + "\" (problems/analytic.hpp)");
+  } else {
+    result.notes.push_back("errors against reference runs at the finest settings (time step / " +
+                           std::to_string(options.reference_refinement) +
+                           ", tolerance / 100, Newton with lie); the finest runs' errors read low");
+  }
+
+  const bool simulate_references = !analytic;
+  const int tasks = static_cast<int>(grid.size()) +
+                    (simulate_references || optimization ? static_cast<int>(references.size()) : 0);
+  Progress progress(options.progress, options.progress_bar, tasks);
+  using Clock = std::chrono::steady_clock;
+  for (Reference& ref : references) {
+    if (!simulate_references && !optimization) break;
+    const auto start = Clock::now();
+    const std::string what = "reference " + ref.scene.label;
+    progress.start(what);
+    if (simulate_references) ref.recording = record(ref.scene.scene, 1);
+    if (optimization) ref.gradient = reference_gradient(ref.scene.scene, options.gradient_sample);
+    progress.finish(what, std::chrono::duration<double>(Clock::now() - start).count());
+    SweepRun summary;
+    summary.settings = {ref.scene.label};
+    summary.reference = "(reference)";
+    fill_cost(ref.scene.scene, ref.recording, summary);
+    if (!ref.gradient.failure.empty()) {
+      summary.failed = true;
+      summary.failure += std::string(summary.failure.empty() ? "" : "; ") +
+                         "reference gradient: " + ref.gradient.failure;
+    }
+    result.references.push_back(summary);
+  }
+
+  for (std::size_t i = 0; i < grid.size(); ++i) {
+    const GridScene& g = grid[i];
+    const Reference& ref = references[reference_of[i]];
+    const auto start = Clock::now();
+    const std::string what = describe(result.axis_names, g.settings);
+    progress.start(what);
+    SweepRun run;
+    run.settings = g.settings;
+    const Recording r = record(g.scene, options.repeats);
+    fill_cost(g.scene, r, run);
+    if (analytic) {
+      run.reference = std::string("analytic ") + to_string(base_scene.analytic);
+      against_analytic(g.scene, r, run);
+    } else {
+      run.reference = ref.scene.label.empty() ? "the scene's settings" : ref.scene.label;
+      against_reference(g.scene, r, ref.scene.scene, ref.recording, run);
+    }
+    if (optimization) gradient_error(g.scene, ref.gradient, run);
+    progress.finish(what, std::chrono::duration<double>(Clock::now() - start).count());
+    result.runs.push_back(std::move(run));
+  }
+  return result;
+}
+
+namespace {
+
+// The metrics plotted against wall time, and the CSV's accuracy columns.
+struct Metric {
+  const char* key;
+  const char* label;
+  double SweepRun::*value;
+};
+constexpr Metric kMetrics[] = {
+    {"position_error", "position error [m]", &SweepRun::position_error},
+    {"orientation_error", "orientation error [rad]", &SweepRun::orientation_error},
+    {"energy_drift", "energy drift [J]", &SweepRun::energy_drift},
+    {"momentum_drift", "angular momentum drift [kg m²/s]", &SweepRun::momentum_drift},
+    {"gradient_error", "gradient relative error", &SweepRun::gradient_error},
+};
+
+// The error the `front` marks refer to (sweep.hpp): position, else orientation, else gradient.
+const Metric& primary_metric(const SweepResult& result) {
+  for (const Metric& m : {kMetrics[0], kMetrics[1], kMetrics[4]}) {
+    if (std::any_of(result.runs.begin(), result.runs.end(),
+                    [&](const SweepRun& r) { return r.*m.value > 0.0; })) {
+      for (const Metric& k : kMetrics) {
+        if (k.value == m.value) return k;
+      }
+    }
+  }
+  return kMetrics[0];
+}
+
+// Runs on the (wall time, metric) Pareto front; failed runs never are.
+std::vector<bool> on_front(const SweepResult& result, double SweepRun::*metric) {
+  std::vector<PlotPoint> points;
+  for (const SweepRun& r : result.runs) {
+    points.push_back({r.failed ? SweepRun::kNaN : r.wall_seconds, r.*metric, "", 0});
+  }
+  std::vector<bool> front(result.runs.size(), false);
+  for (const std::size_t i : pareto_front(points)) front[i] = true;
+  return front;
+}
+
+}  // namespace
+
+std::string sweep_csv(const SweepResult& result) {
+  std::ostringstream os;
+  for (const std::string& name : result.axis_names) os << csv_field(name) << ",";
+  os << "frames,frames_completed,wall_seconds,newton_iterations,factorizations,"
+        "unconverged_steps";
+  for (const Metric& m : kMetrics) os << "," << m.key;
+  os << ",gradient_seconds,pareto,failed,reference,failure\n";
+  const std::vector<bool> front = on_front(result, primary_metric(result).value);
+  for (std::size_t i = 0; i < result.runs.size(); ++i) {
+    const SweepRun& r = result.runs[i];
+    for (const std::string& v : r.settings) os << csv_field(v) << ",";
+    os << r.frames << "," << r.frames_completed << "," << format_number(r.wall_seconds, 9) << ","
+       << r.newton_iterations << "," << r.factorizations << "," << r.unconverged_steps;
+    for (const Metric& m : kMetrics) os << "," << format_number(r.*m.value, 9);
+    os << "," << format_number(r.gradient_seconds, 9) << "," << (front[i] ? 1 : 0) << ","
+       << (r.failed ? 1 : 0) << "," << csv_field(r.reference) << "," << csv_field(r.failure)
+       << "\n";
+  }
+  return os.str();
+}
+
+std::string format_sweep(const SweepResult& result) {
+  std::ostringstream os;
+  os << "sweep of " << result.scene << ": " << result.runs.size() << " runs\n";
+  for (const std::string& note : result.notes) os << "  " << note << "\n";
+  for (const SweepRun& ref : result.references) {
+    os << "  reference " << ref.settings.front() << ": " << format_number(ref.wall_seconds, 4)
+       << " s, " << ref.frames_completed << "/" << ref.frames << " frames"
+       << (ref.unconverged_steps > 0
+               ? ", " + std::to_string(ref.unconverged_steps) + " unconverged steps"
+               : std::string())
+       << (ref.failed ? ", FAILED: " + ref.failure : std::string()) << "\n";
+  }
+  const std::vector<bool> front = on_front(result, primary_metric(result).value);
+  std::vector<std::string> headings = result.axis_names;
+  for (const char* h : {"seconds", "iter", "unconv", "Δx max [m]", "ΔR max [rad]",
+                        "energy drift [J]", "grad err", "front"}) {
+    headings.emplace_back(h);
+  }
+  std::vector<std::vector<std::string>> lines{headings};
+  for (std::size_t i = 0; i < result.runs.size(); ++i) {
+    const SweepRun& r = result.runs[i];
+    std::vector<std::string> line = r.settings;
+    line.push_back(format_number(r.wall_seconds, 4));
+    line.push_back(std::to_string(r.newton_iterations));
+    line.push_back(std::to_string(r.unconverged_steps));
+    for (const double v : {r.position_error, r.orientation_error, r.energy_drift, r.gradient_error}) {
+      line.push_back(std::isnan(v) ? "-" : format_number(v, 3));
+    }
+    line.push_back(r.failed ? "FAILED" : front[i] ? "*" : "");
+    lines.push_back(line);
+  }
+  std::vector<std::size_t> widths(headings.size(), 0);
+  auto width = [](const std::string& s) {  // code points, for Δ
+    return static_cast<std::size_t>(std::count_if(
+        s.begin(), s.end(), [](char ch) { return (static_cast<unsigned char>(ch) & 0xC0) != 0x80; }));
+  };
+  for (const auto& line : lines) {
+    for (std::size_t c = 0; c < line.size(); ++c) widths[c] = std::max(widths[c], width(line[c]));
+  }
+  for (const auto& line : lines) {
+    for (std::size_t c = 0; c < line.size(); ++c) {
+      os << (c > 0 ? "  " : "") << std::string(widths[c] - width(line[c]), ' ') << line[c];
+    }
+    os << "\n";
+  }
+  os << "front: on the Pareto front of wall time against " << primary_metric(result).key << "\n";
+  for (const SweepRun& r : result.runs) {
+    if (r.failed) os << "failed: " << describe(result.axis_names, r.settings) << ": " << r.failure << "\n";
+  }
+  return os.str();
+}
+
+void write_sweep(const SweepResult& result, const std::filesystem::path& dir) {
+  std::filesystem::create_directories(dir);
+  AtomicFile csv(dir / "sweep.csv");
+  csv.stream() << sweep_csv(result);
+  csv.commit();
+  for (const Metric& m : kMetrics) {
+    if (std::none_of(result.runs.begin(), result.runs.end(),
+                     [&](const SweepRun& r) { return std::isfinite(r.*m.value); })) {
+      continue;
+    }
+    ScatterPlot plot;
+    plot.title = std::string(m.label) + " against cost: " + result.scene;
+    if (result.axis_names.size() > 1) {
+      plot.title += " (labels: ";
+      for (std::size_t a = 1; a < result.axis_names.size(); ++a) {
+        plot.title += (a > 1 ? ", " : "") + result.axis_names[a];
+      }
+      plot.title += ")";
+    }
+    plot.x_label = "wall time of the time steps [s]";
+    plot.y_label = m.label;
+    // One series per value of the first axis; the other axes' values label the points.
+    std::vector<std::string> series;
+    for (const SweepRun& r : result.runs) {
+      const std::string name =
+          result.axis_names.empty() ? "runs" : result.axis_names[0] + "=" + r.settings[0];
+      auto it = std::find(series.begin(), series.end(), name);
+      if (it == series.end()) it = series.insert(series.end(), name);
+      std::string label;
+      for (std::size_t a = 1; a < r.settings.size(); ++a) label += (a > 1 ? " " : "") + r.settings[a];
+      plot.points.push_back({r.failed ? SweepRun::kNaN : r.wall_seconds, r.*m.value, label,
+                             static_cast<int>(it - series.begin())});
+    }
+    plot.series_names = series;
+    write_png(plot, dir / (std::string(m.key) + "_vs_time.png"));
+  }
+}
+
+}  // namespace liedyn

@@ -1,0 +1,28 @@
+#!/usr/bin/env bash
+# Regenerates docs/speed-accuracy.md and its plots: `liedyn sweep` on the butterfly bolt, the
+# helical rod and the die-throw optimisation, then a report of what each setting costs and
+# buys, with the cheapest setting per error budget.
+#   bash scripts/speed_accuracy_report.sh [LIEDYN_BINARY]   (default: a Release build in build/)
+set -euo pipefail
+root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
+liedyn=${1:-}
+if [ -z "$liedyn" ]; then
+  cmake -S "$root" -B "$root/build" -DCMAKE_BUILD_TYPE=Release >/dev/null
+  cmake --build "$root/build" -j"$(nproc)" --target liedyn_cli >/dev/null
+  liedyn="$root/build/liedyn"
+fi
+out="$root/docs/speed-accuracy"
+mkdir -p "$out"
+scenes="$root/problems/scenes"
+# Each sweep: its name, the scene, the axes. Timings are medians of 3 runs.
+"$liedyn" sweep "$scenes/butterfly_bolt.json" --out "$out/butterfly_bolt" --repeat 3 --quiet \
+  --set time_step=0.01,0.005,0.0025,0.00125 --set solver.tolerance=1e-4,1e-6,1e-9 \
+  --rotations lie,rotvec,quat > "$out/butterfly_bolt.txt"
+"$liedyn" sweep "$scenes/helix_pull.json" --out "$out/helix_pull" --repeat 3 --quiet \
+  --set time_step=0.02,0.01,0.005 --set solver.tolerance=1e-4,1e-6,1e-9 \
+  > "$out/helix_pull.txt"
+"$liedyn" sweep "$scenes/optimization/die_throw.json" --out "$out/die_throw" --repeat 3 --quiet \
+  --set time_step=0.005,0.0025,0.00125,0.000625 --set solver.tolerance=1e-4,1e-7,1e-10 \
+  > "$out/die_throw.txt"
+python3 "$root/scripts/speed_accuracy_report.py" "$out" "$root/docs/speed-accuracy.md"
+echo "wrote $root/docs/speed-accuracy.md"
