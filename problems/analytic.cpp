@@ -84,8 +84,7 @@ StraightRod straight_rod(const Scene& scene) {
     }
     r.s.push_back(s);
   }
-  const bool straight_rest =
-      rod.rest_nodes.empty() || rod.rest_nodes == rod.nodes;
+  const bool straight_rest = rod.rest_nodes.empty() || rod.rest_nodes == rod.nodes;
   const bool no_curvature = std::all_of(rod.rest_darboux.begin(), rod.rest_darboux.end(),
                                         [](const Vector3& w) { return w.isZero(); });
   if (!straight_rest || !no_curvature || !rod.rest_darboux_controls.empty()) {
@@ -131,7 +130,8 @@ std::vector<ExactFrame> free_body(const Scene& scene) {
   std::vector<ExactFrame> frames(scene.frames + 1);
   for (int k = 0; k <= scene.frames; ++k) {
     const double t = k * scene.model.time_step;
-    frames[k].points = {{0, b.position + t * b.linear_velocity + 0.5 * t * t * scene.model.gravity}};
+    frames[k].points = {
+        {0, b.position + t * b.linear_velocity + 0.5 * t * t * scene.model.gravity}};
     frames[k].rotations = {{0, so3::exp(t / inertia.perpendicular * L) * b.orientation *
                                    so3::exp(t * lambda * inertia.axis)}};
   }
@@ -185,8 +185,9 @@ std::vector<ExactFrame> axial_stretch(const Scene& scene) {
 }  // namespace
 
 std::optional<AnalyticSolution> parse_analytic(std::string_view name) {
-  for (const AnalyticSolution s : {AnalyticSolution::kNone, AnalyticSolution::kFreeBody,
-                                   AnalyticSolution::kCantilever, AnalyticSolution::kAxialStretch}) {
+  for (const AnalyticSolution s :
+       {AnalyticSolution::kNone, AnalyticSolution::kFreeBody, AnalyticSolution::kCantilever,
+        AnalyticSolution::kAxialStretch}) {
     if (name == to_string(s)) return s;
   }
   return std::nullopt;
@@ -194,30 +195,42 @@ std::optional<AnalyticSolution> parse_analytic(std::string_view name) {
 
 const char* to_string(AnalyticSolution solution) {
   switch (solution) {
-    case AnalyticSolution::kNone: return "none";
-    case AnalyticSolution::kFreeBody: return "free_body";
-    case AnalyticSolution::kCantilever: return "cantilever";
-    case AnalyticSolution::kAxialStretch: return "axial_stretch";
+    case AnalyticSolution::kNone:
+      return "none";
+    case AnalyticSolution::kFreeBody:
+      return "free_body";
+    case AnalyticSolution::kCantilever:
+      return "cantilever";
+    case AnalyticSolution::kAxialStretch:
+      return "axial_stretch";
   }
   return "?";
 }
 
 void check_analytic(const Scene& scene) {
   switch (scene.analytic) {
-    case AnalyticSolution::kNone: return;
-    case AnalyticSolution::kFreeBody: return check_free_body(scene);
-    case AnalyticSolution::kCantilever: return check_cantilever(scene);
-    case AnalyticSolution::kAxialStretch: return check_axial_stretch(scene);
+    case AnalyticSolution::kNone:
+      return;
+    case AnalyticSolution::kFreeBody:
+      return check_free_body(scene);
+    case AnalyticSolution::kCantilever:
+      return check_cantilever(scene);
+    case AnalyticSolution::kAxialStretch:
+      return check_axial_stretch(scene);
   }
 }
 
 std::vector<ExactFrame> exact_trajectory(const Scene& scene) {
   check_analytic(scene);
   switch (scene.analytic) {
-    case AnalyticSolution::kNone: return {};
-    case AnalyticSolution::kFreeBody: return free_body(scene);
-    case AnalyticSolution::kCantilever: return cantilever(scene);
-    case AnalyticSolution::kAxialStretch: return axial_stretch(scene);
+    case AnalyticSolution::kNone:
+      return {};
+    case AnalyticSolution::kFreeBody:
+      return free_body(scene);
+    case AnalyticSolution::kCantilever:
+      return cantilever(scene);
+    case AnalyticSolution::kAxialStretch:
+      return axial_stretch(scene);
   }
   return {};
 }

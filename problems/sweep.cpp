@@ -98,9 +98,9 @@ void set_path(json& root, const std::string& path, const json& value, const std:
       if (!last && !node->contains(key)) (*node)[key] = json::object();
       node = &(*node)[key];
     } else {
-      throw SceneError(source, field,
-                       "\"" + walked + "\" is a " + node->type_name() +
-                           ", not an object or an array");
+      throw SceneError(
+          source, field,
+          "\"" + walked + "\" is a " + node->type_name() + ", not an object or an array");
     }
     walked += (walked.empty() ? "" : ".") + key;
     if (last) break;
@@ -109,7 +109,8 @@ void set_path(json& root, const std::string& path, const json& value, const std:
   *node = value;
 }
 
-std::string describe(const std::vector<std::string>& names, const std::vector<std::string>& values) {
+std::string describe(const std::vector<std::string>& names,
+                     const std::vector<std::string>& values) {
   std::string text;
   for (std::size_t i = 0; i < names.size(); ++i) {
     text += (i > 0 ? " " : "") + names[i] + "=" + values[i];
@@ -125,7 +126,8 @@ struct GridScene {
 };
 
 GridScene make_scene(const json& base, const std::string& source,
-                     const std::vector<std::string>& paths, const std::vector<std::string>& values) {
+                     const std::vector<std::string>& paths,
+                     const std::vector<std::string>& values) {
   json root = base;
   for (std::size_t i = 0; i < paths.size(); ++i) {
     set_path(root, paths[i], parse_value(values[i]), source);
@@ -133,7 +135,21 @@ GridScene make_scene(const json& base, const std::string& source,
   GridScene g;
   g.settings = values;
   g.label = describe(paths, values);
-  g.scene = parse_scene(root.dump(), source + " [" + g.label + "]");
+  try {
+    g.scene = parse_scene(root.dump(), source + " [" + g.label + "]");
+  } catch (const SceneError& e) {
+    // A rotation the back-end lacks (ipopt with quat) is a failed run (record), not bad
+    // input: parse with lie, then restore the rotation for the Simulator to refuse.
+    const auto rotation =
+        e.field() == "solver.rotation" && root["solver"]["rotation"].is_string()
+            ? parse_rotation(root["solver"]["rotation"].get<std::string>())
+            : std::nullopt;
+    if (!rotation) throw;
+    json lie = root;
+    lie["solver"]["rotation"] = "lie";
+    g.scene = parse_scene(lie.dump(), source + " [" + g.label + "]");
+    g.scene.solver.rotation = *rotation;
+  }
   return g;
 }
 
@@ -294,8 +310,8 @@ class Progress {
     if (out_ == nullptr || !bar_) return;
     const int width = 30;
     const int filled = total_ > 0 ? width * done_ / total_ : width;
-    *out_ << "\r[" << std::string(filled, '#') << std::string(width - filled, '.') << "] "
-          << done_ << "/" << total_ << " " << what << "\033[K" << std::flush;
+    *out_ << "\r[" << std::string(filled, '#') << std::string(width - filled, '.') << "] " << done_
+          << "/" << total_ << " " << what << "\033[K" << std::flush;
   }
   void finish(const std::string& what, double seconds) {
     ++done_;
@@ -345,19 +361,33 @@ std::vector<std::pair<std::string, std::string>> reference_overrides(
         }
         break;
       }
-      case AxisKind::kTolerance: overrides.emplace_back("solver.tolerance", number(tolerance / 100)); break;
+      case AxisKind::kTolerance:
+        overrides.emplace_back("solver.tolerance", number(tolerance / 100));
+        break;
       case AxisKind::kMaxIterations:
         overrides.emplace_back("solver.max_iterations", std::to_string(iterations));
         break;
-      case AxisKind::kBackend: overrides.emplace_back("solver.backend", "newton"); break;
-      case AxisKind::kRotation: overrides.emplace_back("solver.rotation", "lie"); break;
-      case AxisKind::kLoadSteps: overrides.emplace_back("frames", std::to_string(load_steps)); break;
+      case AxisKind::kBackend:  // Newton with lie below, whatever the axis says
+      case AxisKind::kRotation:
+        break;
+      case AxisKind::kLoadSteps:
+        overrides.emplace_back("frames", std::to_string(load_steps));
+        break;
       case AxisKind::kModel:
+        // With h on the grid, the reference's frames cover the group's longest run instead.
+        if (axes[a].path == "frames" &&
+            std::count(kinds.begin(), kinds.end(), AxisKind::kTimeStep) > 0)
+          break;
         overrides.emplace_back(axes[a].path, group.front()->settings[a]);
         break;
-      case AxisKind::kSolverSetting: break;  // the scene's own value
+      case AxisKind::kSolverSetting:
+        break;  // the scene's own value
     }
   }
+  // Our Newton solver on the exact Lie Hessian: the one that reaches tight tolerances on
+  // every scene (Ceres stalls near round-off, README "Back-ends").
+  overrides.emplace_back("solver.backend", "newton");
+  overrides.emplace_back("solver.rotation", "lie");
   return overrides;
 }
 
@@ -408,8 +438,7 @@ SweepResult run_sweep(const std::string& scene_text, const std::string& source,
   if (rescale) {
     paths.push_back("frames");
     result.notes.push_back("frames = round(T/h) for the scene's duration T = " +
-                           format_number(base_scene.frames * base_scene.model.time_step, 6) +
-                           " s");
+                           format_number(base_scene.frames * base_scene.model.time_step, 6) + " s");
   }
 
   // Every grid point, parsed before anything runs.
@@ -419,13 +448,14 @@ SweepResult run_sweep(const std::string& scene_text, const std::string& source,
   for (const SweepAxis& axis : options.axes) count *= axis.values.size();
   for (std::size_t n = 0; n < count; ++n) {
     std::vector<std::string> values;
-    for (std::size_t a = 0; a < options.axes.size(); ++a) values.push_back(options.axes[a].values[at[a]]);
+    for (std::size_t a = 0; a < options.axes.size(); ++a)
+      values.push_back(options.axes[a].values[at[a]]);
     if (rescale) {
       const json h = parse_value(values[time_step_index]);
-      const double frames = h.is_number() && h.get<double>() > 0.0
-                                ? std::round(base_scene.frames * base_scene.model.time_step /
-                                             h.get<double>())
-                                : 1.0;  // a bad h: parse_scene names it
+      const double frames =
+          h.is_number() && h.get<double>() > 0.0
+              ? std::round(base_scene.frames * base_scene.model.time_step / h.get<double>())
+              : 1.0;  // a bad h: parse_scene names it
       values.push_back(std::to_string(static_cast<long long>(std::max(frames, 1.0))));
     }
     GridScene g = make_scene(base, source, paths, values);
@@ -571,7 +601,7 @@ std::vector<bool> on_front(const SweepResult& result, double SweepRun::*metric) 
 std::string sweep_csv(const SweepResult& result) {
   std::ostringstream os;
   for (const std::string& name : result.axis_names) os << csv_field(name) << ",";
-  os << "frames,frames_completed,wall_seconds,newton_iterations,factorizations,"
+  os << "frames_requested,frames_completed,wall_seconds,newton_iterations,factorizations,"
         "unconverged_steps";
   for (const Metric& m : kMetrics) os << "," << m.key;
   os << ",gradient_seconds,pareto,failed,reference,failure\n";
@@ -614,7 +644,8 @@ std::string format_sweep(const SweepResult& result) {
     line.push_back(format_number(r.wall_seconds, 4));
     line.push_back(std::to_string(r.newton_iterations));
     line.push_back(std::to_string(r.unconverged_steps));
-    for (const double v : {r.position_error, r.orientation_error, r.energy_drift, r.gradient_error}) {
+    for (const double v :
+         {r.position_error, r.orientation_error, r.energy_drift, r.gradient_error}) {
       line.push_back(std::isnan(v) ? "-" : format_number(v, 3));
     }
     line.push_back(r.failed ? "FAILED" : front[i] ? "*" : "");
@@ -622,8 +653,9 @@ std::string format_sweep(const SweepResult& result) {
   }
   std::vector<std::size_t> widths(headings.size(), 0);
   auto width = [](const std::string& s) {  // code points, for Δ
-    return static_cast<std::size_t>(std::count_if(
-        s.begin(), s.end(), [](char ch) { return (static_cast<unsigned char>(ch) & 0xC0) != 0x80; }));
+    return static_cast<std::size_t>(std::count_if(s.begin(), s.end(), [](char ch) {
+      return (static_cast<unsigned char>(ch) & 0xC0) != 0x80;
+    }));
   };
   for (const auto& line : lines) {
     for (std::size_t c = 0; c < line.size(); ++c) widths[c] = std::max(widths[c], width(line[c]));
@@ -636,7 +668,8 @@ std::string format_sweep(const SweepResult& result) {
   }
   os << "front: on the Pareto front of wall time against " << primary_metric(result).key << "\n";
   for (const SweepRun& r : result.runs) {
-    if (r.failed) os << "failed: " << describe(result.axis_names, r.settings) << ": " << r.failure << "\n";
+    if (r.failed)
+      os << "failed: " << describe(result.axis_names, r.settings) << ": " << r.failure << "\n";
   }
   return os.str();
 }
@@ -652,7 +685,8 @@ void write_sweep(const SweepResult& result, const std::filesystem::path& dir) {
       continue;
     }
     ScatterPlot plot;
-    plot.title = std::string(m.label) + " against cost: " + result.scene;
+    plot.title = std::string(m.label) +
+                 " against cost: " + std::filesystem::path(result.scene).filename().string();
     if (result.axis_names.size() > 1) {
       plot.title += " (labels: ";
       for (std::size_t a = 1; a < result.axis_names.size(); ++a) {
@@ -670,7 +704,8 @@ void write_sweep(const SweepResult& result, const std::filesystem::path& dir) {
       auto it = std::find(series.begin(), series.end(), name);
       if (it == series.end()) it = series.insert(series.end(), name);
       std::string label;
-      for (std::size_t a = 1; a < r.settings.size(); ++a) label += (a > 1 ? " " : "") + r.settings[a];
+      for (std::size_t a = 1; a < r.settings.size(); ++a)
+        label += (a > 1 ? " " : "") + r.settings[a];
       plot.points.push_back({r.failed ? SweepRun::kNaN : r.wall_seconds, r.*m.value, label,
                              static_cast<int>(it - series.begin())});
     }

@@ -13,8 +13,10 @@
 // round(T/h) for the scene's duration T = frames · h, so that every run covers the same time.
 //
 // Cost, per run: wall time of the time steps (not of the bookkeeping around them; the median
-// of `repeats` runs), Newton (or
-// Ceres/Ipopt) iterations and Cholesky factorisations summed over frames, unconverged steps.
+// of `repeats` runs); iterations (Newton updates, or Ceres/Ipopt iterations) and linear solves
+// summed over frames — Newton's Cholesky factorisations, one per solve plus retries with a
+// shift; for Ceres and Ipopt only those of our final convergence check (their own solves are
+// not counted) — and unconverged steps.
 //
 // Accuracy, per run, against a reference:
 //   * the scene's analytic solution when it declares one ("analytic", problems/analytic.hpp),
@@ -66,9 +68,9 @@ SweepAxis parse_sweep_axis(const std::string& text);
 
 struct SweepOptions {
   std::vector<SweepAxis> axes;
-  int reference_refinement = 4;  // reference h = smallest h on the grid / this, ≥ 1
-  int gradient_sample = 8;       // parameters checked for gradient_error (0: all)
-  int repeats = 1;               // timed runs per grid point; wall_seconds is their median
+  int reference_refinement = 4;      // reference h = smallest h on the grid / this, ≥ 1
+  int gradient_sample = 8;           // parameters checked for gradient_error (0: all)
+  int repeats = 1;                   // timed runs per grid point; wall_seconds is their median
   std::ostream* progress = nullptr;  // progress reports, if set:
   bool progress_bar = false;         //   a bar redrawn in place (a terminal), else a line per run
 };

@@ -21,7 +21,7 @@ SWEEPS = [
     ("die_throw", "Die throw optimisation (adjoint gradient)",
      "gradient_error"),
 ]
-AXES_END = "frames"  # the first column after the axes
+AXES_END = "frames_requested"  # the first column after the axes
 
 
 def number(text):

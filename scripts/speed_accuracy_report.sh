@@ -13,7 +13,8 @@ if [ -z "$liedyn" ]; then
 fi
 out="$root/docs/speed-accuracy"
 mkdir -p "$out"
-scenes="$root/problems/scenes"
+cd "$root"  # relative scene paths in the outputs
+scenes=problems/scenes
 # Each sweep: its name, the scene, the axes. Timings are medians of 3 runs.
 "$liedyn" sweep "$scenes/butterfly_bolt.json" --out "$out/butterfly_bolt" --repeat 3 --quiet \
   --set time_step=0.01,0.005,0.0025,0.00125 --set solver.tolerance=1e-4,1e-6,1e-9 \
