@@ -4,7 +4,6 @@
 #include <chrono>
 #include <cmath>
 #include <iomanip>
-#include <map>
 #include <nlohmann/json.hpp>
 #include <ostream>
 #include <sstream>
@@ -469,13 +468,17 @@ SweepResult run_sweep(const std::string& scene_text, const std::string& source,
   }
 
   // Groups of runs that share a reference: the same values on every model axis.
-  std::map<std::string, std::vector<std::size_t>> groups;
+  // In grid order of their first run.
+  std::vector<std::pair<std::string, std::vector<std::size_t>>> groups;
   for (std::size_t i = 0; i < grid.size(); ++i) {
     std::string key;
     for (std::size_t a = 0; a < kinds.size(); ++a) {
       if (kinds[a] == AxisKind::kModel) key += grid[i].settings[a] + "\n";
     }
-    groups[key].push_back(i);
+    auto group = std::find_if(groups.begin(), groups.end(),
+                              [&](const auto& g) { return g.first == key; });
+    if (group == groups.end()) group = groups.insert(groups.end(), {key, {}});
+    group->second.push_back(i);
   }
   const bool analytic = base_scene.analytic != AnalyticSolution::kNone;
   const bool optimization = base_scene.optimization.has_value();
