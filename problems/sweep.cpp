@@ -505,9 +505,10 @@ SweepResult run_sweep(const std::string& scene_text, const std::string& source,
     result.notes.push_back(std::string("errors against the scene's analytic solution \"") +
                            to_string(base_scene.analytic) + "\" (problems/analytic.hpp)");
   } else {
-    result.notes.push_back("errors against reference runs at the finest settings (time step / " +
-                           std::to_string(options.reference_refinement) +
-                           ", tolerance / 100, Newton with lie); the finest runs' errors read low");
+    result.notes.push_back(
+        "errors against reference runs at the grid's finest settings (below: a swept time step / " +
+        std::to_string(options.reference_refinement) +
+        ", a swept tolerance / 100, Newton with lie); the finest runs' errors read low");
   }
 
   const bool simulate_references = !analytic;
