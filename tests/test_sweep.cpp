@@ -279,7 +279,7 @@ TEST(SweepReference, FinestSettingsWithNewtonAndLie) {
     EXPECT_TRUE(std::isnan(run.gradient_error));  // not an optimisation scene
   }
   EXPECT_TRUE(std::any_of(r.notes.begin(), r.notes.end(), [](const std::string& n) {
-    return n.find("reference runs at the finest settings") != std::string::npos;
+    return n.find("reference runs at the grid's finest settings") != std::string::npos;
   }));
 }
 
