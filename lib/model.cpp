@@ -5,6 +5,7 @@
 #include <numbers>
 #include <sstream>
 
+#include "inertia.hpp"
 #include "so3.hpp"
 
 namespace liedyn {
@@ -16,6 +17,17 @@ std::string index_field(const std::string& array, std::size_t i, const std::stri
 
 void require_finite(const Eigen::MatrixXd& m, const std::string& field) {
   if (!m.allFinite()) throw ModelError(field, "must be finite (found NaN or Inf)");
+}
+
+// The inertia terms of a dynamic step hold m/h² and J/h² (lib/inertia.hpp): finite values can
+// still overflow there (a rod edge of 1e200 m, a time step of 1e-200 s), and a non-finite
+// inertia term fails only later, when the simulator is built.
+void require_finite_over_h2(double mass, const Matrix3& inertia, double inv_h2,
+                            const std::string& field) {
+  if (!std::isfinite(mass * inv_h2) || !(rotational_mass(inertia) * inv_h2).allFinite()) {
+    throw ModelError(field, "is too large for the time step: its mass or rotational inertia "
+                            "divided by time_step² overflows");
+  }
 }
 
 void require_body(int body, std::size_t count, const std::string& field, bool allow_world) {
@@ -54,6 +66,10 @@ void Model::validate() const {
   if (!std::isfinite(time_step) || time_step <= 0.0) {
     throw ModelError("time_step", "must be a finite positive number of seconds");
   }
+  const double inv_h2 = 1.0 / (time_step * time_step);
+  if (!static_equilibrium && !std::isfinite(inv_h2)) {
+    throw ModelError("time_step", "is too small: 1 / time_step² overflows");
+  }
   require_finite(gravity, "gravity");
   for (std::size_t i = 0; i < bodies.size(); ++i) {
     const RigidBody& b = bodies[i];
@@ -61,6 +77,9 @@ void Model::validate() const {
       throw ModelError(index_field("bodies", i, "mass"), "must be a finite positive number");
     }
     validate_inertia(b.inertia, index_field("bodies", i, "inertia"));
+    if (!static_equilibrium) {
+      require_finite_over_h2(b.mass, b.inertia, inv_h2, index_field("bodies", i, ""));
+    }
     require_finite(b.position, index_field("bodies", i, "position"));
     require_finite(b.orientation, index_field("bodies", i, "orientation"));
     const double drift = (b.orientation.transpose() * b.orientation - Matrix3::Identity()).norm();
@@ -105,7 +124,15 @@ void Model::validate() const {
     require_body(torques[i].body, bodies.size(), index_field("torques", i, "body"), false);
     require_finite(torques[i].torque, index_field("torques", i, "torque"));
   }
-  for (std::size_t r = 0; r < rods.size(); ++r) validate_rod(rods[r], index_field("rods", r, ""));
+  for (std::size_t r = 0; r < rods.size(); ++r) {
+    validate_rod(rods[r], index_field("rods", r, ""));
+    if (static_equilibrium) continue;
+    const RodDiscretization d = discretize(rods[r]);
+    for (std::size_t j = 0; j < d.edge_inertia.size(); ++j) {
+      require_finite_over_h2(d.node_mass[j] + d.node_mass[j + 1], d.edge_inertia[j], inv_h2,
+                             index_field("rods", r, ""));
+    }
+  }
   if (!static_equilibrium) validate_motion_speeds();
   if (static_equilibrium) validate_anchoring();
 }
@@ -175,6 +202,10 @@ void Model::validate_rod(const RodSpec& rod, const std::string& path) {
       if (i > 0 && !((nodes[i] - nodes[i - 1]).norm() > 0.0)) {
         throw ModelError(field(member) + "[" + std::to_string(i) + "]",
                          "coincides with the previous node (zero-length edge)");
+      }
+      if (i > 0 && !std::isfinite((nodes[i] - nodes[i - 1]).norm())) {
+        throw ModelError(field(member) + "[" + std::to_string(i) + "]",
+                         "is too far from the previous node (the edge length overflows)");
       }
     }
   };

@@ -77,7 +77,8 @@ std::optional<ParameterKind> parse_parameter_kind(std::string_view name) {
   return std::nullopt;
 }
 
-int ParameterSet::block_size(const Model& model, ParameterKind kind, int index) const {
+long long ParameterSet::block_size(const Model& model, ParameterKind kind, int index) const {
+  const long long frames = frames_, nodes = on_rod(kind) ? model.rods[index].node_count() : 0;
   switch (kind) {
     case ParameterKind::kBodyLinearVelocity:
     case ParameterKind::kBodyAngularVelocity:
@@ -86,17 +87,17 @@ int ParameterSet::block_size(const Model& model, ParameterKind kind, int index) 
     case ParameterKind::kBendingStiffness:
       return 3;
     case ParameterKind::kRodNodeVelocities:
-      return 3 * model.rods[index].node_count();
+      return 3 * nodes;
     case ParameterKind::kForce:
     case ParameterKind::kTorque:
     case ParameterKind::kNodeForce:
-      return 3 * frames_;
+      return 3 * frames;
     case ParameterKind::kCableTension:
-      return frames_;
+      return frames;
     case ParameterKind::kRestDarboux:
-      return 3 * (model.rods[index].node_count() - 2);
+      return 3 * (nodes - 2);
     case ParameterKind::kRestDarbouxPerFrame:
-      return 3 * (model.rods[index].node_count() - 2) * frames_;
+      return 3 * (nodes - 2) * frames;
     case ParameterKind::kSpringStiffness:
     case ParameterKind::kStretchStiffness:
     case ParameterKind::kShearStiffness:
@@ -159,7 +160,14 @@ void ParameterSet::add(const Model& model, ParameterKind kind, int index, int su
                                   std::to_string(index));
     }
   }
-  ParameterBlock block{kind, index, sub, size_, block_size(model, kind, index)};
+  // In long long: 3 · (nodes − 2) · frames overflows int long before it is refused here.
+  const long long size = block_size(model, kind, index);
+  if (size > kMaxSize - size_) {
+    throw ModelError(field, "would make γ " + std::to_string(size_ + size) +
+                                " numbers long; at most " + std::to_string(kMaxSize) +
+                                " are allowed (fewer frames or nodes)");
+  }
+  ParameterBlock block{kind, index, sub, size_, static_cast<int>(size)};
   blocks_.push_back(block);
   size_ += block.size;
 }

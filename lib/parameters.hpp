@@ -65,8 +65,12 @@ class ParameterSet {
   // `frames`: the number of steps simulated (sizes the per-step kinds).
   explicit ParameterSet(int frames) : frames_(frames) {}
 
+  // Most numbers γ may hold (80 MB a vector): per-step kinds grow with frames and rod nodes.
+  static constexpr int kMaxSize = 10000000;
+
   // Appends a block; throws ModelError naming `field` (e.g. "optimization.parameters[2]")
-  // when the index does not exist in the model, or the block repeats one already added.
+  // when the index does not exist in the model, the block repeats one already added, or γ
+  // would exceed kMaxSize.
   void add(const Model& model, ParameterKind kind, int index, int sub, const std::string& field);
 
   int size() const { return size_; }
@@ -85,7 +89,7 @@ class ParameterSet {
                             Eigen::VectorXd& dgamma) const;
 
  private:
-  int block_size(const Model& model, ParameterKind kind, int index) const;
+  long long block_size(const Model& model, ParameterKind kind, int index) const;
   int frames_;
   int size_ = 0;
   std::vector<ParameterBlock> blocks_;

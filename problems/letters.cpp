@@ -200,6 +200,11 @@ std::vector<Eigen::Vector3d> resample_polyline(const std::vector<Eigen::Vector3d
     if (i > 0) cumulative[i] = cumulative[i - 1] + (polyline[i] - polyline[i - 1]).norm();
   }
   const double length = cumulative.back();
+  // Finite points can still be too far apart for their distance (±1e308): an infinite length
+  // would make every resampled point inf/inf = NaN, so reject it like a non-finite point.
+  if (!std::isfinite(length)) {
+    throw std::invalid_argument("resample_polyline: the polyline's length overflows a double");
+  }
   if (!(length > 0.0)) {
     throw std::invalid_argument("resample_polyline: the polyline has zero length");
   }

@@ -22,6 +22,10 @@ using nlohmann::json;
 using scene_json::item_path;
 using scene_json::ObjectReader;
 
+// Most frames an optimisation may simulate: the adjoint keeps all of them, and a
+// projected_trajectory one target point each (docs/scene-format.md#optimization).
+constexpr int kMaxOptimizationFrames = 1000000;
+
 int body_named(ObjectReader& r, const Scene& scene) {
   const std::string name = r.string("body");
   for (std::size_t i = 0; i < scene.model.bodies.size(); ++i) {
@@ -155,6 +159,13 @@ void parse_term(ObjectReader& r, const Scene& scene, OptimizationSpec& spec) {
     }
     const double orientation_weight = r.number("orientation_weight", has_orientation ? 1.0 : 0.0);
     if (!(orientation_weight >= 0.0)) r.fail(r.field("orientation_weight"), "must be ≥ 0");
+    // The term's weights are these times "weight": finite factors can overflow to Inf.
+    if (!(weight * position_weights).allFinite()) {
+      r.fail(r.field("position_weights"), "times \"weight\" overflows a double (must be finite)");
+    }
+    if (!std::isfinite(orientation_weight * weight)) {
+      r.fail(r.field("orientation_weight"), "times \"weight\" overflows a double (must be finite)");
+    }
     r.finish();
     spec.objective.add(std::make_shared<BodyPose>(body, frame, position, weight * position_weights,
                                                   orientation, orientation_weight * weight));
@@ -217,6 +228,10 @@ OptimizationSpec parse_optimization(const json& value, const Scene& scene) {
   const std::string& source = scene.source;
   ObjectReader o(value, "optimization", source);
   if (scene.frames < 1) o.fail("frames", "an optimisation needs at least one frame");
+  if (scene.frames > kMaxOptimizationFrames) {
+    o.fail("frames", "an optimisation keeps every frame in memory: at most " +
+                         std::to_string(kMaxOptimizationFrames) + " frames");
+  }
   OptimizationSpec spec;
   spec.parameters = ParameterSet(scene.frames);
   const json& parameters = o.array("parameters");
