@@ -685,7 +685,7 @@ void write_sweep(const SweepResult& result, const std::filesystem::path& dir) {
   csv.commit();
   for (const Metric& m : kMetrics) {
     if (std::none_of(result.runs.begin(), result.runs.end(),
-                     [&](const SweepRun& r) { return std::isfinite(r.*m.value); })) {
+                     [&](const SweepRun& r) { return std::isfinite(r.*m.value) && r.*m.value > 0.0; })) {
       continue;
     }
     ScatterPlot plot;

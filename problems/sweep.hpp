@@ -113,7 +113,8 @@ SweepResult run_sweep(const std::string& scene_text, const std::string& source,
 std::string sweep_csv(const SweepResult& result);
 // A table for the terminal.
 std::string format_sweep(const SweepResult& result);
-// DIR/sweep.csv, and DIR/<metric>_vs_time.png for every metric with a finite value.
+// DIR/sweep.csv, and DIR/<metric>_vs_time.png for every metric with a positive finite value
+// (the plots are log-log; a body spinning in place has no position error to show).
 // Atomic (temporary files, then rename); DIR is created if missing.
 void write_sweep(const SweepResult& result, const std::filesystem::path& dir);
 
