@@ -17,11 +17,14 @@ if [ "${1:-}" = "--sanitize" ]; then
            -DLIEDYN_SANITIZE=ON -DLIEDYN_BUILD_BENCHMARKS=OFF)
   export ASAN_OPTIONS=detect_leaks=1:abort_on_error=1
   export UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1
+  export LSAN_OPTIONS="suppressions=$root/tests/lsan.supp:print_suppressions=0"
 fi
 # ccache (outside the clone) makes repeated CI runs on the same machine cheap.
 if command -v ccache >/dev/null; then
   export CCACHE_DIR="${CCACHE_DIR:-/var/cache/liedyn-ccache}"
   mkdir -p "$CCACHE_DIR" 2>/dev/null || export CCACHE_DIR="$HOME/.cache/liedyn-ccache"
+  # Paths below the clone are hashed relative to it, so a fresh clone elsewhere still hits.
+  export CCACHE_BASEDIR="$root"
   options+=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache)
 fi
 jobs=$(nproc)
