@@ -59,6 +59,17 @@ void IncrementalPotential::add_step_adjoint(const State& q, const State& previou
     a_previous.segment<3>(tangent_rotation(q, t.rotation)) +=
         t.previous_jacobian(q).transpose() * z.segment<3>(t.offsets[0]);
   }
+  for (const Friction& t : friction) {
+    if (t.normal_force == 0.0) continue;
+    // Columns (x̂, θ̂) of the sample's frame: its point and, on a body, its rotation. A body
+    // whose rotation is not a DOF keeps its previous rotation fixed as well (none exist).
+    const Eigen::Matrix<double, 6, 1> w =
+        t.previous_jacobian(q, previous).transpose() * gather(t, z);
+    if (t.at.point >= 0) a_previous.segment<3>(tangent_point(t.at.point)) += w.head<3>();
+    if (t.at.rotation >= 0) {
+      a_previous.segment<3>(tangent_rotation(q, t.at.rotation)) += w.tail<3>();
+    }
+  }
 }
 
 void IncrementalPotential::add_parameter_adjoint(const State& q, int frame,

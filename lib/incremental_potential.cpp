@@ -1,5 +1,6 @@
 #include "incremental_potential.hpp"
 
+#include <memory>
 #include <numeric>
 
 #include "rod_terms.hpp"
@@ -17,12 +18,15 @@ void IncrementalPotential::begin_step(const State& previous, const Step& previou
   for (auto& t : forces) t.begin_frame(frame);
   for (auto& t : rod_bend_twist) t.begin_frame(frame);
   for (auto& t : cables) t.begin_frame(frame);
+  for (auto& t : friction) t.begin_step(previous, previous_step);
+  for (auto& t : region_forces) t.begin_step(previous, previous_step);
 }
 
 void IncrementalPotential::set_load_scale(double lambda) {
   for (auto& t : gravity) t.scale = lambda;
   for (auto& t : forces) t.scale = lambda;
   for (auto& t : torques) t.scale = lambda;
+  for (auto& t : region_forces) t.scale = lambda;
 }
 
 double IncrementalPotential::value(const State& q) const {
@@ -41,10 +45,47 @@ double IncrementalPotential::potential_energy(const State& q) const {
   for (const auto& t : rod_stretch) energy += t.evaluate(q, nullptr, nullptr);
   for (const auto& t : rod_shear) energy += t.evaluate(q, nullptr, nullptr);
   for (const auto& t : rod_bend_twist) energy += t.evaluate(q, nullptr, nullptr);
+  for (const auto& t : contacts) energy += t.evaluate(q, nullptr, nullptr);
   return energy;
 }
 
 namespace {
+
+// One shared copy of each collider, for the contact and friction terms of all components.
+std::vector<std::shared_ptr<const Collider>> shared_colliders(const Model& model) {
+  std::vector<std::shared_ptr<const Collider>> out;
+  for (const Collider& c : model.colliders) out.push_back(std::make_shared<const Collider>(c));
+  return out;
+}
+
+// A sample's contact term with each collider, and its friction term where μ > 0.
+void add_contact_terms(const Model& model,
+                       const std::vector<std::shared_ptr<const Collider>>& colliders,
+                       const ContactMaterial& material, const AttachedPoint& at,
+                       const std::array<int, 2>& offsets, IncrementalPotential& p) {
+  if (!material.enabled()) return;
+  for (const auto& collider : colliders) {
+    Contact contact;
+    contact.offsets = offsets;
+    contact.at = at;
+    contact.collider = collider;
+    contact.stiffness = material.stiffness;
+    contact.radius = material.radius;
+    p.contacts.push_back(contact);
+    // Static equilibria have no step to slip over: friction is a dynamic term.
+    if (material.friction > 0.0 && !model.static_equilibrium) {
+      Friction friction;
+      friction.offsets = offsets;
+      friction.at = at;
+      friction.collider = collider;
+      friction.stiffness = material.stiffness;
+      friction.radius = material.radius;
+      friction.coefficient = material.friction;
+      friction.epsilon = material.friction_velocity * model.time_step;
+      p.friction.push_back(friction);
+    }
+  }
+}
 
 // Union–find over bodies, joined by springs between two bodies.
 int find_root(std::vector<int>& parent, int i) {
@@ -149,6 +190,15 @@ std::vector<Component> build_components(const Model& model) {
     const int body = s.a.body >= 0 ? s.a.body : s.b.body;
     components[component_of[body]].potential.springs.push_back(term);
   }
+  const std::vector<std::shared_ptr<const Collider>> colliders = shared_colliders(model);
+  for (int i = 0; i < n; ++i) {
+    const RigidBody& body = model.bodies[i];
+    for (const Vector3& sample : body.contact_points) {
+      add_contact_terms(model, colliders, body.contact, {i, i, sample},
+                        {point_offset[i], rotation_offset[i]},
+                        components[component_of[i]].potential);
+    }
+  }
   for (int r = 0; r < static_cast<int>(model.rods.size()); ++r) {
     Component c = build_rod_component(model, r);
     if (c.dofs > 0) components.push_back(std::move(c));
@@ -250,6 +300,24 @@ Component build_rod_component(const Model& model, int r) {
       segment.tension = cable.tension;
       segment.control = cable.control;
       p.cables.push_back(segment);
+    }
+  }
+  const std::vector<std::shared_ptr<const Collider>> colliders = shared_colliders(model);
+  for (int i = 0; i < n; ++i) {
+    if (node_fixed[i]) continue;
+    add_contact_terms(model, colliders, rod.contact, {model.rod_point(r, i), -1, Vector3::Zero()},
+                      {node_offset[i], -1}, p);
+  }
+  for (const RegionPush& push : rod.region_pushes) {
+    for (int i = 0; i < n; ++i) {
+      if (node_fixed[i]) continue;
+      RegionForce term;
+      term.offsets = {node_offset[i]};
+      term.point = model.rod_point(r, i);
+      term.force = push.force;
+      term.center = push.center;
+      term.radius = push.radius;
+      p.region_forces.push_back(term);
     }
   }
   for (const NodeForce& f : rod.node_forces) {

@@ -17,6 +17,8 @@
 #include <vector>
 
 #include "cable.hpp"
+#include "contact.hpp"
+#include "friction.hpp"
 #include "inertia.hpp"
 #include "loads.hpp"
 #include "model.hpp"
@@ -43,11 +45,14 @@ class IncrementalPotential {
   std::vector<Gravity> gravity;
   std::vector<ConstantForce> forces;
   std::vector<ConstantTorque> torques;
+  std::vector<RegionForce> region_forces;
   std::vector<Spring> springs;
   std::vector<RodStretch> rod_stretch;
   std::vector<RodShear> rod_shear;
   std::vector<RodBendTwist> rod_bend_twist;
   std::vector<CableSegment> cables;
+  std::vector<Contact> contacts;
+  std::vector<Friction> friction;
 
   // Fixes the per-step data (x̃, R̃, R_{k−1}) from the previous state and step, and the
   // scheduled quantities (forces, torques, cable tensions, rest Darboux vectors; term.hpp) of
@@ -106,7 +111,7 @@ class IncrementalPotential {
   // (component layout). Whole-state tangent vectors ("full" layout) hold 3 entries per point,
   // then 3 per rotation: point i at 3i, rotation j at 3(P + j), P = q.points.size().
   //   a_previous  += (∂C/∂q_{k−1})ᵀ z,   da_previous += (∂C/∂Δq_{k−1})ᵀ z   (full layout);
-  // only the inertia and torque terms read q_{k−1} or Δq_{k−1}.
+  // only the inertia, torque and friction terms read q_{k−1} or Δq_{k−1}.
   void add_step_adjoint(const State& q, const State& previous, const Step& previous_step,
                         const Eigen::VectorXd& z, Eigen::VectorXd& a_previous,
                         Eigen::VectorXd& da_previous) const;
@@ -114,8 +119,9 @@ class IncrementalPotential {
   void add_parameter_adjoint(const State& q, int frame, const Eigen::VectorXd& z,
                              Eigen::VectorXd& dgamma) const;
 
-  // Potential energy (gravity, constant forces, springs, rod elasticity):
-  // what frames.csv reports. Inertia, torque and cable terms are not energies of the state.
+  // Potential energy (gravity, constant forces, springs, rod elasticity, contact penalties):
+  // what frames.csv reports. Inertia, torque, cable and friction terms are not energies of
+  // the state.
   double potential_energy(const State& q) const;
 
  private:
@@ -126,11 +132,14 @@ class IncrementalPotential {
     f(gravity);
     f(forces);
     f(torques);
+    f(region_forces);
     f(springs);
     f(rod_stretch);
     f(rod_shear);
     f(rod_bend_twist);
     f(cables);
+    f(contacts);
+    f(friction);
   }
 };
 

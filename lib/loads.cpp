@@ -58,4 +58,15 @@ Matrix3 ConstantTorque::previous_jacobian(const State& q) const {
   return -(tau * so3::vee(P).transpose() + 0.5 * so3::hat(P.transpose() * tau));
 }
 
+void RegionForce::begin_step(const State& previous, const Step&) {
+  active = (previous.points[point] - center).norm() <= radius;
+}
+
+double RegionForce::evaluate(const State& q, LocalGradient<1>* g, LocalHessian<1>* H) const {
+  const Vector3 F = active ? Vector3(scale * force) : Vector3::Zero();
+  if (g != nullptr) *g = -F;
+  if (H != nullptr) H->setZero();
+  return -F.dot(q.points[point]);
+}
+
 }  // namespace liedyn

@@ -67,4 +67,24 @@ struct ConstantTorque {
   Matrix3 previous_jacobian(const State& q) const;
 };
 
+// A push on a point while it is inside a region (the endoscope of paper §7.2, driven by
+// forces on the nodes inside an entry region): V = −a F·x, with a = 1 if the point was
+// within `radius` of `center` at the start of the step (lagged, like friction), else 0.
+//   ∂V/∂x = −a F,   ∂²V/∂x² = 0.
+// a is piecewise constant in q_{k−1}: the adjoint has no mixed block for it (its derivative
+// vanishes wherever it exists; a point exactly on the region's boundary is measure zero).
+struct RegionForce {
+  static constexpr int kBlocks = 1;
+  std::array<int, kBlocks> offsets{-1};
+  int point = -1;
+  Vector3 force = Vector3::Zero();
+  Vector3 center = Vector3::Zero();
+  double radius = 0.0;
+  double scale = 1.0;
+  bool active = false;  // a, set by begin_step
+
+  void begin_step(const State& previous, const Step& previous_step);
+  double evaluate(const State& q, LocalGradient<1>* g, LocalHessian<1>* H) const;
+};
+
 }  // namespace liedyn

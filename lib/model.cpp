@@ -96,6 +96,18 @@ void Model::validate() const {
          << " rad per step must be below π (reduce time_step)";
       throw ModelError(index_field("bodies", i, "angular_velocity"), os.str());
     }
+    validate_contact(b.contact, index_field("bodies", i, "contact"));
+    for (std::size_t k = 0; k < b.contact_points.size(); ++k) {
+      require_finite(b.contact_points[k], index_field("bodies", i, "contact.points") + "[" +
+                                              std::to_string(k) + "]");
+    }
+    if (!b.contact_points.empty() && !b.contact.enabled()) {
+      throw ModelError(index_field("bodies", i, "contact.stiffness"),
+                       "must be positive: the body has contact points");
+    }
+  }
+  for (std::size_t c = 0; c < colliders.size(); ++c) {
+    colliders[c].validate(index_field("colliders", c, ""));
   }
   for (std::size_t i = 0; i < springs.size(); ++i) {
     const SpringSpec& s = springs[i];
@@ -193,6 +205,19 @@ void Model::validate_anchoring() const {
   }
 }
 
+void Model::validate_contact(const ContactMaterial& contact, const std::string& path) {
+  const auto check = [&](double value, const std::string& member, bool positive) {
+    if (!std::isfinite(value) || value < 0.0 || (positive && value == 0.0)) {
+      throw ModelError(path + "." + member,
+                       positive ? "must be a finite positive number" : "must be finite and ≥ 0");
+    }
+  };
+  check(contact.stiffness, "stiffness", false);
+  check(contact.radius, "radius", false);
+  check(contact.friction, "friction", false);
+  check(contact.friction_velocity, "friction_velocity", true);
+}
+
 void Model::validate_rod(const RodSpec& rod, const std::string& path) {
   const auto field = [&](const std::string& member) { return path + "." + member; };
   if (rod.nodes.size() < 2) throw ModelError(field("nodes"), "must list at least 2 nodes");
@@ -230,6 +255,7 @@ void Model::validate_rod(const RodSpec& rod, const std::string& path) {
   positive(rod.radius, "radius");
   non_negative(rod.stretch_stiffness, "stretch_stiffness");
   non_negative(rod.shear_stiffness, "shear_stiffness");
+  validate_contact(rod.contact, field("contact"));
   for (int k = 0; k < 3; ++k) {
     non_negative(rod.bending_stiffness[k], "bending_stiffness[" + std::to_string(k) + "]");
   }
@@ -249,6 +275,15 @@ void Model::validate_rod(const RodSpec& rod, const std::string& path) {
   };
   check_indices(rod.fixed_nodes, rod.node_count(), "fixed_nodes", "node");
   check_indices(rod.fixed_edges, rod.edge_count(), "fixed_edges", "edge");
+  for (std::size_t k = 0; k < rod.region_pushes.size(); ++k) {
+    const std::string f = field("region_pushes") + "[" + std::to_string(k) + "]";
+    require_finite(rod.region_pushes[k].force, f + ".force");
+    require_finite(rod.region_pushes[k].center, f + ".center");
+    const double radius = rod.region_pushes[k].radius;
+    if (!std::isfinite(radius) || radius <= 0.0) {
+      throw ModelError(f + ".radius", "must be a finite positive number");
+    }
+  }
   for (std::size_t k = 0; k < rod.node_forces.size(); ++k) {
     const std::string f = field("node_forces") + "[" + std::to_string(k) + "]";
     if (rod.node_forces[k].node < 0 || rod.node_forces[k].node >= rod.node_count()) {

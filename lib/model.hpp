@@ -8,7 +8,9 @@
 #include <string>
 #include <vector>
 
+#include "contact.hpp"
 #include "rod.hpp"
+#include "sdf.hpp"
 #include "state.hpp"
 #include "term.hpp"
 
@@ -32,6 +34,10 @@ struct RigidBody {
   Matrix3 orientation = Matrix3::Identity();      // body → world
   Vector3 linear_velocity = Vector3::Zero();      // world
   Vector3 angular_velocity = Vector3::Zero();     // world
+  // Contact samples (body coordinates) against every collider of the model, each a sphere
+  // of contact.radius (lib/contact.hpp); none: the body never touches anything.
+  std::vector<Vector3> contact_points;
+  ContactMaterial contact;
 };
 
 // End of a spring or point of application of a force: a body point given in body
@@ -68,6 +74,8 @@ struct Model {
   std::vector<ForceSpec> forces;
   std::vector<TorqueSpec> torques;
   std::vector<RodSpec> rods;
+  // Static obstacles (lib/sdf.hpp) that the contact samples of bodies and rods touch.
+  std::vector<Collider> colliders;
 
   // Static equilibria instead of dynamics ("mode": "static"): no inertia terms, and step k
   // minimises the potential energy with every load (gravity, forces, torques) scaled by
@@ -93,6 +101,8 @@ struct Model {
   void validate_motion_speeds() const;
   // The static-mode checks of validate().
   void validate_anchoring() const;
+  // The contact checks of validate(): colliders, materials, samples; `path` as above.
+  static void validate_contact(const ContactMaterial& contact, const std::string& path);
 
   // State q_0 and step Δq_0 = (h v_0, exp(h ω_0)) (DESIGN.md §3); rods start at rest in
   // their initial shape, with parallel-transported edge frames.

@@ -16,6 +16,7 @@
 #include <string>
 #include <vector>
 
+#include "contact.hpp"
 #include "prescribed_motion.hpp"
 #include "state.hpp"
 #include "term.hpp"
@@ -41,6 +42,14 @@ struct CableSpec {
   ScheduledParameter<1> control;       // per-step tensions and their slot in γ (lib/term.hpp)
 };
 
+// A force on every free node that is inside a ball at the start of a step (lib/loads.hpp,
+// RegionForce): how the endoscope of paper §7.2 is fed into its tube.
+struct RegionPush {
+  Vector3 force = Vector3::Zero();   // world, N per node
+  Vector3 center = Vector3::Zero();  // world, m
+  double radius = 0.0;               // m, > 0
+};
+
 struct RodSpec {
   std::string name;
   std::vector<Vector3> nodes;          // initial node positions, at least 2
@@ -53,6 +62,7 @@ struct RodSpec {
   std::vector<int> fixed_nodes;        // clamped positions
   std::vector<int> fixed_edges;        // clamped rotations
   std::vector<NodeForce> node_forces;  // constant world forces on nodes
+  std::vector<RegionPush> region_pushes;  // forces on the nodes inside a region
   std::vector<CableSpec> cables;       // pulling cables
   std::vector<PrescribedMotion> prescribed_motions;  // of clamped nodes and edges
   std::vector<Vector3> node_velocities;  // initial, world, m/s; empty: at rest (edges start at rest)
@@ -61,6 +71,9 @@ struct RodSpec {
   std::vector<Vector3> rest_darboux;
   // Per interior node: per-step ω̄ and slots in γ (lib/term.hpp); empty: none.
   std::vector<ScheduledParameter<3>> rest_darboux_controls;
+  // Contact of every free node, a sphere of contact.radius, with the model's colliders
+  // (lib/contact.hpp); contact.stiffness = 0: none.
+  ContactMaterial contact;
   // Slots in an optimisation's parameter vector γ (−1: not a parameter); bending takes 3.
   int stretch_stiffness_slot = -1, shear_stiffness_slot = -1, bending_stiffness_slot = -1;
 

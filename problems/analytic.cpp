@@ -47,6 +47,7 @@ void check_free_body(const Scene& scene) {
   if (!m.springs.empty() || !m.forces.empty() || !m.torques.empty()) {
     reject(scene, "no springs, forces or torques (torque-free motion)");
   }
+  if (!m.colliders.empty()) reject(scene, "no colliders (free motion)");
   axisymmetric(scene);
 }
 
@@ -70,6 +71,9 @@ StraightRod straight_rod(const Scene& scene) {
   }
   if (!rod.cables.empty() || !rod.prescribed_motions.empty()) {
     reject(scene, "no cables and no prescribed motions");
+  }
+  if (!m.colliders.empty() || !rod.region_pushes.empty()) {
+    reject(scene, "no colliders and no region pushes");
   }
   StraightRod r;
   const Vector3 span = rod.nodes[last] - rod.nodes[0];

@@ -29,6 +29,8 @@ class ObjectReader {
     throw SceneError(source_, field, reason);
   }
 
+  const std::string& source() const { return source_; }
+
   std::string field(const std::string& key) const {
     return path_.empty() ? key : path_ + "." + key;
   }

@@ -55,7 +55,7 @@ void write_frame_row(std::ostream& out, const Simulator& sim, const StepReport* 
   out << sim.kinetic_energy() << ',' << sim.potential_energy() << ',' << L.x() << ',' << L.y()
       << ',' << L.z() << ',' << (report ? report->step_norm : 0.0) << ','
       << (report ? report->regularized_iterations : 0) << ','
-      << (report ? to_string(report->status) : "initial") << '\n';
+      << (report ? to_string(report->status) : "initial") << ',' << sim.max_penetration() << '\n';
 }
 
 }  // namespace
@@ -69,7 +69,7 @@ SimulationSummary simulate_scene(const Scene& scene, const std::filesystem::path
   trajectory.stream() << "frame,time,object,kind,index,x,y,z,qw,qx,qy,qz\n";
   frames.stream() << "frame,time,newton_iterations,gradient_norm,converged,kinetic_energy,"
                      "potential_energy,angular_momentum_x,angular_momentum_y,angular_momentum_z,"
-                     "step_norm,regularized_iterations,status\n";
+                     "step_norm,regularized_iterations,status,max_penetration\n";
 
   Simulator sim(scene.model, scene.solver);
   SimulationSummary summary;

@@ -195,6 +195,132 @@ PrescribedMotion parse_motion(const json& value, const std::string& path,
   return motion;
 }
 
+// Unit quaternion [w, x, y, z] at `key` as a rotation matrix (identity when absent).
+Matrix3 orientation_of(ObjectReader& r, const std::string& key) {
+  if (!r.has(key)) return Matrix3::Identity();
+  const Eigen::Vector4d wxyz = r.vector<4>(key);
+  if (std::abs(wxyz.norm() - 1.0) > kQuaternionNormTolerance) {
+    std::ostringstream os;
+    os << "must be a unit quaternion [w, x, y, z] (norm " << wxyz.norm() << ", tolerance "
+       << kQuaternionNormTolerance << ")";
+    r.fail(r.field(key), os.str());
+  }
+  return so3::from_quaternion(Eigen::Quaterniond(wxyz(0), wxyz(1), wxyz(2), wxyz(3)));
+}
+
+// Most points a scene's generated contact samples and tube polylines may hold together.
+constexpr int kMaxContactSamples = 1000000;
+
+// A collider (lib/sdf.hpp): "type" plane | sphere | box | capsule | tube, its parameters,
+// pose ("position", "orientation"; a plane may give its "normal" instead) and "inside".
+Collider parse_collider(const json& value, const std::string& path, const std::string& source,
+                        int& budget) {
+  ObjectReader c(value, path, source);
+  Collider collider;
+  collider.name = c.string("name", path);
+  collider.position = c.vector<3>("position", Vector3::Zero());
+  collider.orientation = orientation_of(c, "orientation");
+  collider.inside = c.boolean("inside", false);
+  const std::string type = c.string("type");
+  if (type == "plane") {
+    if (c.has("normal")) {
+      if (c.has("orientation")) c.fail(c.field("normal"), "give \"normal\" or \"orientation\", not both");
+      const Vector3 n = c.vector<3>("normal");
+      if (!(n.norm() > 0.0)) c.fail(c.field("normal"), "must be a non-zero vector");
+      collider.orientation = minimal_rotation(Vector3::UnitZ(), n.normalized());
+    }
+    collider.shape = PlaneShape{};
+  } else if (type == "sphere") {
+    collider.shape = SphereShape{c.number("radius")};
+  } else if (type == "box") {
+    collider.shape = BoxShape{c.vector<3>("half_extents"), c.number("rounding", 0.0)};
+  } else if (type == "capsule") {
+    collider.shape = CapsuleShape{c.number("half_length"), c.number("radius")};
+  } else if (type == "tube") {
+    // Through control "points": a Catmull–Rom spline sampled `samples_per_segment` times per
+    // span (1: the polyline itself).
+    const json& points = c.array("points");
+    const int samples = c.has("samples_per_segment")
+                            ? c.integer("samples_per_segment", 1, kMaxContactSamples)
+                            : 1;
+    const long long count = static_cast<long long>(points.size()) * samples;
+    if (count > budget) {
+      c.fail(c.field("points"), "would bring the scene's tube points and contact samples beyond " +
+                                    std::to_string(kMaxContactSamples));
+    }
+    budget -= static_cast<int>(count);
+    std::vector<Vector3> control;
+    for (std::size_t i = 0; i < points.size(); ++i) {
+      control.push_back(c.to_vector<3>(points[i], item_path(c.field("points"), i)));
+    }
+    if (control.size() < 2) c.fail(c.field("points"), "must list at least 2 points");
+    TubeShape tube;
+    tube.radius = c.number("radius");
+    tube.polyline = samples == 1 ? control : catmull_rom_polyline(control, samples);
+    collider.shape = std::move(tube);
+  } else {
+    c.fail(c.field("type"), "unknown collider type \"" + type +
+                                "\" (expected plane, sphere, box, capsule or tube)");
+  }
+  c.finish();
+  return collider;
+}
+
+// "contact" of a body (with "points" or a "box" sample generator) or of a rod (every free
+// node; radius defaults to the rod's). Units and defaults: lib/contact.hpp.
+ContactMaterial parse_contact(ObjectReader& owner, double default_radius,
+                              std::vector<Vector3>* points, int& budget) {
+  ObjectReader c(owner.get("contact"), owner.field("contact"), owner.source());
+  ContactMaterial m;
+  m.stiffness = c.number("stiffness");
+  if (!(m.stiffness > 0.0)) c.fail(c.field("stiffness"), "must be positive");
+  m.radius = c.number("radius", default_radius);
+  m.friction = c.number("friction", m.friction);
+  m.friction_velocity = c.number("friction_velocity", m.friction_velocity);
+  if (points != nullptr) {
+    if (c.has("points")) {
+      const json& list = c.array("points");
+      for (std::size_t i = 0; i < list.size(); ++i) {
+        points->push_back(c.to_vector<3>(list[i], item_path(c.field("points"), i)));
+      }
+    }
+    if (c.has("box")) {
+      // Samples on a box's surface: its 8 corners, `per_edge` evenly spaced points inside
+      // each of its 12 edges and a per_edge × per_edge grid inside each of its 6 faces.
+      ObjectReader b(c.get("box"), c.field("box"), owner.source());
+      const Vector3 half = b.vector<3>("half_extents");
+      if (!(half.minCoeff() > 0.0)) b.fail(b.field("half_extents"), "must be positive");
+      const int per_edge = b.has("per_edge") ? b.integer("per_edge", 0, 1000) : 0;
+      b.finish();
+      const int count = 8 + 12 * per_edge + 6 * per_edge * per_edge;
+      if (count > budget) {
+        b.fail(b.field("per_edge"), "would bring the scene's contact samples beyond " +
+                                        std::to_string(kMaxContactSamples));
+      }
+      budget -= count;
+      // Along each axis: the two faces (±1) and per_edge interior coordinates.
+      std::vector<double> interior;
+      for (int i = 1; i <= per_edge; ++i) interior.push_back(-1.0 + 2.0 * i / (per_edge + 1));
+      std::vector<double> all = interior;
+      all.push_back(-1.0);
+      all.push_back(1.0);
+      for (double u : all) {
+        for (double v : all) {
+          for (double w : all) {
+            const int on_faces = (std::abs(u) == 1.0) + (std::abs(v) == 1.0) + (std::abs(w) == 1.0);
+            if (on_faces >= 1) points->push_back(Vector3(u, v, w).cwiseProduct(half));
+          }
+        }
+      }
+    }
+    if (points->empty()) {
+      c.fail(c.field("points"), "a body's contact needs \"points\" or a \"box\" of samples");
+    }
+  }
+  c.finish();
+  return m;
+}
+
 RodSpec parse_rod(const json& value, const std::string& path, const std::string& source,
                   std::map<std::string, std::string>& taken, RodBudget& budget) {
   ObjectReader r(value, path, source);
@@ -282,6 +408,22 @@ RodSpec parse_rod(const json& value, const std::string& path, const std::string&
       rod.cables.push_back(cable);
     }
   }
+  if (r.has("region_pushes")) {
+    const json& pushes = r.array("region_pushes");
+    for (std::size_t i = 0; i < pushes.size(); ++i) {
+      ObjectReader f(pushes[i], item_path(r.field("region_pushes"), i), source);
+      RegionPush push;
+      push.force = f.vector<3>("force");
+      push.center = f.vector<3>("center");
+      push.radius = f.number("radius");
+      f.finish();
+      rod.region_pushes.push_back(push);
+    }
+  }
+  if (r.has("contact")) {
+    int no_samples = 0;  // a rod's samples are its nodes
+    rod.contact = parse_contact(r, rod.radius, nullptr, no_samples);
+  }
   if (r.has("prescribed_motions")) {
     const json& motions = r.array("prescribed_motions");
     for (std::size_t i = 0; i < motions.size(); ++i) {
@@ -365,6 +507,7 @@ Scene parse(const json& root, const std::string& source) {
   }
   const json no_items = json::array();
   const json& bodies = has_bodies ? top.array("bodies") : no_items;
+  int contact_budget = kMaxContactSamples;
   for (std::size_t i = 0; i < bodies.size(); ++i) {
     ObjectReader b(bodies[i], item_path("bodies", i), source);
     RigidBody body;
@@ -387,6 +530,7 @@ Scene parse(const json& root, const std::string& source) {
     }
     body.linear_velocity = b.vector<3>("linear_velocity", Vector3::Zero());
     body.angular_velocity = b.vector<3>("angular_velocity", Vector3::Zero());
+    if (b.has("contact")) body.contact = parse_contact(b, 0.0, &body.contact_points, contact_budget);
     b.finish();
     scene.model.bodies.push_back(body);
   }
@@ -401,6 +545,13 @@ Scene parse(const json& root, const std::string& source) {
   if (bodies.empty() && rods.empty()) {
     top.fail(has_bodies ? "bodies" : "rods",
              "the scene must contain at least one body or rod");
+  }
+  if (top.has("colliders")) {
+    const json& colliders = top.array("colliders");
+    for (std::size_t i = 0; i < colliders.size(); ++i) {
+      scene.model.colliders.push_back(
+          parse_collider(colliders[i], item_path("colliders", i), source, contact_budget));
+    }
   }
 
   if (top.has("springs")) {

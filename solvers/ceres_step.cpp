@@ -525,6 +525,7 @@ class CeresStepSolver final : public StepSolver {
       }
     }
     for (const ConstantTorque& t : P.torques) add_offset_root(t, "torque (offset root)");
+    for (const RegionForce& t : P.region_forces) add_offset_root(t, "region force (offset root)");
     for (const CableSegment& c : P.cables) add_offset_root(c, "cable (offset root)");
     refresh_.push_back([this, folded_gravity, folded_forces, inertia_of_point](const State&) {
       for (Vector3& l : loads_) l.setZero();
@@ -542,6 +543,8 @@ class CeresStepSolver final : public StepSolver {
     for (const auto& t : P.rod_stretch) add(TermForm<RodStretch>{&t}, "rod_stretch");
     for (const auto& t : P.rod_shear) add(TermForm<RodShear>{&t}, "rod_shear");
     for (const auto& t : P.rod_bend_twist) add(TermForm<RodBendTwist>{&t}, "rod_bend_twist");
+    for (const auto& t : P.contacts) add(TermForm<Contact>{&t}, "contact");
+    for (const auto& t : P.friction) add(TermForm<Friction>{&t}, "friction");
 
     ceres::Solver::Options& o = solver_options_;
     const bool dense = options_.ceres.linear_solver == "auto" ? c.dofs <= kDenseLimit

@@ -117,6 +117,16 @@ double Simulator::potential_energy() const {
   return energy;
 }
 
+double Simulator::max_penetration() const {
+  double deepest = 0.0;
+  for (const auto& s : solvers_) {
+    for (const Contact& c : s->component().potential.contacts) {
+      deepest = std::max(deepest, c.penetration(state_));
+    }
+  }
+  return deepest;
+}
+
 Vector3 Simulator::angular_momentum() const {
   Vector3 L = Vector3::Zero();
   for_each_mass([&](int point, double mass, int rotation, const Matrix3& inertia) {

@@ -43,6 +43,9 @@ class Simulator {
   double kinetic_energy() const;
   double potential_energy() const;  // conservative loads (IncrementalPotential::potential_energy)
   Vector3 angular_momentum() const;
+  // Deepest penetration ρ − φ of a contact sample into a collider (lib/contact.hpp), m;
+  // 0 when no sample touches (or the model has none).
+  double max_penetration() const;
 
  private:
   // Calls f(point, mass, rotation, body_inertia) for every lumped mass and rotational

@@ -1,0 +1,64 @@
+#include "contact.hpp"
+
+#include <cmath>
+
+#include "so3.hpp"
+
+namespace liedyn {
+
+void attached_point_derivatives(const Vector3& lever, const Vector3& f, const Matrix3& K,
+                                LocalGradient<2>* g, LocalHessian<2>* H) {
+  if (g != nullptr) {
+    g->head<3>() = f;
+    g->tail<3>() = lever.cross(f);  // (22): −hat(r)ᵀ f = r × f
+  }
+  if (H != nullptr) {
+    const Matrix3 S = so3::hat(lever);
+    const Matrix3 KS = K * S;
+    H->topLeftCorner<3, 3>() = K;
+    H->topRightCorner<3, 3>() = -KS;               // K ∂p/∂θ
+    H->bottomLeftCorner<3, 3>() = -KS.transpose();  // (K(−S))ᵀ = S K (K, S: K sym., S skew)
+    H->bottomRightCorner<3, 3>() = -S * KS + rotated_point_curvature(lever, f);  // (23)
+  }
+}
+
+double Contact::penetration(const State& q) const {
+  return radius - collider->evaluate(at.position(q), false).distance;
+}
+
+double Contact::evaluate(const State& q, LocalGradient<2>* g, LocalHessian<2>* H) const {
+  const SdfValue s = collider->evaluate(at.position(q), H != nullptr);
+  const double d = radius - s.distance;
+  if (!(d > 0.0)) {
+    if (g != nullptr) g->setZero();
+    if (H != nullptr) H->setZero();
+    return 0.0;
+  }
+  if (g != nullptr || H != nullptr) {
+    const Vector3 f = -stiffness * d * s.gradient;  // ∂V/∂p = −k d ∇φ
+    Matrix3 K = Matrix3::Zero();
+    if (H != nullptr) {
+      K = stiffness * (s.gradient * s.gradient.transpose() - d * s.hessian);  // k(n nᵀ − d N)
+    }
+    attached_point_derivatives(at.lever(q), f, K, g, H);
+  }
+  return 0.5 * stiffness * d * d;
+}
+
+void Contact::residual(const State& q, Residual& r, ResidualJacobian* J) const {
+  const SdfValue s = collider->evaluate(at.position(q), false);
+  const double d = radius - s.distance;
+  const double root_k = std::sqrt(stiffness);
+  if (!(d > 0.0)) {
+    r(0) = 0.0;
+    if (J != nullptr) J->setZero();
+    return;
+  }
+  r(0) = root_k * d;
+  if (J != nullptr) {
+    J->leftCols<3>() = -root_k * s.gradient.transpose();                          // ∂d/∂x = −nᵀ
+    J->rightCols<3>() = -root_k * at.lever(q).cross(s.gradient).transpose();  // −nᵀ(−hat(r))
+  }
+}
+
+}  // namespace liedyn

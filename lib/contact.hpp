@@ -1,0 +1,69 @@
+#pragma once
+// Penalty contact of a sample point with a static collider (paper §7.1–7.3; SDFs: sdf.hpp).
+//
+// A sample is a point p = x + R p̄ attached to a rigid body (blocks x, θ) or a rod node
+// p = x (block x only; the θ block is then not a DOF, offset −1). With the sample's radius
+// ρ and the collider's signed distance φ, the penetration is d = ρ − φ(p) and
+//   V = ½ k max(0, d)²                                 (quadratic penalty, as in the paper).
+// With n = ∇φ(p), N = ∇²φ(p), and d > 0:
+//   f = ∂V/∂p = −k d n,       K = ∂²V/∂p² = k (n nᵀ − d N).
+// K is indefinite where the surface curves towards the sample (−k d N for a convex collider
+// has negative eigenvalues of size k d/radius of curvature): exact, and regularised by the
+// Newton solver like every indefinite Hessian (solvers/newton.hpp). At d ≤ 0 everything is
+// zero: V is C¹ with a jump of K at d = 0, which Newton's line search handles.
+//
+// Through p = x + r, r = R p̄ (eqs. 22, 23; conventions: so3.hpp), ∂p/∂(x, θ) = [I, −hat(r)]:
+//   gradient = [f; r × f],
+//   Hessian  = [[K, −K hat(r)], [hat(r) K, −hat(r) K hat(r) + C(r, f)]],
+// C(r, f) = ½(f rᵀ + r fᵀ) − (f·r) I (rotated_point_curvature, state.hpp).
+//
+// Least-squares form (contract: term.hpp), 1 residual:
+//   r = √k max(0, d),   J = ∂r/∂(x, θ) = −√k [nᵀ, (r × n)ᵀ] where d > 0, else 0;
+// ½ r² = V and Jᵀ r = the gradient above.
+//
+// The term reads q_k only: the adjoint needs no mixed block for it (its Hessian enters H_k).
+// Colliders are static, so a sample's stencil is its own body's or node's blocks, which the
+// inertia already puts in the pattern: contacts that come and go never change the sparsity.
+
+#include <memory>
+
+#include "sdf.hpp"
+#include "state.hpp"
+#include "term.hpp"
+
+namespace liedyn {
+
+// What a body's or rod's contact samples are made of (scene: "contact", docs/scene-format.md).
+struct ContactMaterial {
+  double stiffness = 0.0;          // k, N/m, > 0 to enable contact
+  double radius = 0.0;             // ρ, m, ≥ 0: the sample's sphere (a rod node: the rod radius)
+  double friction = 0.0;           // μ, ≥ 0 (0: frictionless)
+  double friction_velocity = 1e-3; // ε_v, m/s, > 0: the smoothed Coulomb law's stick–slip
+                                   // transition speed (friction.hpp); sticking creeps below it
+  bool enabled() const { return stiffness > 0.0; }
+};
+
+// Maps the derivatives of a potential of one attached point, f = ∂V/∂p and K = ∂²V/∂p², to
+// the blocks (x, θ) of its frame (formulas at the top). Writes (not adds); H may be null.
+void attached_point_derivatives(const Vector3& lever, const Vector3& f, const Matrix3& K,
+                                LocalGradient<2>* g, LocalHessian<2>* H);
+
+struct Contact {
+  static constexpr int kBlocks = 2;
+  std::array<int, kBlocks> offsets{-1, -1};  // x, θ
+  AttachedPoint at;
+  std::shared_ptr<const Collider> collider;
+  double stiffness = 0.0;  // k
+  double radius = 0.0;     // ρ
+
+  // ρ − φ(p): > 0 when the sample's sphere overlaps the collider.
+  double penetration(const State& q) const;
+  double evaluate(const State& q, LocalGradient<2>* g, LocalHessian<2>* H) const;
+
+  static constexpr int kResiduals = 1;
+  using Residual = LocalResidual<kResiduals>;
+  using ResidualJacobian = LocalResidualJacobian<kResiduals, kBlocks>;
+  void residual(const State& q, Residual& r, ResidualJacobian* J) const;
+};
+
+}  // namespace liedyn

@@ -1,0 +1,302 @@
+#include "sdf.hpp"
+
+#include <Eigen/LU>  // determinant
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <sstream>
+#include <stdexcept>
+#include <type_traits>
+
+#include "model.hpp"
+
+namespace liedyn {
+namespace {
+
+// All shapes fill an SdfValue in the collider frame; Collider::evaluate maps it to the world.
+
+// ∇²φ of a point core, (I − u uᵀ)/d.
+Matrix3 sphere_hessian(const Vector3& u, double d) {
+  return (Matrix3::Identity() - u * u.transpose()) / d;
+}
+
+// ∇²φ of a line core with unit direction e, (I − e eᵀ − u uᵀ)/d (u ⟂ e).
+Matrix3 cylinder_hessian(const Vector3& e, const Vector3& u, double d) {
+  return (Matrix3::Identity() - e * e.transpose() - u * u.transpose()) / d;
+}
+
+// The unit vector of the coordinate axis least aligned with the unit vector e (lowest index
+// on ties), made perpendicular to e: the documented gradient on a segment (d = 0).
+Vector3 perpendicular_to(const Vector3& e) {
+  Eigen::Index k = 0;
+  e.cwiseAbs().minCoeff(&k);  // Eigen returns the first minimum
+  Vector3 a = Vector3::Unit(k);
+  a -= a.dot(e) * e;  // |e_k| ≤ 1/√3, so ‖a‖ ≥ √(2/3)
+  return a.normalized();
+}
+
+// φ = z, ∇φ = e_z, ∇²φ = 0.
+void plane_sdf(const Vector3& x, SdfValue& out) {
+  out.distance = x.z();
+  out.gradient = Vector3::UnitZ();
+}
+
+// φ = ‖x‖ − ρ, ∇φ = u = x/‖x‖, ∇²φ = (I − u uᵀ)/‖x‖; at the centre ∇φ = e_z, ∇²φ = 0.
+void sphere_sdf(const SphereShape& s, const Vector3& x, bool with_hessian, SdfValue& out) {
+  const double d = x.norm();
+  out.distance = d - s.radius;
+  if (d <= kCoreDistance) {  // the centre: conical kink (header, "Non-smooth points")
+    out.gradient = Vector3::UnitZ();
+    return;
+  }
+  out.gradient = x / d;
+  if (with_hessian) out.hessian = sphere_hessian(out.gradient, d);
+}
+
+// Rounded box (header): b = half_extents − rounding, q = |x| − b.
+void box_sdf(const BoxShape& s, const Vector3& x, bool with_hessian, SdfValue& out) {
+  const Vector3 b = s.half_extents - Vector3::Constant(s.rounding);
+  const Vector3 q = x.cwiseAbs() - b;
+  // w = x − clamp(x, −b, b): sign(x_i) q_i on the active set {q_i > 0} (where |x_i| > b_i > 0,
+  // so the sign is defined), 0 elsewhere. A tie q_i = 0 is inactive (face rather than edge).
+  Vector3 w = Vector3::Zero();
+  Matrix3 active = Matrix3::Zero();  // P_A
+  for (int i = 0; i < 3; ++i) {
+    if (q(i) > 0.0) {
+      w(i) = std::copysign(q(i), x(i));
+      active(i, i) = 1.0;
+    }
+  }
+  const double d = w.norm();
+  if (d > kCoreDistance) {  // outside the inner box: distance to it, minus the rounding
+    out.distance = d - s.rounding;
+    out.gradient = w / d;  // on a face exactly ±e_i (d = |w_i|), so ∇²φ = 0 exactly there
+    if (with_hessian) out.hessian = (active - out.gradient * out.gradient.transpose()) / d;
+    return;
+  }
+  // Inside the inner box (or within kCoreDistance of it): φ = max_i q_i − rounding, exact for
+  // a convex core. maxCoeff picks the lowest index on ties; sign(0) = +1.
+  Eigen::Index k = 0;
+  const double q_max = q.maxCoeff(&k);
+  out.distance = q_max - s.rounding;
+  out.gradient = Vector3::Zero();
+  out.gradient(k) = std::signbit(x(k)) ? -1.0 : 1.0;
+}
+
+// Capsule: c = (0, 0, clamp(z, −L, L)), w = x − c (header).
+void capsule_sdf(const CapsuleShape& s, const Vector3& x, bool with_hessian, SdfValue& out) {
+  const double L = s.half_length;
+  const bool side = -L < x.z() && x.z() < L;  // |z| = L counts as a cap (sphere)
+  const Vector3 w(x.x(), x.y(), x.z() - std::clamp(x.z(), -L, L));  // w_z = 0 on the side
+  const double d = w.norm();
+  out.distance = d - s.radius;
+  if (d <= kCoreDistance) {  // on the segment: perpendicular_to(e_z) = e_x
+    out.gradient = Vector3::UnitX();
+    return;
+  }
+  out.gradient = w / d;
+  if (with_hessian) {
+    out.hessian = side ? cylinder_hessian(Vector3::UnitZ(), out.gradient, d)
+                       : sphere_hessian(out.gradient, d);
+  }
+}
+
+// Tube: brute force over the segments for the nearest point (first segment on ties).
+void tube_sdf(const TubeShape& s, const Vector3& x, bool with_hessian, SdfValue& out) {
+  const std::vector<Vector3>& v = s.polyline;
+  double best_d2 = std::numeric_limits<double>::infinity();
+  std::size_t best = 0;
+  Vector3 best_c = v.front();
+  bool best_interior = false;
+  for (std::size_t j = 0; j + 1 < v.size(); ++j) {
+    const Vector3 ab = v[j + 1] - v[j];
+    const double t = (x - v[j]).dot(ab);  // projection parameter × ‖ab‖²
+    const double l2 = ab.squaredNorm();   // > 0 (validate)
+    // Clamped ends are the vertices themselves (not v_j + 1·ab, which may round elsewhere):
+    // both segments at a joint then give the same point, distance and derivatives.
+    const bool interior = t > 0.0 && t < l2;
+    const Vector3 c = t <= 0.0 ? v[j] : (t >= l2 ? v[j + 1] : Vector3(v[j] + (t / l2) * ab));
+    const double d2 = (x - c).squaredNorm();
+    if (d2 < best_d2) {  // strict: ties keep the first segment
+      best_d2 = d2;
+      best = j;
+      best_c = c;
+      best_interior = interior;
+    }
+  }
+  const Vector3 w = x - best_c;
+  const double d = w.norm();
+  out.distance = d - s.radius;
+  if (d <= kCoreDistance) {  // on the polyline
+    out.gradient = perpendicular_to((v[best + 1] - v[best]).normalized());
+    return;
+  }
+  out.gradient = w / d;
+  if (with_hessian) {
+    out.hessian = best_interior
+                      ? cylinder_hessian((v[best + 1] - v[best]).normalized(), out.gradient, d)
+                      : sphere_hessian(out.gradient, d);
+  }
+}
+
+std::string number(double v) {
+  std::ostringstream s;
+  s.precision(17);
+  s << v;
+  return s.str();
+}
+
+void require_finite(const Eigen::MatrixXd& m, const std::string& field) {
+  if (!m.allFinite()) throw ModelError(field, "must be finite (found NaN or Inf)");
+}
+
+void require_positive(double v, const std::string& field) {
+  if (!std::isfinite(v) || !(v > 0.0)) {
+    throw ModelError(field, "must be a finite positive number of metres (found " + number(v) + ")");
+  }
+}
+
+}  // namespace
+
+SdfValue Collider::evaluate(const Vector3& p, bool with_hessian) const {
+  const Vector3 x = orientation.transpose() * (p - position);  // x = Rᵀ(p − o)
+  SdfValue local;
+  std::visit(
+      [&](const auto& s) {
+        using S = std::decay_t<decltype(s)>;
+        if constexpr (std::is_same_v<S, PlaneShape>) plane_sdf(x, local);
+        if constexpr (std::is_same_v<S, SphereShape>) sphere_sdf(s, x, with_hessian, local);
+        if constexpr (std::is_same_v<S, BoxShape>) box_sdf(s, x, with_hessian, local);
+        if constexpr (std::is_same_v<S, CapsuleShape>) capsule_sdf(s, x, with_hessian, local);
+        if constexpr (std::is_same_v<S, TubeShape>) tube_sdf(s, x, with_hessian, local);
+      },
+      shape);
+  const double sign = inside ? -1.0 : 1.0;  // inside: φ → −φ (and so its derivatives)
+  SdfValue out;
+  out.distance = sign * local.distance;
+  out.gradient = sign * (orientation * local.gradient);  // ∇φ = R ∇φ_loc
+  if (with_hessian) {
+    // ∇²φ = R ∇²φ_loc Rᵀ, symmetrised: the product is symmetric only up to round-off.
+    const Matrix3 H = orientation * local.hessian * orientation.transpose();
+    out.hessian = (0.5 * sign) * (H + H.transpose());
+  }
+  return out;
+}
+
+void Collider::validate(const std::string& path) const {
+  const auto field = [&path](const std::string& member) { return path + "." + member; };
+  require_finite(position, field("position"));
+  require_finite(orientation, field("orientation"));
+  const double drift = (orientation.transpose() * orientation - Matrix3::Identity()).norm();
+  if (drift > 1e-9 || orientation.determinant() <= 0.0) {
+    throw ModelError(field("orientation"),
+                     "must be a rotation matrix (‖RᵀR − I‖ = " + number(drift) +
+                         ", det R = " + number(orientation.determinant()) + ")");
+  }
+  std::visit(
+      [&](const auto& s) {
+        using S = std::decay_t<decltype(s)>;
+        if constexpr (std::is_same_v<S, SphereShape>) require_positive(s.radius, field("radius"));
+        if constexpr (std::is_same_v<S, BoxShape>) {
+          require_finite(s.half_extents, field("half_extents"));
+          if (!(s.half_extents.minCoeff() > 0.0)) {
+            throw ModelError(field("half_extents"), "must all be positive");
+          }
+          const double limit = s.half_extents.minCoeff();
+          if (!std::isfinite(s.rounding) || !(s.rounding >= 0.0) || !(s.rounding < limit)) {
+            throw ModelError(field("rounding"),
+                             "must be finite, ≥ 0 and below the smallest half "
+                             "extent " +
+                                 number(limit) + " (found " + number(s.rounding) + ")");
+          }
+        }
+        if constexpr (std::is_same_v<S, CapsuleShape>) {
+          if (!std::isfinite(s.half_length) || !(s.half_length >= 0.0)) {
+            throw ModelError(field("half_length"),
+                             "must be finite and ≥ 0 (found " + number(s.half_length) + ")");
+          }
+          require_positive(s.radius, field("radius"));
+        }
+        if constexpr (std::is_same_v<S, TubeShape>) {
+          if (s.polyline.size() < 2) {
+            throw ModelError(field("polyline"), "must have at least 2 points (found " +
+                                                    std::to_string(s.polyline.size()) + ")");
+          }
+          for (std::size_t j = 0; j < s.polyline.size(); ++j) {
+            const std::string point = field("polyline[" + std::to_string(j) + "]");
+            require_finite(s.polyline[j], point);
+            if (j == 0) continue;
+            // The nearest-point search divides by the squared segment length.
+            const double l2 = (s.polyline[j] - s.polyline[j - 1]).squaredNorm();
+            if (!(l2 > 0.0)) {
+              throw ModelError(point,
+                               "repeats the previous point: segments must have a "
+                               "positive length");
+            }
+            if (!std::isfinite(l2)) {
+              throw ModelError(point,
+                               "is too far from the previous point (the squared segment "
+                               "length overflows)");
+            }
+          }
+          require_positive(s.radius, field("radius"));
+        }
+      },
+      shape);
+}
+
+std::vector<Vector3> catmull_rom_polyline(const std::vector<Vector3>& control_points,
+                                          int samples_per_segment) {
+  const std::size_t n = control_points.size();
+  if (n < 2) {
+    throw std::invalid_argument("catmull_rom_polyline: needs at least 2 control points (found " +
+                                std::to_string(n) + ")");
+  }
+  if (samples_per_segment < 1) {
+    throw std::invalid_argument("catmull_rom_polyline: samples_per_segment must be ≥ 1 (found " +
+                                std::to_string(samples_per_segment) + ")");
+  }
+  for (std::size_t i = 0; i < n; ++i) {
+    if (!control_points[i].allFinite()) {
+      throw std::invalid_argument("catmull_rom_polyline: control_points[" + std::to_string(i) +
+                                  "] is not finite");
+    }
+    if (i > 0 && control_points[i] == control_points[i - 1]) {
+      throw std::invalid_argument("catmull_rom_polyline: control_points[" + std::to_string(i) +
+                                  "] repeats the previous point");
+    }
+  }
+  // Control point i, with the reflected phantoms P_{−1} = 2P_0 − P_1, P_n = 2P_{n−1} − P_{n−2}.
+  const auto point = [&](std::ptrdiff_t i) -> Vector3 {
+    const auto m = static_cast<std::ptrdiff_t>(n);
+    if (i < 0) return 2.0 * control_points[0] - control_points[1];
+    if (i >= m) return 2.0 * control_points[n - 1] - control_points[n - 2];
+    return control_points[static_cast<std::size_t>(i)];
+  };
+  std::vector<Vector3> out;
+  out.reserve((n - 1) * static_cast<std::size_t>(samples_per_segment) + 1);
+  for (std::size_t span = 0; span + 1 < n; ++span) {
+    const auto i = static_cast<std::ptrdiff_t>(span);
+    const Vector3 P0 = point(i - 1), P1 = point(i), P2 = point(i + 1), P3 = point(i + 2);
+    // Centripetal knots: t_{k+1} = t_k + ‖P_{k+1} − P_k‖^½ (all spacings > 0: distinct points).
+    const double t0 = 0.0;
+    const double t1 = t0 + std::sqrt((P1 - P0).norm());
+    const double t2 = t1 + std::sqrt((P2 - P1).norm());
+    const double t3 = t2 + std::sqrt((P3 - P2).norm());
+    out.push_back(P1);  // exact, not the (rounded) value of the formula at t = t1
+    for (int k = 1; k < samples_per_segment; ++k) {
+      const double t = t1 + (t2 - t1) * k / samples_per_segment;
+      // Barry–Goldman pyramid of linear interpolations.
+      const Vector3 A1 = ((t1 - t) * P0 + (t - t0) * P1) / (t1 - t0);
+      const Vector3 A2 = ((t2 - t) * P1 + (t - t1) * P2) / (t2 - t1);
+      const Vector3 A3 = ((t3 - t) * P2 + (t - t2) * P3) / (t3 - t2);
+      const Vector3 B1 = ((t2 - t) * A1 + (t - t0) * A2) / (t2 - t0);
+      const Vector3 B2 = ((t3 - t) * A2 + (t - t1) * A3) / (t3 - t1);
+      out.push_back(((t2 - t) * B1 + (t - t1) * B2) / (t2 - t1));
+    }
+  }
+  out.push_back(control_points.back());
+  return out;
+}
+
+}  // namespace liedyn

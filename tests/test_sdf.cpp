@@ -1,0 +1,820 @@
+// Signed distance fields (lib/sdf.hpp): gradient and Hessian against finite differences in
+// every region of every shape, with and without `inside`, at random collider poses; exact
+// values at hand-computed points; continuity across region boundaries; the documented
+// choices at non-differentiable points; accuracy far away and very close to the surface;
+// validate(); catmull_rom_polyline.
+//
+// Finite differences (tests/fd_check.hpp, one point DOF, defaults): ε = 1e-6, rtol = 1e-6,
+// floor = 1e-9 × (largest entry), plus the computed round-off floor 16 eps·max|f|/ε ≈ 4e-9
+// for the unit gradient. Test points keep
+//   * ≥ kCoreMargin = 1e-2 from the core sets (sphere centre, segments, polyline) where ∇²φ
+//     grows as 1/d: the FD truncation ε²/6·|∂⁴φ| ~ ε²/d³ is then ≤ 1e-6, i.e. ≤ 1e-8 relative
+//     to |∇²φ| ~ 1/d (and ~ε²/d² ≤ 1e-8 for the gradient), far inside rtol;
+//   * ≥ kSeamMargin = 1e-3 from the sets where ∇²φ jumps (box planes q_i = 0, capsule and
+//     tube end planes) or ∇φ is not unique (box and tube medial sets): 1000 FD steps, so no
+//     difference straddles them.
+// Both margins are computed by the test's own reference geometry (Probe below), not by the
+// code under test. Where ∇²φ = 0 by construction (plane, box near a face or inside) the
+// Hessian check does not require a non-zero Hessian (it compares the FD of a constant
+// gradient with exactly 0: still a check); the gradient check always requires ∇φ ≠ 0.
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <functional>
+#include <limits>
+#include <map>
+#include <numbers>
+#include <random>
+#include <string>
+#include <type_traits>
+#include <variant>
+#include <vector>
+
+#include "fd_check.hpp"
+#include "lib/model.hpp"
+#include "lib/sdf.hpp"
+#include "lib/so3.hpp"
+
+namespace liedyn {
+namespace {
+
+using fd::random_unit;
+using fd::random_vector;
+using fd::rotation_at;
+
+constexpr double kEps = std::numeric_limits<double>::epsilon();
+constexpr double kInf = std::numeric_limits<double>::infinity();
+constexpr double kCoreMargin = 1e-2;
+constexpr double kSeamMargin = 1e-3;
+
+// ---------------------------------------------------------------------------------------
+// Reference geometry, written independently of lib/sdf.cpp (literal formulas).
+
+struct Probe {
+  double distance = 0.0;  // φ_loc(x)
+  std::string region;     // e.g. "edge/solid"
+  bool zero_hessian = false;
+  double core = kInf;  // distance to the set where φ is not differentiable
+  double seam = kInf;  // distance to the sets where ∇²φ jumps or ∇φ is not unique (lower bound)
+};
+
+std::string with_side(const std::string& region, double distance) {
+  return region + (distance < 0.0 ? "/solid" : "/free");
+}
+
+Probe probe_plane(const Vector3& x) {
+  Probe p;
+  p.distance = x.z();
+  p.region = with_side("half-space", p.distance);
+  p.zero_hessian = true;
+  return p;
+}
+
+Probe probe_sphere(const SphereShape& s, const Vector3& x) {
+  Probe p;
+  p.distance = x.norm() - s.radius;
+  p.region = with_side("ball", p.distance);
+  p.core = x.norm();
+  return p;
+}
+
+Probe probe_box(const BoxShape& s, const Vector3& x) {
+  const Vector3 b = (s.half_extents.array() - s.rounding).matrix();
+  const Vector3 q = x.cwiseAbs() - b;
+  Probe p;
+  // Inigo Quilez: ‖max(q, 0)‖ + min(max q, 0) − r.
+  p.distance = q.cwiseMax(0.0).norm() + std::min(q.maxCoeff(), 0.0) - s.rounding;
+  const auto active = static_cast<int>((q.array() > 0.0).count());
+  static const char* const kNames[] = {"inner", "face", "edge", "corner"};
+  p.region = with_side(kNames[active], p.distance);
+  p.zero_hessian = active <= 1;
+  p.seam = q.cwiseAbs().minCoeff();  // the planes |x_i| = b_i
+  if (active == 0) {
+    // Medial sets: the two largest q_i tie, or x_k = 0 for the largest.
+    Eigen::Index k = 0;
+    const double first = q.maxCoeff(&k);
+    double second = -kInf;
+    for (int i = 0; i < 3; ++i) {
+      if (i != k) second = std::max(second, q(i));
+    }
+    p.seam = std::min({p.seam, (first - second) / std::sqrt(2.0), std::abs(x(k))});
+  }
+  return p;
+}
+
+Probe probe_capsule(const CapsuleShape& s, const Vector3& x) {
+  const double L = s.half_length;
+  const Vector3 c(0.0, 0.0, std::clamp(x.z(), -L, L));
+  Probe p;
+  p.core = (x - c).norm();
+  p.distance = p.core - s.radius;
+  p.region = with_side(std::abs(x.z()) < L ? "side" : "cap", p.distance);
+  p.seam = std::min(std::abs(x.z() - L), std::abs(x.z() + L));
+  return p;
+}
+
+Probe probe_tube(const TubeShape& s, const Vector3& x) {
+  const std::vector<Vector3>& v = s.polyline;
+  const std::size_t m = v.size() - 1;  // segments
+  std::vector<Vector3> nearest(m);
+  std::vector<double> dist(m);
+  Probe p;
+  std::size_t best = 0;
+  std::string kind;
+  for (std::size_t j = 0; j < m; ++j) {
+    const double l = (v[j + 1] - v[j]).norm();
+    const Vector3 e = (v[j + 1] - v[j]) / l;
+    const double t = (x - v[j]).dot(e);  // arc length along segment j
+    nearest[j] = v[j] + std::clamp(t, 0.0, l) * e;
+    dist[j] = (x - nearest[j]).norm();
+    p.seam = std::min({p.seam, std::abs(t), std::abs(t - l)});  // all end planes (conservative)
+    if (dist[j] < dist[best]) best = j;
+    if (j == best) {
+      const bool first_end = t <= 0.0 && j == 0, last_end = t >= l && j + 1 == m;
+      kind = t > 0.0 && t < l ? "interior" : (first_end || last_end ? "end" : "joint");
+    }
+  }
+  // Medial sets: another segment almost as near, at a different point.
+  for (std::size_t j = 0; j < m; ++j) {
+    if ((nearest[j] - nearest[best]).norm() > 1e-9) {
+      p.seam = std::min(p.seam, dist[j] - dist[best]);
+    }
+  }
+  p.core = dist[best];
+  p.distance = p.core - s.radius;
+  p.region = with_side(kind, p.distance);
+  return p;
+}
+
+Probe probe(const Shape& shape, const Vector3& x) {
+  return std::visit(
+      [&](const auto& s) -> Probe {
+        using S = std::decay_t<decltype(s)>;
+        if constexpr (std::is_same_v<S, PlaneShape>) return probe_plane(x);
+        if constexpr (std::is_same_v<S, SphereShape>) return probe_sphere(s, x);
+        if constexpr (std::is_same_v<S, BoxShape>) return probe_box(s, x);
+        if constexpr (std::is_same_v<S, CapsuleShape>) return probe_capsule(s, x);
+        if constexpr (std::is_same_v<S, TubeShape>) return probe_tube(s, x);
+      },
+      shape);
+}
+
+// ---------------------------------------------------------------------------------------
+// Shapes under test, with a proposal distribution of local points that reaches every region.
+
+struct Fixture {
+  std::string name;
+  Shape shape;
+  std::vector<std::string> regions;  // each must receive kPointsPerRegion accepted points
+  std::function<Vector3(std::mt19937&)> propose;
+};
+
+double uniform(std::mt19937& rng, double a, double b) {
+  return std::uniform_real_distribution<double>(a, b)(rng);
+}
+
+// A point near a random vertex or segment point of the polyline.
+Vector3 near_polyline(const std::vector<Vector3>& v, double reach, std::mt19937& rng) {
+  const auto j = std::uniform_int_distribution<std::size_t>(0, v.size() - 2)(rng);
+  const double t = uniform(rng, -0.3, 1.3);
+  const Vector3 c = v[j] + std::clamp(t, 0.0, 1.0) * (v[j + 1] - v[j]);
+  return c + uniform(rng, 0.0, reach) * random_unit(rng);
+}
+
+// A point on the convex side of the joint at a random interior vertex: the joint region
+// (nearest point = the vertex) is a thin wedge where the polyline bends little.
+Vector3 near_joint(const std::vector<Vector3>& v, double reach, std::mt19937& rng) {
+  const auto j = std::uniform_int_distribution<std::size_t>(1, v.size() - 2)(rng);
+  const Vector3 e1 = (v[j] - v[j - 1]).normalized(), e2 = (v[j + 1] - v[j]).normalized();
+  const Vector3 out = (e1 - e2).normalized(), binormal = e1.cross(e2).normalized();
+  return v[j] + uniform(rng, 0.0, reach) * (out + uniform(rng, -2.0, 2.0) * binormal).normalized();
+}
+
+std::vector<Vector3> curved_polyline() {
+  std::vector<Vector3> control;
+  for (int i = 0; i < 6; ++i) {
+    const double a = 0.9 * i;
+    control.emplace_back(std::cos(a), std::sin(a), 0.35 * i);  // a helix
+  }
+  return catmull_rom_polyline(control, 8);
+}
+
+std::vector<Fixture> fixtures() {
+  std::vector<Fixture> out;
+  out.push_back(
+      {"plane", PlaneShape{}, {"half-space/free", "half-space/solid"}, [](std::mt19937& rng) {
+         return random_vector(rng, 2.0);
+       }});
+  out.push_back({"sphere", SphereShape{0.7}, {"ball/free", "ball/solid"}, [](std::mt19937& rng) {
+                   return random_vector(rng, 1.5);
+                 }});
+  const Vector3 h(0.5, 0.8, 1.1);
+  out.push_back(
+      {"sharp box",
+       BoxShape{h, 0.0},
+       {"inner/solid", "face/free", "edge/free", "corner/free"},
+       [h](std::mt19937& rng) -> Vector3 { return h.cwiseProduct(random_vector(rng, 1.6)); }});
+  const BoxShape rounded{h, 0.25};
+  out.push_back({"rounded box",
+                 rounded,
+                 {"inner/solid", "face/solid", "face/free", "edge/solid", "edge/free",
+                  "corner/solid", "corner/free"},
+                 [rounded](std::mt19937& rng) -> Vector3 {
+                   // Half uniform, half near the inner box's surface (edges and corners).
+                   const Vector3 y = rounded.half_extents.cwiseProduct(random_vector(rng, 1.3));
+                   if (std::bernoulli_distribution(0.5)(rng)) return y;
+                   const Vector3 b = (rounded.half_extents.array() - rounded.rounding).matrix();
+                   return y.cwiseMax(-b).cwiseMin(b) + uniform(rng, 0.0, 0.5) * random_unit(rng);
+                 }});
+  out.push_back({"capsule",
+                 CapsuleShape{0.6, 0.3},
+                 {"side/solid", "side/free", "cap/solid", "cap/free"},
+                 [](std::mt19937& rng) -> Vector3 {
+                   return Vector3(uniform(rng, -1, 1), uniform(rng, -1, 1),
+                                  uniform(rng, -1.5, 1.5));
+                 }});
+  const std::vector<Vector3> bent = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {1, 1, 1}, {0.2, 1.3, 1.4}};
+  const std::vector<std::string> tube_regions = {"interior/solid", "interior/free", "joint/solid",
+                                                 "joint/free",     "end/solid",     "end/free"};
+  out.push_back({"bent tube", TubeShape{bent, 0.15}, tube_regions,
+                 [bent](std::mt19937& rng) { return near_polyline(bent, 0.6, rng); }});
+  const std::vector<Vector3> curved = curved_polyline();
+  out.push_back({"curved tube", TubeShape{curved, 0.2}, tube_regions, [curved](std::mt19937& rng) {
+                   return std::bernoulli_distribution(0.5)(rng) ? near_polyline(curved, 0.6, rng)
+                                                                : near_joint(curved, 0.4, rng);
+                 }});
+  return out;
+}
+
+// ---------------------------------------------------------------------------------------
+// Checks at one world point.
+
+State at_point(const Vector3& p) {
+  State q;
+  q.points = {p};
+  return q;
+}
+
+const fd::Dofs kPointDof = {fd::point_dof(0)};
+
+::testing::AssertionResult check_derivatives(const Collider& c, const Vector3& p,
+                                             bool zero_hessian) {
+  const SdfValue v = c.evaluate(p);
+  const fd::ScalarFunction f = [&c](const State& s) {
+    return c.evaluate(s.points[0], false).distance;
+  };
+  const fd::GradientFunction g = [&c](const State& s) {
+    return Eigen::VectorXd(c.evaluate(s.points[0], false).gradient);
+  };
+  ::testing::AssertionResult r =
+      fd::check_lie_gradient(f, at_point(p), kPointDof, v.gradient);  // requires ∇φ ≠ 0
+  if (!r) return r;
+  fd::FdOptions hessian;
+  if (zero_hessian) {
+    if (!v.hessian.isZero(0.0)) {
+      return ::testing::AssertionFailure() << "∇²φ must be exactly 0 here:\n" << v.hessian;
+    }
+    hessian.require_nonzero = fd::NonZero::kNone;
+  }
+  return fd::check_lie_hessian(g, at_point(p), kPointDof, v.hessian, hessian);
+}
+
+// Identities that hold at every point where φ is differentiable.
+void expect_identities(const Collider& c, const Vector3& p, double reference_distance) {
+  const SdfValue v = c.evaluate(p);
+  const SdfValue cheap = c.evaluate(p, false);
+  EXPECT_EQ(cheap.distance, v.distance);
+  EXPECT_EQ(cheap.gradient, v.gradient);
+  EXPECT_TRUE(cheap.hessian.isZero(0.0)) << "hessian written although not requested";
+  EXPECT_NEAR(v.gradient.norm(), 1.0, 1e-12);
+  EXPECT_EQ(v.hessian, v.hessian.transpose());
+  // ∇²φ ∇φ = 0: φ grows linearly along its gradient.
+  EXPECT_LE((v.hessian * v.gradient).norm(), 1e-12 * std::max(1.0, v.hessian.norm()));
+  const double sign = c.inside ? -1.0 : 1.0;
+  EXPECT_NEAR(v.distance, sign * reference_distance, 1e-12);
+
+  Collider flipped = c;
+  flipped.inside = !c.inside;
+  const SdfValue w = flipped.evaluate(p);
+  EXPECT_EQ(w.distance, -v.distance);
+  EXPECT_EQ(w.gradient, -v.gradient);
+  EXPECT_EQ(w.hessian, -v.hessian);
+}
+
+constexpr int kPointsPerRegion = 12;
+
+TEST(Sdf, DerivativesMatchFiniteDifferencesInEveryRegion) {
+  std::mt19937 rng(8);
+  const std::vector<double> angles = {0.0, 1.0, 2.5, std::numbers::pi};
+  for (const Fixture& fx : fixtures()) {
+    for (const bool inside : {false, true}) {
+      for (const double angle : angles) {
+        Collider c;
+        c.name = fx.name;
+        c.shape = fx.shape;
+        c.inside = inside;
+        c.position = random_vector(rng, 2.0);
+        c.orientation = rotation_at(angle, rng);
+        ASSERT_NO_THROW(c.validate("colliders[0]"));
+        std::map<std::string, int> count;
+        int rejected = 0, tries = 0;
+        std::size_t done = 0;
+        while (done < fx.regions.size() && tries < 200000) {
+          ++tries;
+          const Vector3 x = fx.propose(rng);
+          const Probe pr = probe(fx.shape, x);
+          if (pr.core < kCoreMargin || pr.seam < kSeamMargin) {
+            ++rejected;
+            continue;
+          }
+          int& n = count[pr.region];
+          if (n >= kPointsPerRegion) continue;
+          if (std::find(fx.regions.begin(), fx.regions.end(), pr.region) == fx.regions.end()) {
+            ADD_FAILURE() << fx.name << ": unexpected region " << pr.region;
+            n = kPointsPerRegion;  // report it once
+            continue;
+          }
+          if (++n == kPointsPerRegion) ++done;
+          const Vector3 p = c.position + c.orientation * x;
+          SCOPED_TRACE(fx.name + (inside ? " (inside)" : "") + ", " + pr.region +
+                       fd::trace(", local point", x.x(), x.y(), x.z()) +
+                       fd::trace(", angle", angle));
+          EXPECT_TRUE(check_derivatives(c, p, pr.zero_hessian));
+          expect_identities(c, p, pr.distance);
+        }
+        for (const std::string& region : fx.regions) {
+          EXPECT_EQ(count[region], kPointsPerRegion)
+              << fx.name << ": region " << region << " not reached (" << tries << " tries, "
+              << rejected << " too near a non-smooth set)";
+        }
+      }
+    }
+  }
+}
+
+// ---------------------------------------------------------------------------------------
+// Exact values at hand-computed points (identity pose unless stated).
+
+Collider make(Shape shape, bool inside = false) {
+  Collider c;
+  c.shape = std::move(shape);
+  c.inside = inside;
+  return c;
+}
+
+void expect_vector(const Vector3& a, const Vector3& b, double tol = 1e-15) {
+  EXPECT_LE((a - b).norm(), tol) << a.transpose() << " vs " << b.transpose();
+}
+
+TEST(Sdf, PlaneValues) {
+  Collider c = make(PlaneShape{});
+  c.position = Vector3(0, 0, 1);
+  c.orientation = so3::exp(Vector3(std::numbers::pi / 2, 0, 0));  // e_z → −e_y
+  const SdfValue v = c.evaluate(Vector3(5, -3, 7));               // n·(p − o), n = −e_y
+  EXPECT_NEAR(v.distance, 3.0, 1e-15);
+  expect_vector(v.gradient, Vector3(0, -1, 0));
+  EXPECT_TRUE(v.hessian.isZero(0.0));
+}
+
+TEST(Sdf, SphereValues) {
+  Collider c = make(SphereShape{2.0});
+  c.position = Vector3(1, 2, 3);
+  const SdfValue v = c.evaluate(Vector3(1, 2, 6));
+  EXPECT_EQ(v.distance, 1.0);
+  expect_vector(v.gradient, Vector3::UnitZ());
+  Matrix3 H = Matrix3::Identity() / 3.0;
+  H(2, 2) = 0.0;  // (I − e_z e_zᵀ)/3
+  EXPECT_LE((v.hessian - H).norm(), 1e-15);
+  EXPECT_EQ(c.evaluate(Vector3(4, 6, 3)).distance, 3.0);  // ‖(3, 4, 0)‖ − 2
+  EXPECT_EQ(c.evaluate(Vector3(1, 2, 3.5)).distance, -1.5);
+  // A bowl: inside, the solid is outside the ball.
+  const Collider bowl = make(SphereShape{2.0}, true);
+  EXPECT_EQ(bowl.evaluate(Vector3(0, 0, -1.5)).distance, 0.5);
+  expect_vector(bowl.evaluate(Vector3(0, 0, -1.5)).gradient, Vector3::UnitZ());  // towards centre
+}
+
+TEST(Sdf, BoxValuesAndRoundingKeepsTheOuterSize) {
+  const Collider sharp = make(BoxShape{Vector3(1, 2, 3), 0.0});
+  EXPECT_EQ(sharp.evaluate(Vector3(2, 0, 0)).distance, 1.0);  // face
+  expect_vector(sharp.evaluate(Vector3(2, 0, 0)).gradient, Vector3::UnitX());
+  EXPECT_TRUE(sharp.evaluate(Vector3(2, 0, 0)).hessian.isZero(0.0));
+  EXPECT_NEAR(sharp.evaluate(Vector3(2, -3, 0)).distance, std::sqrt(2.0), 1e-15);  // edge
+  expect_vector(sharp.evaluate(Vector3(2, -3, 0)).gradient, Vector3(1, -1, 0) / std::sqrt(2.0));
+  // Edge Hessian: a cylinder about the edge ∥ e_z, (I − e_z e_zᵀ − u uᵀ)/√2.
+  const Vector3 u = Vector3(1, -1, 0) / std::sqrt(2.0);
+  const Matrix3 He =
+      (Matrix3::Identity() - Vector3::UnitZ() * Vector3::UnitZ().transpose() - u * u.transpose()) /
+      std::sqrt(2.0);
+  EXPECT_LE((sharp.evaluate(Vector3(2, -3, 0)).hessian - He).norm(), 1e-15);
+  EXPECT_NEAR(sharp.evaluate(Vector3(-2, 3, -4)).distance, std::sqrt(3.0), 1e-15);  // corner
+  EXPECT_EQ(sharp.evaluate(Vector3(0.5, 0, 0)).distance, -0.5);  // inside: nearest face x
+  expect_vector(sharp.evaluate(Vector3(0.5, 0, 0)).gradient, Vector3::UnitX());
+  expect_vector(sharp.evaluate(Vector3(0, -1.5, 0.2)).gradient, -Vector3::UnitY());
+  EXPECT_EQ(sharp.evaluate(Vector3(0, -1.5, 0.2)).distance, -0.5);
+
+  const double r = 0.5;
+  const Collider rounded = make(BoxShape{Vector3(1, 2, 3), r});
+  // The outer size stays half_extents: face centres and face points away from the rounded
+  // edges are on the surface, face distances are unchanged.
+  for (const Vector3& s : {Vector3(1, 0, 0), Vector3(0, -2, 0), Vector3(0, 0, 3),
+                           Vector3(1, 1.2, -2.1), Vector3(-0.3, 0.6, -3)}) {
+    EXPECT_NEAR(rounded.evaluate(s).distance, 0.0, 1e-15) << s.transpose();
+  }
+  EXPECT_NEAR(rounded.evaluate(Vector3(2, 0, 0)).distance, 1.0, 1e-15);
+  EXPECT_NEAR(rounded.evaluate(Vector3(0, 0, 0)).distance, -1.0, 1e-15);  // −min half extent
+  // Edges and corners are rounded: the sharp corner is r(√3 − 1) outside, the edge r(√2 − 1).
+  EXPECT_NEAR(rounded.evaluate(Vector3(1, 2, 3)).distance, r * (std::sqrt(3.0) - 1.0), 1e-15);
+  EXPECT_NEAR(rounded.evaluate(Vector3(1, 2, 0)).distance, r * (std::sqrt(2.0) - 1.0), 1e-15);
+  // b = (0.5, 1.5, 2.5); (2, 3, 0): q = (1.5, 1.5, −2.5), φ = 1.5√2 − r.
+  EXPECT_NEAR(rounded.evaluate(Vector3(2, 3, 0)).distance, 1.5 * std::sqrt(2.0) - r, 1e-15);
+}
+
+TEST(Sdf, CapsuleValues) {
+  const Collider c = make(CapsuleShape{1.0, 0.5});
+  const SdfValue side = c.evaluate(Vector3(1, 0, 0.3));
+  EXPECT_EQ(side.distance, 0.5);
+  expect_vector(side.gradient, Vector3::UnitX());
+  Matrix3 H = Matrix3::Zero();
+  H(1, 1) = 1.0;  // (I − e_z e_zᵀ − e_x e_xᵀ)/1
+  EXPECT_LE((side.hessian - H).norm(), 1e-15);
+  EXPECT_EQ(c.evaluate(Vector3(0, 0, 3)).distance, 1.5);  // above the top cap
+  EXPECT_EQ(c.evaluate(Vector3(3, 0, 5)).distance, 4.5);  // ‖(3, 0, 4)‖ − 0.5
+  EXPECT_EQ(c.evaluate(Vector3(0, -3, -5)).distance, 4.5);  // bottom cap: ‖(0, −3, −4)‖ − 0.5
+  const SdfValue cap = c.evaluate(Vector3(0, 0, 3));
+  Matrix3 Hs = Matrix3::Identity() / 2.0;
+  Hs(2, 2) = 0.0;  // (I − e_z e_zᵀ)/2
+  EXPECT_LE((cap.hessian - Hs).norm(), 1e-15);
+  EXPECT_NEAR(c.evaluate(Vector3(0.2, 0, 0.9)).distance, -0.3, 1e-15);
+}
+
+TEST(Sdf, TubeValuesAndTieRule) {
+  const Collider c = make(TubeShape{{{0, 0, 0}, {2, 0, 0}, {2, 2, 0}}, 0.25});
+  // (1, 1, 0) is equally near both segments (the medial plane of the bend): the first one
+  // wins, so ∇φ points away from (1, 0, 0) on segment 0, not from (2, 1, 0) on segment 1.
+  const SdfValue tie = c.evaluate(Vector3(1, 1, 0));
+  EXPECT_EQ(tie.distance, 0.75);
+  expect_vector(tie.gradient, Vector3::UnitY());
+  // Outside the joint: the vertex (2, 0, 0) is nearest, for both segments (a sphere).
+  const SdfValue joint = c.evaluate(Vector3(3, -1, 0));
+  EXPECT_NEAR(joint.distance, std::sqrt(2.0) - 0.25, 1e-15);
+  const Vector3 u = Vector3(1, -1, 0) / std::sqrt(2.0);
+  EXPECT_LE((joint.hessian - (Matrix3::Identity() - u * u.transpose()) / std::sqrt(2.0)).norm(),
+            1e-15);
+  // Segment interior: a cylinder.
+  const SdfValue mid = c.evaluate(Vector3(1, -0.5, 0.5));
+  EXPECT_NEAR(mid.distance, std::sqrt(0.5) - 0.25, 1e-15);
+  const Vector3 w = Vector3(0, -1, 1) / std::sqrt(2.0);
+  EXPECT_LE((mid.hessian - (Matrix3::Identity() - Vector3::UnitX() * Vector3::UnitX().transpose() -
+                            w * w.transpose()) /
+                               std::sqrt(0.5))
+                .norm(),
+            1e-15);
+  EXPECT_EQ(c.evaluate(Vector3(-1, 0, 0)).distance, 0.75);  // hemispherical end
+  EXPECT_EQ(c.evaluate(Vector3(2, 3, 0)).distance, 0.75);   // the other end
+  EXPECT_NEAR(c.evaluate(Vector3(1.9, 1.0, 0)).distance, -0.15, 1e-15);
+  // The lumen of the pipe: inside, the solid is everything outside the tube.
+  const Collider pipe = make(TubeShape{{{0, 0, 0}, {2, 0, 0}, {2, 2, 0}}, 0.25}, true);
+  EXPECT_NEAR(pipe.evaluate(Vector3(1, 0.05, 0)).distance, 0.2, 1e-15);
+  expect_vector(pipe.evaluate(Vector3(1, 0.05, 0)).gradient, -Vector3::UnitY());  // to the axis
+}
+
+// ---------------------------------------------------------------------------------------
+// Continuity across region boundaries: φ and ∇φ (C¹) agree on both sides of a plane where
+// the formula changes, at δ = 1e-13 on either side.
+
+void expect_continuous(const Collider& c, const Vector3& on, const Vector3& across,
+                       bool gradient_continuous = true) {
+  constexpr double kDelta = 1e-13;
+  const SdfValue a = c.evaluate(on - kDelta * across), b = c.evaluate(on + kDelta * across);
+  EXPECT_NEAR(a.distance, b.distance, 1e-12) << on.transpose();
+  if (gradient_continuous) {
+    EXPECT_LE((a.gradient - b.gradient).norm(), 1e-12) << on.transpose();
+  }
+}
+
+TEST(Sdf, ContinuousAcrossRegionBoundaries) {
+  std::mt19937 rng(3);
+  for (const double r : {0.0, 0.25}) {
+    Collider c = make(BoxShape{Vector3(1, 2, 3), r});
+    c.position = random_vector(rng, 1.0);
+    c.orientation = rotation_at(2.0, rng);
+    const Matrix3& R = c.orientation;
+    const Vector3 b = (Vector3(1, 2, 3).array() - r).matrix();
+    const auto world = [&](const Vector3& x) -> Vector3 { return c.position + R * x; };
+    // Face (z) | edge (x, z): the plane x = b_x above the top face.
+    expect_continuous(c, world(Vector3(b.x(), 0.3, b.z() + 0.4)), R * Vector3::UnitX());
+    // Edge (x, z) | corner: y = b_y.
+    expect_continuous(c, world(Vector3(b.x() + 0.2, b.y(), b.z() + 0.4)), R * Vector3::UnitY());
+    // Inner box | face: z = b_z (also the solid's surface when r = 0).
+    expect_continuous(c, world(Vector3(0.1, -0.2, b.z())), R * Vector3::UnitZ());
+    // Inner medial plane q_x = q_y (φ continuous, ∇φ jumps): x − b_x = y − b_y.
+    expect_continuous(c, world(Vector3(b.x() - 0.3, b.y() - 0.3, 0.1)),
+                      R * Vector3(1, -1, 0).normalized(), false);
+  }
+  Collider capsule = make(CapsuleShape{0.6, 0.3});
+  capsule.orientation = rotation_at(1.0, rng);
+  for (const double z : {0.6, -0.6}) {  // side | cap
+    expect_continuous(capsule, capsule.orientation * Vector3(0.4, 0.1, z),
+                      capsule.orientation * Vector3::UnitZ());
+  }
+  const Collider tube = make(TubeShape{{{0, 0, 0}, {1, 0, 0}, {1, 1, 0}}, 0.15});
+  expect_continuous(tube, Vector3(1, -0.3, 0.2), Vector3::UnitX());  // interior | joint
+  expect_continuous(tube, Vector3(1.3, 0, 0.2), Vector3::UnitY());   // joint | interior
+  expect_continuous(tube, Vector3(0, 0.3, 0.2), Vector3::UnitX());   // end | interior
+}
+
+// ---------------------------------------------------------------------------------------
+// Non-differentiable points: the documented finite choices.
+
+void expect_finite(const SdfValue& v) {
+  EXPECT_TRUE(std::isfinite(v.distance));
+  EXPECT_TRUE(v.gradient.allFinite());
+  EXPECT_TRUE(v.hessian.allFinite());
+  EXPECT_NEAR(v.gradient.norm(), 1.0, 1e-12);
+}
+
+TEST(Sdf, NonDifferentiablePointsAreFinite) {
+  // An exactly representable pose (a cyclic permutation: e_x → e_y → e_z → e_x), so that the
+  // local point is exactly on the core set and the documented choices can be compared.
+  Matrix3 P;
+  P << 0, 0, 1,  //
+      1, 0, 0,   //
+      0, 1, 0;
+  for (const bool inside : {false, true}) {
+    const double s = inside ? -1.0 : 1.0;
+    Collider c;
+    c.inside = inside;
+    c.position = Vector3(1, -2, 0.5);
+    c.orientation = P;
+    const auto local = [&](const Vector3& x) { return c.evaluate(c.position + P * x); };
+
+    c.shape = SphereShape{0.7};  // centre: ∇φ = e_z, ∇²φ = 0
+    SdfValue v = local(Vector3::Zero());
+    expect_finite(v);
+    EXPECT_EQ(v.distance, -0.7 * s);
+    EXPECT_EQ(v.gradient, s * (P * Vector3::UnitZ()));
+    EXPECT_TRUE(v.hessian.isZero(0.0));
+
+    // Box centre: q = −b, the largest q is the axis of the smallest b (y), with sign(0) = +1.
+    // b = h − r = (0.875, 0.375, 0.625), exact.
+    c.shape = BoxShape{Vector3(1, 0.5, 0.75), 0.125};
+    v = local(Vector3::Zero());
+    expect_finite(v);
+    EXPECT_EQ(v.distance, -0.5 * s);
+    EXPECT_EQ(v.gradient, s * (P * Vector3::UnitY()));
+    EXPECT_TRUE(v.hessian.isZero(0.0));
+    // Off-centre on the medial plane y = 0 between the two nearest faces: sign(0) = +1.
+    EXPECT_EQ(local(Vector3(0.2, 0, 0.1)).gradient, s * (P * Vector3::UnitY()));
+    // On the medial plane q_x = q_y = −0.125 (exact): the lower index, x.
+    EXPECT_EQ(local(Vector3(0.75, 0.25, 0)).gradient, s * (P * Vector3::UnitX()));
+    EXPECT_EQ(local(Vector3(0.75, -0.25, 0)).distance, -0.25 * s);
+
+    // On the segment and at its ends: ∇φ = e_x, ∇²φ = 0 (z values chosen so that p − o is
+    // exact: 1.6 − 1 would put the point 1e-16 beyond the end, on the cap).
+    c.shape = CapsuleShape{0.625, 0.3};
+    for (const double z : {0.0, 0.375, 0.625, -0.625}) {
+      v = local(Vector3(0, 0, z));
+      expect_finite(v);
+      EXPECT_NEAR(v.distance, -0.3 * s, 1e-15);
+      EXPECT_EQ(v.gradient, s * (P * Vector3::UnitX()));
+      EXPECT_TRUE(v.hessian.isZero(0.0));
+    }
+
+    // Tube axis: the coordinate axis least aligned with the segment, made perpendicular.
+    c.shape = TubeShape{{{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {1, 1, 1}}, 0.15};
+    v = local(Vector3(0.5, 0, 0));  // segment ∥ e_x: e_y (first of the tie y, z)
+    expect_finite(v);
+    EXPECT_NEAR(v.distance, -0.15 * s, 1e-15);
+    EXPECT_EQ(v.gradient, s * (P * Vector3::UnitY()));
+    EXPECT_TRUE(v.hessian.isZero(0.0));
+    EXPECT_EQ(local(Vector3(1, 1, 0.5)).gradient, s * (P * Vector3::UnitX()));  // ∥ e_z: e_x
+    // Vertices: the first of the two segments meeting there (the joint (1, 0, 0): segment 0).
+    EXPECT_EQ(local(Vector3(1, 0, 0)).gradient, s * (P * Vector3::UnitY()));
+    EXPECT_EQ(local(Vector3(1, 1, 0)).gradient, s * (P * Vector3::UnitX()));  // segment 1 ∥ e_y
+    for (const Vector3& x : {Vector3(0, 0, 0), Vector3(1, 1, 1)}) {
+      v = local(x);
+      expect_finite(v);
+      EXPECT_NEAR(v.distance, -0.15 * s, 1e-15);
+      EXPECT_TRUE(v.hessian.isZero(0.0));
+    }
+    // d = 1e-160 (d² underflows): counts as on the axis (o = 0 keeps the 1e-160 in p − o).
+    c.position.setZero();
+    v = local(Vector3(0.5, 1e-160, 0));
+    expect_finite(v);
+    EXPECT_EQ(v.gradient, s * (P * Vector3::UnitY()));
+    EXPECT_TRUE(v.hessian.isZero(0.0));
+    v = local(Vector3(0.5, 1e-140, 0));  // above kCoreDistance: the true (huge) curvature
+    EXPECT_EQ(v.gradient, s * (P * Vector3::UnitY()));
+    EXPECT_NEAR(v.hessian.norm(), 1e140, 1e126);
+  }
+
+  // At a general pose the transformed point is only within round-off (~1e-16) of the core
+  // set: huge but finite curvature, unit gradient.
+  std::mt19937 rng(5);
+  for (const Fixture& fx : fixtures()) {
+    Collider c;
+    c.shape = fx.shape;
+    c.position = random_vector(rng, 2.0);
+    c.orientation = rotation_at(2.5, rng);
+    std::vector<Vector3> cores = {Vector3::Zero(), Vector3(0, 0, 0.6), Vector3(0, 0, 0.2)};
+    if (const auto* t = std::get_if<TubeShape>(&fx.shape)) {
+      cores = t->polyline;
+      cores.push_back(0.5 * (t->polyline[0] + t->polyline[1]));
+    }
+    for (const Vector3& x : cores) {
+      SCOPED_TRACE(fx.name);
+      expect_finite(c.evaluate(c.position + c.orientation * x));
+    }
+  }
+}
+
+// ---------------------------------------------------------------------------------------
+// Far (1e6) and very close (1e-9) points against an 80-bit long double reference of the
+// same formulas; error allowed: a few ulps of the coordinates, 8 eps·(‖p − o‖ + size).
+
+using LongVector = Eigen::Matrix<long double, 3, 1>;
+
+long double reference_distance(const Collider& c, const Vector3& p) {
+  const LongVector x = c.orientation.cast<long double>().transpose() *
+                       (p.cast<long double>() - c.position.cast<long double>());
+  const auto segment = [&x](const LongVector& a, const LongVector& b) {
+    const LongVector ab = b - a;
+    const long double t = std::clamp((x - a).dot(ab) / ab.squaredNorm(), 0.0L, 1.0L);
+    return (x - a - t * ab).norm();
+  };
+  return std::visit(
+      [&](const auto& s) -> long double {
+        using S = std::decay_t<decltype(s)>;
+        if constexpr (std::is_same_v<S, PlaneShape>) return x.z();
+        if constexpr (std::is_same_v<S, SphereShape>) return x.norm() - s.radius;
+        if constexpr (std::is_same_v<S, BoxShape>) {
+          const LongVector q =
+              x.cwiseAbs() -
+              (s.half_extents.array() - s.rounding).matrix().template cast<long double>();
+          return q.cwiseMax(0.0L).norm() + std::min(q.maxCoeff(), 0.0L) - s.rounding;
+        }
+        if constexpr (std::is_same_v<S, CapsuleShape>) {
+          return segment(LongVector(0, 0, -s.half_length), LongVector(0, 0, s.half_length)) -
+                 s.radius;
+        }
+        if constexpr (std::is_same_v<S, TubeShape>) {
+          long double d = std::numeric_limits<long double>::infinity();
+          for (std::size_t j = 0; j + 1 < s.polyline.size(); ++j) {
+            d = std::min(d, segment(s.polyline[j].template cast<long double>(),
+                                    s.polyline[j + 1].template cast<long double>()));
+          }
+          return d - s.radius;
+        }
+      },
+      c.shape);
+}
+
+TEST(Sdf, AccurateFarAwayAndVeryClose) {
+  std::mt19937 rng(13);
+  for (const Fixture& fx : fixtures()) {
+    int landed = 0;
+    for (int trial = 0; trial < 20; ++trial) {
+      Collider c;
+      c.shape = fx.shape;
+      c.inside = trial % 2 == 1;
+      c.position = random_vector(rng, 2.0);
+      c.orientation = rotation_at(1.0 + 0.1 * trial, rng);
+      const double s = c.inside ? -1.0 : 1.0;
+      // Far: 1e6 in a random direction.
+      const Vector3 far = c.position + 1e6 * random_unit(rng);
+      const SdfValue v = c.evaluate(far);
+      const double tol_far = 8 * kEps * (1e6 + 4.0);
+      EXPECT_NEAR(v.distance, s * static_cast<double>(reference_distance(c, far)), tol_far)
+          << fx.name;
+      EXPECT_NEAR(v.gradient.norm(), 1.0, 1e-12);
+      EXPECT_TRUE(v.hessian.allFinite());
+      // Close: step 1e-9 off a surface point along the (world) normal, to either side.
+      const Vector3 x = fx.propose(rng);
+      const Probe pr = probe(fx.shape, x);
+      if (pr.core < kCoreMargin || pr.seam < kSeamMargin) continue;
+      const Vector3 p0 = c.position + c.orientation * x;
+      const SdfValue at = c.evaluate(p0);
+      for (const double gap : {1e-9, -1e-9}) {
+        // Walk to the surface (exact along ∇φ in a region), then 1e-9 off it.
+        const Vector3 p = p0 - (at.distance - s * gap) * at.gradient;
+        const SdfValue w = c.evaluate(p);
+        const double ref = s * static_cast<double>(reference_distance(c, p));
+        const double tol = 8 * kEps * ((p - c.position).norm() + 4.0);
+        EXPECT_NEAR(w.distance, ref, tol) << fx.name;
+        // The walk along ∇φ lands 1e-9 off the surface unless it crosses a medial set (the
+        // inside of a tube's bend); it rounds by ~eps·‖p‖.
+        if (std::abs(ref - s * gap) <= 1e-14) ++landed;
+      }
+    }
+    EXPECT_GE(landed, 10) << fx.name << ": too few points 1e-9 from the surface were tested";
+  }
+}
+
+// ---------------------------------------------------------------------------------------
+// validate()
+
+std::string rejected_field(const Collider& c) {
+  try {
+    c.validate("colliders[0]");
+  } catch (const ModelError& e) {
+    EXPECT_EQ(std::string(e.what()).rfind(e.field(), 0), 0u) << e.what();  // message names it
+    return e.field();
+  }
+  return "(accepted)";
+}
+
+TEST(Sdf, ValidateRejectsEachBadField) {
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  const auto with = [](Shape s) { return make(std::move(s)); };
+  EXPECT_EQ(rejected_field(with(PlaneShape{})), "(accepted)");
+  EXPECT_EQ(rejected_field(with(SphereShape{1.0})), "(accepted)");
+  EXPECT_EQ(rejected_field(with(BoxShape{Vector3(1, 2, 3), 0.99})), "(accepted)");
+  EXPECT_EQ(rejected_field(with(CapsuleShape{0.0, 0.1})), "(accepted)");  // a sphere
+  EXPECT_EQ(rejected_field(with(TubeShape{{{0, 0, 0}, {1, 0, 0}}, 0.1})), "(accepted)");
+  EXPECT_EQ(rejected_field(with(TubeShape{curved_polyline(), 0.1})), "(accepted)");
+
+  for (const double bad : {0.0, -1.0, nan, kInf}) {
+    EXPECT_EQ(rejected_field(with(SphereShape{bad})), "colliders[0].radius") << bad;
+    EXPECT_EQ(rejected_field(with(CapsuleShape{1.0, bad})), "colliders[0].radius") << bad;
+    EXPECT_EQ(rejected_field(with(TubeShape{{{0, 0, 0}, {1, 0, 0}}, bad})), "colliders[0].radius");
+    EXPECT_EQ(rejected_field(with(BoxShape{Vector3(1, bad, 1), 0.0})), "colliders[0].half_extents");
+  }
+  for (const double bad : {-0.1, 1.0, 1.5, nan, kInf}) {  // min half extent 1
+    EXPECT_EQ(rejected_field(with(BoxShape{Vector3(2, 1, 3), bad})), "colliders[0].rounding");
+  }
+  for (const double bad : {-1.0, nan, kInf}) {
+    EXPECT_EQ(rejected_field(with(CapsuleShape{bad, 0.1})), "colliders[0].half_length");
+  }
+  EXPECT_EQ(rejected_field(with(TubeShape{{{0, 0, 0}}, 0.1})), "colliders[0].polyline");
+  EXPECT_EQ(rejected_field(with(TubeShape{{}, 0.1})), "colliders[0].polyline");
+  EXPECT_EQ(rejected_field(with(TubeShape{{{0, 0, 0}, {1, 0, 0}, {1, 0, 0}}, 0.1})),
+            "colliders[0].polyline[2]");  // zero-length segment
+  EXPECT_EQ(rejected_field(with(TubeShape{{{0, 0, 0}, {1, nan, 0}}, 0.1})),
+            "colliders[0].polyline[1]");
+  EXPECT_EQ(rejected_field(with(TubeShape{{{0, 0, 0}, {1e300, 0, 0}}, 0.1})),
+            "colliders[0].polyline[1]");  // ‖segment‖² overflows
+
+  Collider c = with(SphereShape{1.0});
+  c.position = Vector3(0, kInf, 0);
+  EXPECT_EQ(rejected_field(c), "colliders[0].position");
+  c.position.setZero();
+  c.orientation(0, 0) = nan;
+  EXPECT_EQ(rejected_field(c), "colliders[0].orientation");
+  c.orientation = 1.01 * Matrix3::Identity();
+  EXPECT_EQ(rejected_field(c), "colliders[0].orientation");
+  c.orientation = Vector3(1, 1, -1).asDiagonal();  // a reflection
+  EXPECT_EQ(rejected_field(c), "colliders[0].orientation");
+  c.orientation = so3::exp(Vector3(0.3, -1, 2));
+  EXPECT_EQ(rejected_field(c), "(accepted)");
+}
+
+// ---------------------------------------------------------------------------------------
+// catmull_rom_polyline
+
+TEST(Sdf, CatmullRomPassesThroughControlPointsWithTheRequestedCount) {
+  std::mt19937 rng(21);
+  std::vector<Vector3> control;
+  for (int i = 0; i < 7; ++i) control.push_back(random_vector(rng, 1.0) + Vector3(i, 0, 0));
+  for (const int samples : {1, 2, 5, 16}) {
+    const std::vector<Vector3> line = catmull_rom_polyline(control, samples);
+    ASSERT_EQ(line.size(), (control.size() - 1) * static_cast<std::size_t>(samples) + 1);
+    for (std::size_t i = 0; i < control.size(); ++i) {
+      EXPECT_EQ(line[i * static_cast<std::size_t>(samples)], control[i]) << i;
+    }
+    for (std::size_t k = 1; k < line.size(); ++k) EXPECT_GT((line[k] - line[k - 1]).norm(), 0.0);
+    EXPECT_EQ(rejected_field(make(TubeShape{line, 0.05})), "(accepted)");
+  }
+  // Two points: a straight segment, sampled on the line.
+  const std::vector<Vector3> two = catmull_rom_polyline({{0, 0, 0}, {2, 0, 0}}, 4);
+  ASSERT_EQ(two.size(), 5u);
+  for (const Vector3& p : two) EXPECT_LE(std::abs(p.y()) + std::abs(p.z()), 1e-15);
+  // Points on a circle: the spline follows it closely (a smooth tube axis).
+  std::vector<Vector3> circle;
+  for (int i = 0; i < 9; ++i) {
+    const double a = i * std::numbers::pi / 4;
+    circle.emplace_back(std::cos(a), std::sin(a), 0.0);
+  }
+  const std::vector<Vector3> arc = catmull_rom_polyline(circle, 10);
+  // Equally spaced points: centripetal knots are uniform, and the middle of a span is the
+  // uniform Catmull–Rom midpoint (−P₀ + 9P₁ + 9P₂ − P₃)/16 (radius 0.9915 at 45° spacing).
+  for (std::size_t span = 1; span + 2 < circle.size(); ++span) {
+    const Vector3 mid =
+        (-circle[span - 1] + 9 * circle[span] + 9 * circle[span + 1] - circle[span + 2]) / 16;
+    expect_vector(arc[10 * span + 5], mid, 1e-15);
+  }
+  for (std::size_t k = 10; k + 10 < arc.size(); ++k) {  // interior spans (not the phantom ends)
+    EXPECT_NEAR(arc[k].norm(), 1.0, 1e-2) << k;
+  }
+}
+
+TEST(Sdf, CatmullRomRejectsBadInput) {
+  EXPECT_THROW(catmull_rom_polyline({{0, 0, 0}}, 4), std::invalid_argument);
+  EXPECT_THROW(catmull_rom_polyline({{0, 0, 0}, {1, 0, 0}}, 0), std::invalid_argument);
+  EXPECT_THROW(catmull_rom_polyline({{0, 0, 0}, {1, 0, 0}, {1, 0, 0}}, 4), std::invalid_argument);
+  EXPECT_THROW(catmull_rom_polyline({{0, 0, 0}, {kInf, 0, 0}}, 4), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace liedyn
