@@ -254,6 +254,11 @@ Collider parse_collider(const json& value, const std::string& path, const std::s
       control.push_back(c.to_vector<3>(points[i], item_path(c.field("points"), i)));
     }
     if (control.size() < 2) c.fail(c.field("points"), "must list at least 2 points");
+    for (std::size_t i = 1; i < control.size(); ++i) {
+      if (!((control[i] - control[i - 1]).norm() > 0.0)) {
+        c.fail(item_path(c.field("points"), i), "coincides with the previous point");
+      }
+    }
     TubeShape tube;
     tube.radius = c.number("radius");
     tube.polyline = samples == 1 ? control : catmull_rom_polyline(control, samples);

@@ -554,4 +554,32 @@ TEST(FixedSizeNewton, MatchesEigenLLTWhenRegularizing) {
   expect_same_newton_path(model);
 }
 
+// Contact and friction (lib/contact.hpp, lib/friction.hpp): a body with samples landing on a
+// plane and a clamped rod hanging into a tube, with friction, through first contact (the
+// SDF evaluations, the lagged friction state and the changing active set).
+TEST(Allocation, ContactAndFrictionStepsDoNotAllocate) {
+  Model model = clamped_rod();
+  liedyn::Collider floor;
+  floor.shape = liedyn::PlaneShape{};
+  floor.position = Vector3(0.0, 0.0, -0.3);
+  liedyn::Collider tube;
+  tube.shape = liedyn::TubeShape{{Vector3(-1, 0, 0), Vector3(0.5, 0, 0.1), Vector3(2, 0, 0)}, 0.5};
+  tube.inside = true;
+  model.colliders = {floor, tube};
+  model.rods[0].contact.stiffness = 1e3;
+  model.rods[0].contact.radius = 0.005;
+  model.rods[0].contact.friction = 0.3;
+  RigidBody box = butterfly_bolt();
+  box.position = Vector3(0.5, 0.0, -0.28);
+  for (int s = 0; s < 8; ++s) {
+    box.contact_points.push_back(Vector3(s & 1 ? 0.05 : -0.05, s & 2 ? 0.05 : -0.05, s & 4 ? 0.05 : -0.05));
+  }
+  box.contact.stiffness = 1e4;
+  box.contact.friction = 0.5;
+  model.bodies.push_back(box);
+  Simulator sim(model, SolverOptions{});
+  expect_no_allocation(run_counted(sim, kSteps), kSteps);
+  EXPECT_GT(sim.max_penetration(), 0.0);  // the run is in contact
+}
+
 }  // namespace

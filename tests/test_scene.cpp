@@ -1030,5 +1030,111 @@ TEST_F(SceneFile, UnreadableFile) {
   }
 }
 
+// --- Colliders and contact (docs/scene-format.md "Colliders and contact") ---------------
+
+const std::string kContactBody =
+    kBody + R"(, "contact": {"stiffness": 1e4, "radius": 0.01, "friction": 0.3, "points": [[0, 0, -1]]})";
+
+TEST(SceneParse, CollidersAndContactGiveTheDescribedModel) {
+  const Scene s = parse_scene(
+      scene(kBody + R"(, "contact": {"stiffness": 2e3, "friction": 0.5, "friction_velocity": 0.01,
+                                     "points": [[0, 0, -1]], "box": {"half_extents": [1, 2, 3], "per_edge": 1}})",
+            R"("colliders": [
+                 {"name": "floor", "type": "plane", "normal": [0, 1, 1]},
+                 {"type": "sphere", "radius": 2, "position": [1, 2, 3], "inside": true},
+                 {"type": "box", "half_extents": [1, 1, 2], "rounding": 0.1},
+                 {"type": "capsule", "half_length": 0.5, "radius": 0.1},
+                 {"type": "tube", "radius": 0.1, "points": [[0, 0, 0], [1, 0, 0], [1, 1, 0]], "samples_per_segment": 4}], )"),
+      kSource);
+  const Model& m = s.model;
+  ASSERT_EQ(m.colliders.size(), 5u);
+  EXPECT_EQ(m.colliders[0].name, "floor");
+  EXPECT_EQ(m.colliders[1].name, "colliders[1]");  // default name
+  // The plane's frame maps z onto the normal.
+  EXPECT_TRUE((m.colliders[0].orientation.col(2) - Vector3(0, 1, 1).normalized()).isZero(1e-15));
+  EXPECT_TRUE(m.colliders[1].inside);
+  EXPECT_EQ(std::get<SphereShape>(m.colliders[1].shape).radius, 2.0);
+  EXPECT_EQ(std::get<BoxShape>(m.colliders[2].shape).rounding, 0.1);
+  EXPECT_EQ(std::get<CapsuleShape>(m.colliders[3].shape).half_length, 0.5);
+  EXPECT_EQ(std::get<TubeShape>(m.colliders[4].shape).polyline.size(), 2u * 4u + 1u);  // spline
+  const RigidBody& b = m.bodies[0];
+  EXPECT_EQ(b.contact.stiffness, 2e3);
+  EXPECT_EQ(b.contact.radius, 0.0);  // bodies: 0 by default
+  EXPECT_EQ(b.contact.friction, 0.5);
+  EXPECT_EQ(b.contact.friction_velocity, 0.01);
+  // One explicit point, then the box: 8 corners, 12 edge midpoints, 6 face centres.
+  ASSERT_EQ(b.contact_points.size(), 1u + 26u);
+  int corners = 0;
+  for (std::size_t i = 1; i < b.contact_points.size(); ++i) {
+    const Vector3 u = b.contact_points[i].cwiseQuotient(Vector3(1, 2, 3)).cwiseAbs();
+    EXPECT_EQ(u.maxCoeff(), 1.0);  // on the surface
+    if (u.minCoeff() == 1.0) ++corners;
+  }
+  EXPECT_EQ(corners, 8);
+}
+
+TEST(SceneParse, RodContactDefaultsToTheRodRadiusAndRegionPushes) {
+  const Scene s = parse_scene(R"({"time_step": 0.01, "frames": 1,
+      "colliders": [{"type": "plane"}],
+      "rods": [{"name": "r", "nodes": [[0, 0, 1], [0, 0, 2]], "mass": 1, "radius": 0.02,
+                "stretch_stiffness": 1, "shear_stiffness": 1, "bending_stiffness": [1, 1, 1],
+                "contact": {"stiffness": 100},
+                "region_pushes": [{"force": [1, 0, 0], "center": [0, 0, 1], "radius": 0.5}]}]})",
+                              kSource);
+  EXPECT_EQ(s.model.rods[0].contact.radius, 0.02);
+  EXPECT_EQ(s.model.rods[0].contact.friction, 0.0);
+  ASSERT_EQ(s.model.rods[0].region_pushes.size(), 1u);
+  EXPECT_EQ(s.model.rods[0].region_pushes[0].radius, 0.5);
+}
+
+TEST(SceneErrors, BadCollidersAndContact) {
+  const auto with_collider = [](const std::string& c) {
+    return scene(kBody, R"("colliders": [)" + c + "], ");
+  };
+  expect_rejected(with_collider(R"({"radius": 1})"), "colliders[0].type", "missing");
+  expect_rejected(with_collider(R"({"type": "cone"})"), "colliders[0].type", "unknown collider type");
+  expect_rejected(with_collider(R"({"type": "sphere"})"), "colliders[0].radius", "missing");
+  expect_rejected(with_collider(R"({"type": "sphere", "radius": -1})"), "colliders[0].radius", "");
+  expect_rejected(with_collider(R"({"type": "sphere", "radius": 1, "colour": 1})"), "colliders[0].colour",
+                  "unknown key");
+  expect_rejected(with_collider(R"({"type": "box", "half_extents": [1, 0, 1]})"),
+                  "colliders[0].half_extents", "");
+  expect_rejected(with_collider(R"({"type": "box", "half_extents": [1, 1, 1], "rounding": 1})"),
+                  "colliders[0].rounding", "");
+  expect_rejected(with_collider(R"({"type": "tube", "radius": 1, "points": [[0, 0, 0]]})"),
+                  "colliders[0].points", "at least 2");
+  expect_rejected(with_collider(R"({"type": "tube", "radius": 1, "points": [[0, 0, 0], [0, 0, 0]]})"),
+                  "colliders[0].points[1]", "coincides");
+  expect_rejected(with_collider(R"({"type": "tube", "radius": 1, "points": [[0, 0, 0], [1, 0, 0]], "samples_per_segment": 0})"),
+                  "colliders[0].samples_per_segment", "integer");
+  expect_rejected(with_collider(R"({"type": "plane", "normal": [0, 0, 0]})"), "colliders[0].normal",
+                  "non-zero");
+  expect_rejected(with_collider(R"({"type": "plane", "normal": [0, 0, 1], "orientation": [1, 0, 0, 0]})"),
+                  "colliders[0].normal", "not both");
+  expect_rejected(with_collider(R"({"type": "plane", "orientation": [2, 0, 0, 0]})"),
+                  "colliders[0].orientation", "unit quaternion");
+
+  const auto with_contact = [](const std::string& c) {
+    return scene(kBody + R"(, "contact": )" + c);
+  };
+  expect_rejected(with_contact(R"({"points": [[0, 0, 0]]})"), "bodies[0].contact.stiffness", "missing");
+  expect_rejected(with_contact(R"({"stiffness": 0, "points": [[0, 0, 0]]})"), "bodies[0].contact.stiffness",
+                  "positive");
+  expect_rejected(with_contact(R"({"stiffness": 1})"), "bodies[0].contact.points", "points");
+  expect_rejected(with_contact(R"({"stiffness": 1, "friction": -0.1, "points": [[0, 0, 0]]})"),
+                  "bodies[0].contact.friction", "≥ 0");
+  expect_rejected(with_contact(R"({"stiffness": 1, "friction_velocity": 0, "points": [[0, 0, 0]]})"),
+                  "bodies[0].contact.friction_velocity", "positive");
+  expect_rejected(with_contact(R"({"stiffness": 1, "radius": -1, "points": [[0, 0, 0]]})"),
+                  "bodies[0].contact.radius", "≥ 0");
+  expect_rejected(with_contact(R"({"stiffness": 1, "points": [[0, 0, 1e999]]})"),
+                  "bodies[0].contact.points[0][2]", "finite");
+  expect_rejected(with_contact(R"({"stiffness": 1, "box": {"half_extents": [1, 1, 1], "per_edge": 1001}})"),
+                  "bodies[0].contact.box.per_edge", "integer");
+  expect_rejected(with_contact(R"({"stiffness": 1, "box": {"half_extents": [1, -1, 1]}})"),
+                  "bodies[0].contact.box.half_extents", "positive");
+  expect_rejected(scene(kContactBody + R"(, "contact": {})"), "bodies[0].contact", "appears twice");
+}
+
 }  // namespace
 }  // namespace liedyn
