@@ -22,7 +22,7 @@ void attached_point_derivatives(const Vector3& lever, const Vector3& f, const Ma
   }
 }
 
-double Contact::penetration(const State& q) const {
+double ContactSample::penetration(const State& q) const {
   return radius - collider->evaluate(at.position(q), false).distance;
 }
 

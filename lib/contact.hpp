@@ -48,9 +48,10 @@ struct ContactMaterial {
 void attached_point_derivatives(const Vector3& lever, const Vector3& f, const Matrix3& K,
                                 LocalGradient<2>* g, LocalHessian<2>* H);
 
-struct Contact {
-  static constexpr int kBlocks = 2;
-  std::array<int, kBlocks> offsets{-1, -1};  // x, θ
+// What a contact term and its friction term share: a sample, a sphere of radius ρ attached
+// at `at`, pressed into `collider` with stiffness k.
+struct ContactSample {
+  std::array<int, 2> offsets{-1, -1};  // x, θ
   AttachedPoint at;
   std::shared_ptr<const Collider> collider;
   double stiffness = 0.0;  // k
@@ -58,6 +59,11 @@ struct Contact {
 
   // ρ − φ(p): > 0 when the sample's sphere overlaps the collider.
   double penetration(const State& q) const;
+};
+
+struct Contact : ContactSample {
+  static constexpr int kBlocks = 2;
+
   double evaluate(const State& q, LocalGradient<2>* g, LocalHessian<2>* H) const;
 
   static constexpr int kResiduals = 1;

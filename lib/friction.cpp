@@ -9,7 +9,7 @@ namespace liedyn {
 void Friction::begin_step(const State& previous, const Step&) {
   previous_position = at.position(previous);
   const SdfValue s = collider->evaluate(previous_position, false);
-  normal_force = stiffness * std::max(0.0, radius - s.distance);
+  normal_force = stiffness * std::max(0.0, radius - s.distance);  // k max(0, penetration)
   const double length = s.gradient.norm();
   normal = length > 0.0 ? Vector3(s.gradient / length) : Vector3::UnitZ();
 }

@@ -36,13 +36,8 @@
 
 namespace liedyn {
 
-struct Friction {
+struct Friction : ContactSample {
   static constexpr int kBlocks = 2;
-  std::array<int, kBlocks> offsets{-1, -1};  // x, θ
-  AttachedPoint at;
-  std::shared_ptr<const Collider> collider;
-  double stiffness = 0.0;    // k of the contact (for λ)
-  double radius = 0.0;       // ρ
   double coefficient = 0.0;  // μ
   double epsilon = 0.0;      // ε = ε_v h, m, > 0
 

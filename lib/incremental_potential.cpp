@@ -65,21 +65,11 @@ void add_contact_terms(const Model& model,
                        const std::array<int, 2>& offsets, IncrementalPotential& p) {
   if (!material.enabled()) return;
   for (const auto& collider : colliders) {
-    Contact contact;
-    contact.offsets = offsets;
-    contact.at = at;
-    contact.collider = collider;
-    contact.stiffness = material.stiffness;
-    contact.radius = material.radius;
-    p.contacts.push_back(contact);
+    const ContactSample sample{offsets, at, collider, material.stiffness, material.radius};
+    p.contacts.push_back(Contact{sample});
     // Static equilibria have no step to slip over: friction is a dynamic term.
     if (material.friction > 0.0 && !model.static_equilibrium) {
-      Friction friction;
-      friction.offsets = offsets;
-      friction.at = at;
-      friction.collider = collider;
-      friction.stiffness = material.stiffness;
-      friction.radius = material.radius;
+      Friction friction{sample};
       friction.coefficient = material.friction;
       friction.epsilon = material.friction_velocity * model.time_step;
       p.friction.push_back(friction);
