@@ -8,6 +8,7 @@
 #include <stdexcept>
 #include <type_traits>
 
+#include "mesh_sdf.hpp"
 #include "model.hpp"
 
 namespace liedyn {
@@ -169,6 +170,7 @@ SdfValue Collider::evaluate(const Vector3& p, bool with_hessian) const {
         if constexpr (std::is_same_v<S, BoxShape>) box_sdf(s, x, with_hessian, local);
         if constexpr (std::is_same_v<S, CapsuleShape>) capsule_sdf(s, x, with_hessian, local);
         if constexpr (std::is_same_v<S, TubeShape>) tube_sdf(s, x, with_hessian, local);
+        if constexpr (std::is_same_v<S, MeshShape>) local = s.grid->evaluate(x, with_hessian);
       },
       shape);
   const double sign = inside ? -1.0 : 1.0;  // inside: φ → −φ (and so its derivatives)
@@ -240,6 +242,9 @@ void Collider::validate(const std::string& path) const {
             }
           }
           require_positive(s.radius, field("radius"));
+        }
+        if constexpr (std::is_same_v<S, MeshShape>) {
+          if (s.grid == nullptr) throw ModelError(field("file"), "no grid was built from the mesh");
         }
       },
       shape);

@@ -61,6 +61,7 @@
 // Accuracy: φ to a few ulps of max(‖x‖, size of the shape) — also 1e-9 from the surface and
 // 1e6 away — for points up to ~1e150 m (beyond, squared norms overflow).
 
+#include <memory>
 #include <string>
 #include <variant>
 #include <vector>
@@ -101,7 +102,14 @@ struct TubeShape {
   std::vector<Vector3> polyline;
   double radius = 0.1;
 };
-using Shape = std::variant<PlaneShape, SphereShape, BoxShape, CapsuleShape, TubeShape>;
+class GridSdf;  // lib/mesh_sdf.hpp
+// A closed triangle mesh, as the trilinear interpolant of its signed distance sampled on a
+// grid (lib/mesh_sdf.hpp; mesh coordinates = the collider frame). Shared between copies of
+// the collider: a grid can hold millions of values.
+struct MeshShape {
+  std::shared_ptr<const GridSdf> grid;
+};
+using Shape = std::variant<PlaneShape, SphereShape, BoxShape, CapsuleShape, TubeShape, MeshShape>;
 
 // Distances to a core set (sphere centre, segment, polyline) at or below this count as zero
 // (see "Non-smooth points" above).

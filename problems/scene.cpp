@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <functional>
 #include <limits>
@@ -15,6 +16,7 @@
 #include "../lib/so3.hpp"
 #include "analytic.hpp"
 #include "json_reader.hpp"
+#include "obj_mesh.hpp"
 #include "optimization.hpp"
 
 namespace liedyn {
@@ -263,9 +265,26 @@ Collider parse_collider(const json& value, const std::string& path, const std::s
     tube.radius = c.number("radius");
     tube.polyline = samples == 1 ? control : catmull_rom_polyline(control, samples);
     collider.shape = std::move(tube);
+  } else if (type == "mesh") {
+    // A closed OBJ mesh ("file", relative to the scene file's folder, times "scale") sampled on
+    // a grid of "cell_size" over its bounding box grown by "padding" (lib/mesh_sdf.hpp).
+    std::filesystem::path file = c.string("file");
+    if (file.is_relative()) file = std::filesystem::path(source).parent_path() / file;
+    const double scale = c.number("scale", 1.0);
+    if (!(scale > 0.0)) c.fail(c.field("scale"), "must be positive");
+    const double cell_size = c.number("cell_size");
+    if (!(cell_size > 0.0)) c.fail(c.field("cell_size"), "must be positive");
+    const double padding = c.number("padding", 2.0 * cell_size);
+    if (!(padding >= 0.0)) c.fail(c.field("padding"), "must be ≥ 0");
+    try {
+      collider.shape = MeshShape{std::make_shared<const GridSdf>(load_obj_mesh(file, scale),
+                                                                 cell_size, padding)};
+    } catch (const std::exception& e) {
+      c.fail(c.field("file"), e.what());
+    }
   } else {
     c.fail(c.field("type"), "unknown collider type \"" + type +
-                                "\" (expected plane, sphere, box, capsule or tube)");
+                                "\" (expected plane, sphere, box, capsule, tube or mesh)");
   }
   c.finish();
   return collider;

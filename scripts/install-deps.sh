@@ -6,7 +6,7 @@ packages=(
   libeigen3-dev libsuitesparse-dev
   libceres-dev coinor-libipopt-dev libnlopt-cxx-dev
   nlohmann-json3-dev libcli11-dev
-  libcairo2-dev fonts-dejavu-core
+  libcairo2-dev fonts-dejavu-core libtinyobjloader-dev
   libgtest-dev libgmock-dev libbenchmark-dev
 )
 missing=()

@@ -1113,6 +1113,12 @@ TEST(SceneErrors, BadCollidersAndContact) {
                   "colliders[0].normal", "not both");
   expect_rejected(with_collider(R"({"type": "plane", "orientation": [2, 0, 0, 0]})"),
                   "colliders[0].orientation", "unit quaternion");
+  expect_rejected(with_collider(R"({"type": "mesh", "file": "no_such_mesh.obj", "cell_size": 0.01})"),
+                  "colliders[0].file", "no_such_mesh.obj");
+  expect_rejected(with_collider(R"({"type": "mesh", "file": "x.obj", "cell_size": 0})"),
+                  "colliders[0].cell_size", "positive");
+  expect_rejected(with_collider(R"({"type": "mesh", "cell_size": 0.1})"), "colliders[0].file",
+                  "missing");
 
   const auto with_contact = [](const std::string& c) {
     return scene(kBody + R"(, "contact": )" + c);

@@ -1,0 +1,27 @@
+#pragma once
+// Triangle meshes from Wavefront OBJ files (tinyobjloader), for GridSdf (lib/mesh_sdf.hpp).
+//
+// Only geometry is read: vertex positions (`v x y z`, any `w` ignored) and faces (`f`, the
+// vertex index of each corner; texture and normal indices, groups, objects, materials and
+// `mtllib` are ignored — no .mtl file is opened). Faces of more than three vertices are
+// triangulated by tinyobjloader (a quad v0 v1 v2 v3 becomes two triangles that keep its
+// orientation); all shapes (`o`/`g`) go into one mesh, sharing the file's vertex list, so
+// indices are the file's (1-based, or negative = relative, in the file; 0-based here).
+// Positions are multiplied by `scale`. Lines and points (`l`, `p`) are ignored.
+// Topology (closed, oriented, non-degenerate) is checked by GridSdf, not here.
+
+#include <filesystem>
+
+#include "lib/mesh_sdf.hpp"
+
+namespace liedyn {
+
+// Reads `file`. Throws std::runtime_error whose message names the file and the reason: it
+// does not exist or cannot be read, tinyobjloader reports a parse error (e.g. a face index 0
+// or a non-numeric face index), a face index is outside the file's vertices, a coordinate
+// (times scale) is not finite, a face has fewer than 3 vertices, or the file has no faces.
+// Throws std::invalid_argument if scale is not finite or ≤ 0. tinyobjloader itself is lenient:
+// a malformed coordinate ("v abc 0 0", or a missing one) reads as 0 without an error.
+TriangleMesh load_obj_mesh(const std::filesystem::path& file, double scale = 1.0);
+
+}  // namespace liedyn
