@@ -20,6 +20,8 @@ SWEEPS = [
      "position_error"),
     ("die_throw", "Die throw optimisation (adjoint gradient)",
      "gradient_error"),
+    ("tube_insertion", "Rod pushed through a tube (963 DOF, contact and friction)",
+     "position_error"),
 ]
 AXES_END = "frames_requested"  # the first column after the axes
 

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Regenerates docs/speed-accuracy.md and its plots: `liedyn sweep` on the butterfly bolt, the
-# helical rod and the die-throw optimisation, then a report of what each setting costs and
+# helical rod, the die-throw optimisation and the rod pushed through a tube (contact), then a report of what each setting costs and
 # buys, with the cheapest setting per error budget.
 #   bash scripts/speed_accuracy_report.sh [LIEDYN_BINARY]   (default: a Release build in build/)
 set -euo pipefail
@@ -25,5 +25,8 @@ scenes=problems/scenes
 "$liedyn" sweep "$scenes/optimization/die_throw.json" --out "$out/die_throw" --repeat 3 --quiet \
   --set time_step=0.005,0.0025,0.00125,0.000625 --set solver.tolerance=1e-4,1e-7,1e-10 \
   > "$out/die_throw.txt"
+"$liedyn" sweep "$scenes/contact/tube_insertion.json" --out "$out/tube_insertion" --repeat 3 --quiet \
+  --set time_step=0.002,0.001,0.0005 --set solver.tolerance=1e-5,1e-7,1e-9 \
+  > "$out/tube_insertion.txt"
 python3 "$root/scripts/speed_accuracy_report.py" "$out" "$root/docs/speed-accuracy.md"
 echo "wrote $root/docs/speed-accuracy.md"
