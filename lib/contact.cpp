@@ -2,25 +2,9 @@
 
 #include <cmath>
 
-#include "so3.hpp"
+#include "point_pair.hpp"
 
 namespace liedyn {
-
-void attached_point_derivatives(const Vector3& lever, const Vector3& f, const Matrix3& K,
-                                LocalGradient<2>* g, LocalHessian<2>* H) {
-  if (g != nullptr) {
-    g->head<3>() = f;
-    g->tail<3>() = lever.cross(f);  // (22): −hat(r)ᵀ f = r × f
-  }
-  if (H != nullptr) {
-    const Matrix3 S = so3::hat(lever);
-    const Matrix3 KS = K * S;
-    H->topLeftCorner<3, 3>() = K;
-    H->topRightCorner<3, 3>() = -KS;               // K ∂p/∂θ
-    H->bottomLeftCorner<3, 3>() = -KS.transpose();  // (K(−S))ᵀ = S K (K, S: K sym., S skew)
-    H->bottomRightCorner<3, 3>() = -S * KS + rotated_point_curvature(lever, f);  // (23)
-  }
-}
 
 double ContactSample::penetration(const State& q) const {
   return radius - collider->evaluate(at.position(q), false).distance;

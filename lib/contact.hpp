@@ -12,10 +12,8 @@
 // Newton solver like every indefinite Hessian (solvers/newton.hpp). At d ≤ 0 everything is
 // zero: V is C¹ with a jump of K at d = 0, which Newton's line search handles.
 //
-// Through p = x + r, r = R p̄ (eqs. 22, 23; conventions: so3.hpp), ∂p/∂(x, θ) = [I, −hat(r)]:
-//   gradient = [f; r × f],
-//   Hessian  = [[K, −K hat(r)], [hat(r) K, −hat(r) K hat(r) + C(r, f)]],
-// C(r, f) = ½(f rᵀ + r fᵀ) − (f·r) I (rotated_point_curvature, state.hpp).
+// Through p = x + r, r = R p̄ (eqs. 22, 23), mapped to the blocks (x, θ) by
+// attached_point_derivatives (point_pair.hpp).
 //
 // Least-squares form (contract: term.hpp), 1 residual:
 //   r = √k max(0, d),   J = ∂r/∂(x, θ) = −√k [nᵀ, (r × n)ᵀ] where d > 0, else 0;
@@ -42,11 +40,6 @@ struct ContactMaterial {
                                    // transition speed (friction.hpp); sticking creeps below it
   bool enabled() const { return stiffness > 0.0; }
 };
-
-// Maps the derivatives of a potential of one attached point, f = ∂V/∂p and K = ∂²V/∂p², to
-// the blocks (x, θ) of its frame (formulas at the top). Writes (not adds); H may be null.
-void attached_point_derivatives(const Vector3& lever, const Vector3& f, const Matrix3& K,
-                                LocalGradient<2>* g, LocalHessian<2>* H);
 
 // What a contact term and its friction term share: a sample, a sphere of radius ρ attached
 // at `at`, pressed into `collider` with stiffness k.

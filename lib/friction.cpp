@@ -2,6 +2,7 @@
 
 #include <cmath>
 
+#include "point_pair.hpp"
 #include "so3.hpp"
 
 namespace liedyn {

@@ -1,5 +1,6 @@
 #include "loads.hpp"
 
+#include "point_pair.hpp"
 #include "so3.hpp"
 
 namespace liedyn {
@@ -12,17 +13,9 @@ double Gravity::evaluate(const State& q, LocalGradient<1>* g, LocalHessian<1>* H
 }
 
 double ConstantForce::evaluate(const State& q, LocalGradient<2>* g, LocalHessian<2>* H) const {
-  const Vector3 r = at.lever(q);
   const Vector3 F = scale * force;
-  const Vector3 f = -F;  // ∂V/∂p
-  if (g != nullptr) {
-    g->head<3>() = f;
-    g->tail<3>() = r.cross(f);  // (22): −(∂V/∂p) hat(p) as a column is r × f
-  }
-  if (H != nullptr) {
-    H->setZero();
-    H->bottomRightCorner<3, 3>() = rotated_point_curvature(r, f);  // (23), ∂²V/∂p² = 0
-  }
+  // f = ∂V/∂p = −F and ∂²V/∂p² = 0, through p = x + R p̄ (eqs. 22, 23).
+  if (g != nullptr || H != nullptr) attached_point_derivatives(at.lever(q), -F, Matrix3::Zero(), g, H);
   return -F.dot(at.position(q));
 }
 

@@ -42,4 +42,26 @@ inline void point_pair_derivatives(const Vector3& r_a, const Vector3& r_b, const
   }
 }
 
+// The same mapping for a potential of ONE attached point p = x + r, r = R p̄ (a force, a
+// contact sample), with f = ∂V/∂p and K = ∂²V/∂p²: ∂p/∂(x, θ) = [I, −hat(r)], so
+//   gradient = [f; r × f],
+//   Hessian  = [[K, −K hat(r)], [hat(r) K, −hat(r) K hat(r) + C(r, f)]]   (eqs. 22, 23).
+// Writes (not adds); g and H may be null. A point without a rotation still gets its θ block
+// written, and assembly ignores it (offset −1).
+inline void attached_point_derivatives(const Vector3& lever, const Vector3& f, const Matrix3& K,
+                                       LocalGradient<2>* g, LocalHessian<2>* H) {
+  if (g != nullptr) {
+    g->head<3>() = f;
+    g->tail<3>() = lever.cross(f);  // (22): −hat(r)ᵀ f = r × f
+  }
+  if (H != nullptr) {
+    const Matrix3 S = so3::hat(lever);
+    const Matrix3 KS = K * S;
+    H->topLeftCorner<3, 3>() = K;
+    H->topRightCorner<3, 3>() = -KS;               // K ∂p/∂θ
+    H->bottomLeftCorner<3, 3>() = -KS.transpose();  // (K(−S))ᵀ = S K (K symmetric, S skew)
+    H->bottomRightCorner<3, 3>() = -S * KS + rotated_point_curvature(lever, f);  // (23)
+  }
+}
+
 }  // namespace liedyn

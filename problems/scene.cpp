@@ -541,17 +541,7 @@ Scene parse(const json& root, const std::string& source) {
     body.mass = b.number("mass");
     body.inertia = b.inertia("inertia");
     body.position = b.vector<3>("position", Vector3::Zero());
-    if (b.has("orientation")) {
-      const Eigen::Vector4d wxyz = b.vector<4>("orientation");
-      if (std::abs(wxyz.norm() - 1.0) > kQuaternionNormTolerance) {
-        std::ostringstream os;
-        os << "must be a unit quaternion [w, x, y, z] (norm " << wxyz.norm()
-           << ", tolerance " << kQuaternionNormTolerance << ")";
-        b.fail(b.field("orientation"), os.str());
-      }
-      body.orientation =
-          so3::from_quaternion(Eigen::Quaterniond(wxyz(0), wxyz(1), wxyz(2), wxyz(3)));
-    }
+    body.orientation = orientation_of(b, "orientation");
     body.linear_velocity = b.vector<3>("linear_velocity", Vector3::Zero());
     body.angular_velocity = b.vector<3>("angular_velocity", Vector3::Zero());
     if (b.has("contact")) body.contact = parse_contact(b, 0.0, &body.contact_points, contact_budget);

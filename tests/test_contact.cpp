@@ -23,6 +23,7 @@
 #include "fd_check.hpp"
 #include "lib/contact.hpp"
 #include "lib/friction.hpp"
+#include "lib/loads.hpp"
 #include "lib/sdf.hpp"
 #include "lib/so3.hpp"
 
@@ -396,6 +397,52 @@ TEST(Friction, TinyAndHugeTimeStepsKeepDerivativesExactAndTheForceBounded) {
       EXPECT_TRUE(H.allFinite());
     }
   }
+}
+
+// ----------------------------------------------------------------------------------------
+// Region pushes (lib/loads.hpp): V = −a F·x with a lagged a ∈ {0, 1}.
+
+TEST(RegionForce, PushesOnlyPointsThatWereInsideAndMatchesFiniteDifferences) {
+  RegionForce term;
+  term.point = 0;
+  term.offsets = {0};
+  term.force = Vector3(0.3, -0.2, 0.1);
+  term.center = Vector3(1, 0, 0);
+  term.radius = 0.5;
+  State previous;
+  previous.points = {Vector3(1.2, 0.1, 0.0)};  // inside
+  term.begin_step(previous, Step{});
+  ASSERT_TRUE(term.active);
+  const fd::Dofs dofs = {fd::point_dof(0)};
+  for (double scale : {1e-3, 1.0, 1e9}) {  // the load factor, from tiny to huge
+    SCOPED_TRACE(trace("scale", scale));
+    term.scale = scale;
+    State q;
+    q.points = {Vector3(3.0, -2.0, 1.0)};  // the state may leave the region: a stays lagged
+    LocalGradient<1> g;
+    LocalHessian<1> H;
+    const double V = term.evaluate(q, &g, &H);
+    EXPECT_NEAR(V, -scale * term.force.dot(q.points[0]), 1e-15 * scale);
+    EXPECT_TRUE(fd::check_lie_gradient(
+        [&term](const State& s) { return term.evaluate(s, nullptr, nullptr); }, q, dofs, g));
+    EXPECT_TRUE(H.isZero(0.0));
+    // ∇²V = 0: the gradient's differences vanish too.
+    fd::FdOptions o;
+    o.require_nonzero = fd::NonZero::kNone;
+    EXPECT_TRUE(fd::check_lie_hessian(
+        [&term](const State& s) {
+          LocalGradient<1> gs;
+          term.evaluate(s, &gs, nullptr);
+          return Eigen::VectorXd(gs);
+        },
+        q, dofs, H, o));
+  }
+  previous.points = {Vector3(1.0, 0.6, 0.0)};  // outside: no force at all
+  term.begin_step(previous, Step{});
+  EXPECT_FALSE(term.active);
+  LocalGradient<1> g;
+  EXPECT_EQ(term.evaluate(previous, &g, nullptr), 0.0);
+  EXPECT_TRUE(g.isZero(0.0));
 }
 
 }  // namespace

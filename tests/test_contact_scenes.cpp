@@ -30,11 +30,7 @@ Collider plane_with_normal(const Vector3& n) {
   Collider c;
   c.name = "plane";
   c.shape = PlaneShape{};
-  const Vector3 u = n.normalized();
-  // A frame whose z axis is n: rotate e_z onto n.
-  const Vector3 axis = Vector3::UnitZ().cross(u);
-  const double angle = std::atan2(axis.norm(), u.z());
-  c.orientation = axis.norm() > 0.0 ? so3::exp(angle * axis.normalized()) : Matrix3::Identity();
+  c.orientation = minimal_rotation(Vector3::UnitZ(), n.normalized());  // frame z = n
   return c;
 }
 
