@@ -1,6 +1,9 @@
 #include "parameters.hpp"
 
+#include <algorithm>
 #include <array>
+#include <cmath>
+#include <sstream>
 
 #include "so3.hpp"
 #include "trajectory.hpp"
@@ -208,6 +211,35 @@ std::string ParameterSet::describe(const Model& model, int i) const {
     }
   }
   return "?";
+}
+
+void ParameterSet::set_bounds(double lower, double upper, const std::string& field) {
+  if (blocks_.empty()) throw ModelError(field, "bounds without a parameter block");
+  if (std::isnan(lower) || std::isnan(upper) || !(lower < upper)) {
+    std::ostringstream os;
+    os << "the lower bound (" << lower << ") must be below the upper bound (" << upper << ")";
+    throw ModelError(field, os.str());
+  }
+  blocks_.back().lower = lower;
+  blocks_.back().upper = upper;
+}
+
+bool ParameterSet::bounded() const {
+  return std::any_of(blocks_.begin(), blocks_.end(), [](const ParameterBlock& b) {
+    return std::isfinite(b.lower) || std::isfinite(b.upper);
+  });
+}
+
+Eigen::VectorXd ParameterSet::lower_bounds() const {
+  Eigen::VectorXd lower(size_);
+  for (const ParameterBlock& b : blocks_) lower.segment(b.offset, b.size).setConstant(b.lower);
+  return lower;
+}
+
+Eigen::VectorXd ParameterSet::upper_bounds() const {
+  Eigen::VectorXd upper(size_);
+  for (const ParameterBlock& b : blocks_) upper.segment(b.offset, b.size).setConstant(b.upper);
+  return upper;
 }
 
 Eigen::VectorXd ParameterSet::initial_values(const Model& model) const {

@@ -20,8 +20,13 @@
 //   rest_darboux_per_frame   3·(nodes−2)·n    per-step rest Darboux vectors (frame-major)
 //   spring_stiffness, stretch_stiffness, shear_stiffness   1
 //   bending_stiffness        3       (K₁, K₂, K₃)
+//
+// Bounds. Each block may carry box bounds lower ≤ γ_i ≤ upper on all its entries (a cable
+// pulls: tension ≥ 0; a stiffness stays positive); ±∞ means none. They are the optimiser's
+// business (solvers/optimizer.hpp); the simulation itself is defined outside them.
 
 #include <Eigen/Core>
+#include <limits>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -58,6 +63,8 @@ struct ParameterBlock {
   int sub = -1;   // node_force / cable_tension: its index in rods[index].node_forces / cables
   int offset = 0;
   int size = 0;
+  double lower = -std::numeric_limits<double>::infinity();  // bounds on every entry
+  double upper = std::numeric_limits<double>::infinity();
 };
 
 class ParameterSet {
@@ -73,7 +80,15 @@ class ParameterSet {
   // would exceed kMaxSize.
   void add(const Model& model, ParameterKind kind, int index, int sub, const std::string& field);
 
+  // Bounds of the last block added; throws ModelError naming `field` unless lower < upper
+  // and neither is NaN (±∞: unbounded on that side).
+  void set_bounds(double lower, double upper, const std::string& field);
+
   int size() const { return size_; }
+  // Whether any block has a finite bound, and the bounds entry by entry (size()).
+  bool bounded() const;
+  Eigen::VectorXd lower_bounds() const;
+  Eigen::VectorXd upper_bounds() const;
   int frames() const { return frames_; }
   const std::vector<ParameterBlock>& blocks() const { return blocks_; }
   // e.g. "bodies[0].angular_velocity[2]", "forces[1].frame[17][0]" (for reports).

@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cmath>
 #include <iomanip>
+#include <limits>
 #include <nlohmann/json.hpp>
 #include <ostream>
 #include <sstream>
@@ -84,8 +85,36 @@ void parse_parameter(ObjectReader& r, const Scene& scene, OptimizationSpec& spec
       index = rod_named(r, scene);
       break;
   }
+  constexpr double kInf = std::numeric_limits<double>::infinity();
+  const double lower = r.number("lower", -kInf), upper = r.number("upper", kInf);
   r.finish();
   spec.parameters.add(scene.model, *kind, index, sub, path);
+  if (r.has("lower") || r.has("upper")) {
+    spec.parameters.set_bounds(lower, upper, r.field(r.has("lower") ? "lower" : "upper"));
+  }
+}
+
+// The initial γ must lie within the bounds, and the optimiser must be able to keep them.
+void check_bounds(const OptimizationSpec& spec, const Scene& scene, const ObjectReader& o) {
+  const Eigen::VectorXd gamma = spec.parameters.initial_values(scene.model);
+  const std::vector<ParameterBlock>& blocks = spec.parameters.blocks();
+  for (std::size_t b = 0; b < blocks.size(); ++b) {
+    const std::string path = item_path(o.field("parameters"), b);
+    for (int i = blocks[b].offset; i < blocks[b].offset + blocks[b].size; ++i) {
+      const bool below = gamma(i) < blocks[b].lower, above = gamma(i) > blocks[b].upper;
+      if (!below && !above) continue;
+      std::ostringstream reason;
+      reason << "the initial value " << gamma(i) << " of " << spec.parameters.describe(scene.model, i)
+             << " is " << (below ? "below" : "above") << " this bound ("
+             << (below ? blocks[b].lower : blocks[b].upper) << ")";
+      o.fail(path + (below ? ".lower" : ".upper"), reason.str());
+    }
+  }
+  if (spec.parameters.bounded() && spec.optimizer.optimizer == Optimizer::kCeresLbfgs) {
+    o.fail(o.field("optimizer"), "ceres-lbfgs cannot respect the parameters' bounds (Ceres's "
+                                 "GradientProblemSolver is unconstrained): use nlopt-lbfgs or "
+                                 "ipopt-lbfgs");
+  }
 }
 
 // The 2×3 orthographic projection onto two world axes, "xy", "xz" or "yz".
@@ -262,6 +291,7 @@ OptimizationSpec parse_optimization(const json& value, const Scene& scene) {
   if (spec.loss_scale < 0.0) o.fail(o.field("loss_scale"), "must be > 0 (or absent: the initial loss)");
   o.finish();
   spec.optimizer.validate();
+  check_bounds(spec, scene, o);
   return spec;
 }
 
@@ -376,6 +406,15 @@ int run_optimize(const Scene& scene, const OptimizeOptions& options, std::ostrea
   if (options.optimizer) optimizer.optimizer = *options.optimizer;
   if (options.max_iterations) optimizer.max_iterations = *options.max_iterations;
   optimizer.validate();
+  Bounds bounds;
+  if (sim.parameters().bounded()) {
+    if (optimizer.optimizer == Optimizer::kCeresLbfgs) {
+      throw SceneError(scene.source, "optimization.parameters",
+                       "has bounds, which --optimizer ceres-lbfgs cannot respect (Ceres's "
+                       "GradientProblemSolver is unconstrained): use nlopt-lbfgs or ipopt-lbfgs");
+    }
+    bounds = {sim.parameters().lower_bounds(), sim.parameters().upper_bounds()};
+  }
   const std::filesystem::path checkpoint_file = options.out / "checkpoint.json";
   const std::filesystem::path history_file = options.out / "history.csv";
 
@@ -430,7 +469,8 @@ int run_optimize(const Scene& scene, const OptimizeOptions& options, std::ostrea
     write_history(history_file, checkpoint.history);
     write_checkpoint(checkpoint_file, checkpoint);
   };
-  const OptimizationResult result = minimize(f, start, checkpoint.loss_scale, optimizer, record);
+  const OptimizationResult result =
+      minimize(f, start, checkpoint.loss_scale, optimizer, record, bounds);
 
   const Eigen::VectorXd& best =
       checkpoint.best.size() == start.size() ? checkpoint.best : result.best_x;

@@ -254,7 +254,7 @@ const char* nlopt_result_name(nlopt::result r) {
 }
 
 Outcome run_nlopt(Evaluator& evaluator, const Eigen::VectorXd& x0,
-                  const OptimizerOptions& options) {
+                  const OptimizerOptions& options, const Bounds& bounds) {
   Outcome out;
   try {
     const auto n = static_cast<unsigned>(x0.size());
@@ -268,6 +268,10 @@ Outcome run_nlopt(Evaluator& evaluator, const Eigen::VectorXd& x0,
     // 0: PLIS's own floors, relative f change ≤ 1e-14 and x change ≤ 1e-16 (header).
     opt.set_ftol_rel(0.0);
     opt.set_xtol_rel(0.0);
+    if (!bounds.empty()) {
+      opt.set_lower_bounds(std::vector<double>(bounds.lower.data(), bounds.lower.data() + n));
+      opt.set_upper_bounds(std::vector<double>(bounds.upper.data(), bounds.upper.data() + n));
+    }
     std::vector<double> x(x0.data(), x0.data() + n);
     double value = 0.0;
     try {
@@ -405,11 +409,12 @@ Outcome run_ceres(Evaluator& evaluator, const Eigen::VectorXd& x0,
 }
 
 // ---------------------------------------------------------------------------------------
-// Ipopt: min ℓ(x), m = 0, no bounds, limited-memory Hessian.
+// Ipopt: min ℓ(x), m = 0, box bounds (or none), limited-memory Hessian.
 
 class LbfgsNlp final : public Ipopt::TNLP {
  public:
-  LbfgsNlp(Evaluator& evaluator, const Eigen::VectorXd& x0) : evaluator_(evaluator), x0_(x0) {}
+  LbfgsNlp(Evaluator& evaluator, const Eigen::VectorXd& x0, const Bounds& bounds)
+      : evaluator_(evaluator), x0_(x0), bounds_(bounds) {}
 
   bool get_nlp_info(Ipopt::Index& n, Ipopt::Index& m, Ipopt::Index& nnz_jac_g,
                     Ipopt::Index& nnz_h_lag, IndexStyleEnum& index_style) override {
@@ -423,9 +428,13 @@ class LbfgsNlp final : public Ipopt::TNLP {
 
   bool get_bounds_info(Ipopt::Index n, Ipopt::Number* x_l, Ipopt::Number* x_u, Ipopt::Index,
                        Ipopt::Number*, Ipopt::Number*) override {
-    // Beyond ±nlp_lower/upper_bound_inf (±1e19): no bounds.
+    // Beyond ±nlp_lower/upper_bound_inf (±1e19): no bound.
     std::fill(x_l, x_l + n, -2e19);
     std::fill(x_u, x_u + n, 2e19);
+    for (Ipopt::Index i = 0; i < n && !bounds_.empty(); ++i) {
+      if (std::isfinite(bounds_.lower(i))) x_l[i] = bounds_.lower(i);
+      if (std::isfinite(bounds_.upper(i))) x_u[i] = bounds_.upper(i);
+    }
     return true;
   }
 
@@ -472,10 +481,11 @@ class LbfgsNlp final : public Ipopt::TNLP {
  private:
   Evaluator& evaluator_;
   const Eigen::VectorXd& x0_;
+  const Bounds& bounds_;
 };
 
 Outcome run_ipopt(Evaluator& evaluator, const Eigen::VectorXd& x0,
-                  const OptimizerOptions& options) {
+                  const OptimizerOptions& options, const Bounds& bounds) {
   Outcome out;
   try {
     Ipopt::SmartPtr<Ipopt::IpoptApplication> app = new Ipopt::IpoptApplication();
@@ -496,6 +506,9 @@ Outcome run_ipopt(Evaluator& evaluator, const Eigen::VectorXd& x0,
     // Genuine convergence only: ‖∇ℓ‖∞ ≤ kStationaryGradient; "acceptable" termination off.
     ok &= o.SetNumericValue("tol", kStationaryGradient);
     ok &= o.SetIntegerValue("acceptable_iter", 0);
+    // Ipopt relaxes bounds by 1e-8 relative by default; a bound here is physical (a cable
+    // cannot push), so it is kept exactly.
+    ok &= o.SetNumericValue("bound_relax_factor", 0.0);
     ok &= o.SetIntegerValue("max_iter", options.max_iterations);
     if (!ok) {
       out.status = "failed";
@@ -508,7 +521,7 @@ Outcome run_ipopt(Evaluator& evaluator, const Eigen::VectorXd& x0,
       out.message = "ipopt: could not be initialised";
       return out;
     }
-    Ipopt::SmartPtr<Ipopt::TNLP> nlp = new LbfgsNlp(evaluator, x0);
+    Ipopt::SmartPtr<Ipopt::TNLP> nlp = new LbfgsNlp(evaluator, x0, bounds);
     const Ipopt::ApplicationReturnStatus status = app->OptimizeTNLP(nlp);
     out.message = std::string("ipopt: ") + ipopt_status_name(status);
     switch (status) {
@@ -528,11 +541,39 @@ Outcome run_ipopt(Evaluator& evaluator, const Eigen::VectorXd& x0,
   return out;
 }
 
+// Throws std::invalid_argument unless `bounds` fit x0 and the back-end (see the header).
+void check_bounds(const Bounds& bounds, const Eigen::VectorXd& x0, Optimizer optimizer) {
+  if (bounds.empty()) return;
+  if (bounds.lower.size() != x0.size() || bounds.upper.size() != x0.size()) {
+    throw std::invalid_argument("minimize: bounds of sizes " + std::to_string(bounds.lower.size()) +
+                                " and " + std::to_string(bounds.upper.size()) + " for " +
+                                std::to_string(x0.size()) + " parameters");
+  }
+  for (Eigen::Index i = 0; i < x0.size(); ++i) {
+    const double l = bounds.lower(i), u = bounds.upper(i);
+    const std::string entry = "minimize: parameter " + std::to_string(i) + ": ";
+    if (std::isnan(l) || std::isnan(u) || !(l < u)) {
+      throw std::invalid_argument(entry + "the lower bound " + short_number(l) +
+                                  " is not below the upper bound " + short_number(u));
+    }
+    if (!(l <= x0(i) && x0(i) <= u)) {
+      throw std::invalid_argument(entry + "x0 = " + short_number(x0(i)) + " is outside [" +
+                                  short_number(l) + ", " + short_number(u) + "]");
+    }
+  }
+  const bool finite = (bounds.lower.array().isFinite() || bounds.upper.array().isFinite()).any();
+  if (finite && optimizer == Optimizer::kCeresLbfgs) {
+    throw std::invalid_argument(
+        "minimize: ceres-lbfgs cannot respect bounds (Ceres's GradientProblemSolver is "
+        "unconstrained): use nlopt-lbfgs or ipopt-lbfgs");
+  }
+}
+
 }  // namespace
 
 OptimizationResult minimize(const ObjectiveFunction& f, const Eigen::VectorXd& x0,
                             double loss_scale, const OptimizerOptions& options,
-                            const EvaluationCallback& on_evaluation) {
+                            const EvaluationCallback& on_evaluation, const Bounds& bounds) {
   const Clock::time_point start = Clock::now();
   options.validate();
   if (!(loss_scale > 0.0) || !std::isfinite(loss_scale)) {
@@ -542,14 +583,15 @@ OptimizationResult minimize(const ObjectiveFunction& f, const Eigen::VectorXd& x
   if (x0.size() == 0) throw std::invalid_argument("minimize: x0 is empty (no parameters)");
   if (!x0.allFinite()) throw std::invalid_argument("minimize: x0 has a non-finite entry");
   if (!f) throw std::invalid_argument("minimize: no objective function");
+  check_bounds(bounds, x0, options.optimizer);
 
   Evaluator evaluator(f, x0, loss_scale, options.target_normalized_loss, on_evaluation, start);
   if (options.optimizer != Optimizer::kNloptLbfgs) evaluator.recover_from_infeasible_points();
   Outcome outcome;
   switch (options.optimizer) {
-    case Optimizer::kNloptLbfgs: outcome = run_nlopt(evaluator, x0, options); break;
+    case Optimizer::kNloptLbfgs: outcome = run_nlopt(evaluator, x0, options, bounds); break;
     case Optimizer::kCeresLbfgs: outcome = run_ceres(evaluator, x0, options); break;
-    case Optimizer::kIpoptLbfgs: outcome = run_ipopt(evaluator, x0, options); break;
+    case Optimizer::kIpoptLbfgs: outcome = run_ipopt(evaluator, x0, options, bounds); break;
   }
   if (evaluator.foreign_exception()) std::rethrow_exception(evaluator.foreign_exception());
 

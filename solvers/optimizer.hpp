@@ -131,6 +131,19 @@ struct OptimizerOptions {
   void validate() const;
 };
 
+// Box bounds lower_i ≤ x_i ≤ upper_i (±∞: none on that side); empty vectors: none at all.
+//   nlopt-lbfgs — PLIS is a bound-constrained method (NLopt set_lower/upper_bounds): steps
+//                 stay in the box, and "converged" is a stationary point of the box problem.
+//   ipopt-lbfgs — the bounds enter the NLP: log-barrier terms keep iterates strictly inside
+//                 (a start on a bound is pushed in by bound_push), "converged" is the KKT
+//                 point at tol.
+//   ceres-lbfgs — GradientProblemSolver is unconstrained: minimize rejects finite bounds.
+// x0 must lie within them.
+struct Bounds {
+  Eigen::VectorXd lower, upper;
+  bool empty() const { return lower.size() == 0 && upper.size() == 0; }
+};
+
 // Returns f(x) and writes ∇f(x) into `gradient` (already sized like x; do not resize it).
 // May throw std::exception (e.g. a forward simulation step that did not converge).
 using ObjectiveFunction =
@@ -177,12 +190,14 @@ struct OptimizationResult {
   double seconds = 0.0;  // wall time of minimize()
 };
 
-// Minimises f from x0 (finite, non-empty) with the back-end options.optimizer, reporting each
-// evaluation to on_evaluation; normalised loss = loss / loss_scale (finite, > 0). Throws
-// std::invalid_argument for bad options, loss_scale or x0; never throws for a failure of f
-// that is a std::exception (status "failed").
+// Minimises f from x0 (finite, non-empty) with the back-end options.optimizer, within
+// `bounds`, reporting each evaluation to on_evaluation; normalised loss = loss / loss_scale
+// (finite, > 0). Throws std::invalid_argument for bad options, loss_scale, x0 or bounds
+// (sizes other than x0's, NaN, lower ≥ upper, x0 outside, or any finite bound for Ceres);
+// never throws for a failure of f that is a std::exception (status "failed").
 OptimizationResult minimize(const ObjectiveFunction& f, const Eigen::VectorXd& x0,
                             double loss_scale, const OptimizerOptions& options,
-                            const EvaluationCallback& on_evaluation = {});
+                            const EvaluationCallback& on_evaluation = {},
+                            const Bounds& bounds = {});
 
 }  // namespace liedyn

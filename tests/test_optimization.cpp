@@ -17,6 +17,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <map>
 #include <nlohmann/json.hpp>
 #include <numbers>
@@ -258,6 +259,31 @@ TEST(OptimizationParse, PerFrameNamesCountFramesFromOne) {
   EXPECT_EQ(p.describe(s.model, 3 * 2 * kFrames - 1), "rods[1].rest_darboux.frame[5][1][2]");
   EXPECT_EQ(p.describe(s.model, 3 * 2 * kFrames), "rods[1].cables[0].tension.frame[1]");
   EXPECT_EQ(p.describe(s.model, p.size() - 1), "rods[1].cables[0].tension.frame[5]");
+}
+
+TEST(OptimizationParse, BoundsApplyToEveryEntryOfTheirBlock) {
+  const Scene unbounded = parsed(scene_text(block(kForceParameter, kEffortTerm)));
+  EXPECT_FALSE(unbounded.optimization->parameters.bounded());
+  const Scene s = parsed(scene_text(block(
+      R"({"kind": "force", "index": 1, "lower": -1, "upper": 2},
+         {"kind": "rod_node_velocities", "rod": "arm"},
+         {"kind": "cable_tension", "rod": "arm", "cable": 1, "lower": 0})",
+      kEffortTerm)));
+  const ParameterSet& p = s.optimization->parameters;
+  ASSERT_TRUE(p.bounded());
+  const Eigen::VectorXd lower = p.lower_bounds(), upper = p.upper_bounds();
+  ASSERT_EQ(lower.size(), p.size());
+  ASSERT_EQ(upper.size(), p.size());
+  const double inf = std::numeric_limits<double>::infinity();
+  const std::vector<std::pair<double, double>> expected = {{-1, 2}, {-inf, inf}, {0, inf}};
+  ASSERT_EQ(p.blocks().size(), expected.size());
+  for (std::size_t b = 0; b < expected.size(); ++b) {
+    const ParameterBlock& block = p.blocks()[b];
+    for (int i = block.offset; i < block.offset + block.size; ++i) {
+      EXPECT_EQ(lower(i), expected[b].first) << "block " << b << ", entry " << i;
+      EXPECT_EQ(upper(i), expected[b].second) << "block " << b << ", entry " << i;
+    }
+  }
 }
 
 TEST(OptimizationParse, BlocksFollowEachOtherInListOrder) {
@@ -634,6 +660,28 @@ TEST(OptimizationErrors, OptimizerSettings) {
   expect_rejected(with(R"(, "lbfgs_memory": 0)"), "optimization.lbfgs_memory",
                   "must be an integer in [1,");
   expect_rejected(with(R"(, "loss_scale": -1)"), "optimization.loss_scale", "must be > 0");
+}
+
+TEST(OptimizationErrors, Bounds) {
+  expect_parameter_rejected(R"({"kind": "force", "index": 1, "lower": 1, "upper": 1})",
+                            "optimization.parameters[0].lower",
+                            "the lower bound (1) must be below the upper bound (1)");
+  expect_parameter_rejected(R"({"kind": "force", "index": 1, "upper": -1e300, "lower": 0})",
+                            "optimization.parameters[0].lower", "must be below the upper bound");
+  expect_parameter_rejected(R"({"kind": "force", "index": 1, "lower": "0"})",
+                            "optimization.parameters[0].lower", "must be a number");
+  // The initial γ must lie within the bounds: the box's force is (0, 1, 0) in every frame,
+  // the arm's cable 1 pulls with 2.5.
+  expect_parameter_rejected(R"({"kind": "force", "index": 1, "lower": 0.5})",
+                            "optimization.parameters[0].lower",
+                            "the initial value 0 of forces[1].frame[1][0] is below this bound (0.5)");
+  expect_parameter_rejected(
+      kForceParameter + R"(, {"kind": "cable_tension", "rod": "arm", "cable": 1, "upper": 2})",
+      "optimization.parameters[1].upper", "the initial value 2.5 of rods[1].cables[1]");
+  // Ceres's L-BFGS is unconstrained: a bounded problem for it is refused, not run unbounded.
+  expect_rejected(scene_text(block(R"({"kind": "force", "index": 1, "upper": 5})", kEffortTerm,
+                                   R"(, "optimizer": "ceres-lbfgs")")),
+                  "optimization.optimizer", "ceres-lbfgs cannot respect the parameters' bounds");
 }
 
 TEST(OptimizationErrors, BlockStructure) {
@@ -1176,6 +1224,35 @@ TEST_F(OptimizationCli, LettersIAndAReachTheTarget) {
     EXPECT_LE(final / initial, 1e-3 * (1 + 1e-6));
     EXPECT_NEAR(final / initial, h.best_normalized_loss(), 1e-6);
   }
+}
+
+// The cable problem (paper Fig. 10) with its cables bounded to pull (tension ≥ 0): NLopt
+// reaches the target with no negative tension, and some tensions rest on the bound (without
+// it the optimum pushes: half the tensions went negative, down to −53 N). Ceres's L-BFGS
+// cannot keep bounds, so asking for it is bad input (exit 2, nothing written).
+TEST_F(OptimizationCli, CablesOnlyPull) {
+  const std::string scene =
+      (kSourceDir / "problems/scenes/optimization/cable_tip_curve.json").string();
+  const Result r = run({"optimize", scene, "--out", "cables"});
+  ASSERT_EQ(r.exit_code, 0) << r.out << r.err;
+  EXPECT_LE(checked_history(dir_ / "cables").best_normalized_loss(), 1e-3);
+  const std::vector<std::string> lines =
+      split(liedyn::test::read_file(dir_ / "cables/parameters.csv"), '\n');
+  ASSERT_EQ(lines.size(), 1u + 800u);
+  int on_bound = 0;
+  for (std::size_t i = 1; i < lines.size(); ++i) {
+    const double tension = std::stod(split(lines[i], ',').at(1));
+    EXPECT_GE(tension, 0.0) << lines[i];
+    on_bound += tension == 0.0;
+  }
+  EXPECT_GT(on_bound, 0);
+
+  const Result ceres = run({"optimize", scene, "--out", "ceres", "--optimizer", "ceres-lbfgs"});
+  EXPECT_EQ(ceres.exit_code, 2) << ceres.out << ceres.err;
+  EXPECT_NE(ceres.err.find("cable_tip_curve.json: optimization.parameters: has bounds"),
+            std::string::npos)
+      << ceres.err;
+  EXPECT_FALSE(fs::exists(dir_ / "ceres"));
 }
 
 TEST_F(OptimizationCli, ResumeContinuesTheHistory) {

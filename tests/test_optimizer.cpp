@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
@@ -428,6 +429,72 @@ TEST(OptimizerOptions, InvalidValuesNameTheField) {
               minimize(rosenbrock, VectorXd(), 1.0, OptimizerOptions{});
             }).find("x0"),
             std::string::npos);
+}
+
+// Box bounds (solvers/optimizer.hpp, Bounds). The quadratic's minimiser c_i = sin(1 + i) has
+// entries of both signs; bounds [0, 0.5] cut it off on both sides, so the box minimiser is
+// clamp(c, 0, 0.5) (the quadratic is separable) and the unconstrained one is outside.
+class BoundedBackend : public ::testing::TestWithParam<Optimizer> {};
+
+TEST_P(BoundedBackend, QuadraticEndsAtTheClampedMinimiserAndNeverLeavesTheBox) {
+  const int n = 8;
+  const Quadratic q(n, 10.0);
+  const Bounds bounds{VectorXd::Zero(n), VectorXd::Constant(n, 0.5)};
+  ASSERT_LT(q.c.minCoeff(), -0.5);  // the set-up: c lies outside the box on both sides
+  ASSERT_GT(q.c.maxCoeff(), 0.8);
+  const VectorXd expected = q.c.cwiseMax(0.0).cwiseMin(0.5);
+  VectorXd g(n);
+  const double floor = q(expected, g);  // the least loss within the box
+  double outside = 0.0;                 // how far any evaluated point left the box
+  const ObjectiveFunction f = [&](const VectorXd& x, VectorXd& gradient) {
+    outside = std::max({outside, (-x).maxCoeff(), (x.array() - 0.5).maxCoeff()});
+    return q(x, gradient);
+  };
+  const VectorXd x0 = VectorXd::Constant(n, 0.25);
+  const OptimizationResult r =
+      minimize(f, x0, value_at(f, x0), options_for(GetParam(), 200, 0.0), {}, bounds);
+  EXPECT_TRUE(r.status == "converged" || r.status == "roundoff_limited") << r.status << ": " << r.message;
+  EXPECT_LE(outside, 0.0);  // every evaluation, trial points included, within the box
+  EXPECT_LT((r.best_x - expected).lpNorm<Eigen::Infinity>(), 1e-4) << r.best_x.transpose();
+  EXPECT_LT(r.best_loss - floor, 1e-6 * floor);
+  // Without the bounds the same run goes below the box's floor: the bounds were binding.
+  const OptimizationResult free = minimize(f, x0, value_at(f, x0), options_for(GetParam(), 200, 0.0));
+  EXPECT_LT(free.best_loss, 0.5 * floor);
+}
+
+INSTANTIATE_TEST_SUITE_P(NloptAndIpopt, BoundedBackend,
+                         ::testing::Values(Optimizer::kNloptLbfgs, Optimizer::kIpoptLbfgs),
+                         [](const ::testing::TestParamInfo<Optimizer>& info) {
+                           return std::string(info.param == Optimizer::kNloptLbfgs ? "nlopt" : "ipopt");
+                         });
+
+TEST(OptimizerBounds, BadBoundsAndCeresAreRejected) {
+  const Quadratic q(3, 1.0);
+  const ObjectiveFunction f = q;
+  const VectorXd x0 = VectorXd::Constant(3, 0.5);
+  const auto message_for = [&](const Bounds& bounds, Optimizer optimizer = Optimizer::kNloptLbfgs) {
+    return invalid_argument_message(
+        [&] { minimize(f, x0, 1.0, options_for(optimizer, 10, 0.0), {}, bounds); });
+  };
+  const double inf = std::numeric_limits<double>::infinity();
+  const VectorXd zero = VectorXd::Zero(3), one = VectorXd::Ones(3);
+  EXPECT_NE(message_for({zero, VectorXd::Ones(2)}).find("sizes 3 and 2 for 3"), std::string::npos);
+  EXPECT_NE(message_for({one, one}).find("parameter 0: the lower bound 1 is not below"), std::string::npos);
+  VectorXd nan = zero;
+  nan(2) = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_NE(message_for({nan, one}).find("parameter 2:"), std::string::npos);
+  VectorXd tight = one;
+  tight(1) = 0.4;
+  EXPECT_NE(message_for({zero, tight}).find("parameter 1: x0 = 0.5 is outside [0, 0.4]"),
+            std::string::npos)
+      << message_for({zero, tight});
+  const std::string ceres = message_for({zero, VectorXd::Constant(3, inf)}, Optimizer::kCeresLbfgs);
+  EXPECT_NE(ceres.find("ceres-lbfgs cannot respect bounds"), std::string::npos) << ceres;
+  // Infinite bounds everywhere are no bounds, for every back-end (Ceres included).
+  const Bounds none{VectorXd::Constant(3, -inf), VectorXd::Constant(3, inf)};
+  for (const Optimizer o : {Optimizer::kNloptLbfgs, Optimizer::kCeresLbfgs, Optimizer::kIpoptLbfgs}) {
+    EXPECT_EQ(message_for(none, o), "") << to_string(o);
+  }
 }
 
 TEST(OptimizerOptions, NamesRoundTrip) {
