@@ -9,6 +9,7 @@
 //                  three; an unsupported pair such as ipopt + quat is a failed row)
 //   liedyn exp-jacobian --out FILE [--samples N]   (paper Fig. 3 data: σ of ∂vec(exp r)/∂r)
 //   liedyn gradcheck SCENE.json [--sample N] [--seed S] [--tolerance T] [--step E] [--verbose]
+//                  [--parameters DIR/parameters.csv]
 //                  (adjoint gradient against central differences; last line
 //                  "gradcheck: max_rel_error=<float> params=<int> tolerance=<float>"; exit 0
 //                  within tolerance, 1 otherwise)
@@ -179,6 +180,9 @@ int main(int argc, char** argv) {
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
   gradcheck->add_flag("--verbose", verbose, "One CSV row per checked parameter");
+  std::string gradcheck_parameters;
+  gradcheck->add_option("--parameters", gradcheck_parameters,
+                        "Check at the γ of this parameters.csv (of liedyn optimize), not at γ₀");
 
   liedyn::OptimizeOptions optimize_options;
   std::string optimizer_name;
@@ -266,7 +270,9 @@ int main(int argc, char** argv) {
                 << ": optimization: is required but missing (nothing to differentiate)\n";
       return 2;
     }
-    if (gradcheck->parsed()) return liedyn::run_gradcheck(scene, check, verbose, std::cout);
+    if (gradcheck->parsed()) {
+      return liedyn::run_gradcheck(scene, check, verbose, std::cout, gradcheck_parameters);
+    }
     if (optimize->parsed()) {
       optimize_options.out = out_dir;
       if (optimize_iterations > 0) optimize_options.max_iterations = optimize_iterations;

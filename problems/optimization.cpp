@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <fstream>
 #include <iomanip>
 #include <limits>
 #include <nlohmann/json.hpp>
@@ -303,10 +304,59 @@ DifferentiableSimulation make_differentiable_simulation(const Scene& scene) {
                                   scene.optimization->objective, scene.solver);
 }
 
+namespace {
+
+// γ from a parameters.csv ("parameter,value", then one row per entry of γ, named as
+// ParameterSet::describe names it); the names must be the scene's, in order.
+Eigen::VectorXd read_parameters(const std::filesystem::path& file,
+                                const DifferentiableSimulation& sim, const Model& model) {
+  const std::string source = file.string();
+  std::ifstream in(file);
+  if (!in) throw SceneError(source, "", "cannot open the parameters file");
+  std::string line;
+  if (!std::getline(in, line) || line != "parameter,value") {
+    throw SceneError(source, "line 1", "must be the header \"parameter,value\"");
+  }
+  Eigen::VectorXd gamma(sim.parameters().size());
+  for (int i = 0; i < gamma.size(); ++i) {
+    const std::string where = "line " + std::to_string(i + 2);
+    const std::string name = sim.parameters().describe(model, i);
+    if (!std::getline(in, line)) {
+      throw SceneError(source, where, "missing: the scene has " + std::to_string(gamma.size()) +
+                                          " parameters, the file " + std::to_string(i));
+    }
+    const std::size_t comma = line.rfind(',');
+    if (comma == std::string::npos || line.substr(0, comma) != name) {
+      throw SceneError(source, where, "expected the parameter " + name + " (got \"" + line + "\")");
+    }
+    const std::string value = line.substr(comma + 1);
+    std::size_t used = 0;
+    try {
+      gamma(i) = std::stod(value, &used);
+    } catch (const std::exception&) {
+      used = 0;
+    }
+    if (used == 0 || used != value.size() || !std::isfinite(gamma(i))) {
+      throw SceneError(source, where, "the value of " + name + " must be a finite number (got \"" +
+                                          value + "\")");
+    }
+  }
+  if (std::getline(in, line) && !line.empty()) {
+    throw SceneError(source, "line " + std::to_string(gamma.size() + 2),
+                     "more rows than the scene's " + std::to_string(gamma.size()) + " parameters");
+  }
+  return gamma;
+}
+
+}  // namespace
+
 int run_gradcheck(const Scene& scene, const GradientCheckOptions& options, bool verbose,
-                  std::ostream& out) {
+                  std::ostream& out, const std::filesystem::path& parameters_file) {
   const DifferentiableSimulation sim = make_differentiable_simulation(scene);
-  const GradientCheckResult r = check_gradient(sim, sim.initial_parameters(), options);
+  const Eigen::VectorXd gamma = parameters_file.empty()
+                                    ? sim.initial_parameters()
+                                    : read_parameters(parameters_file, sim, scene.model);
+  const GradientCheckResult r = check_gradient(sim, gamma, options);
   out << std::setprecision(6);
   if (verbose) {
     out << "parameter,adjoint,finite_difference,relative_error\n";

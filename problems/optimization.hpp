@@ -22,12 +22,15 @@ OptimizationSpec parse_optimization(const nlohmann::json& value, const Scene& sc
 // if it has none).
 DifferentiableSimulation make_differentiable_simulation(const Scene& scene);
 
-// `liedyn gradcheck`: prints one row per checked parameter (with --verbose) and then the
-// last line exactly
+// `liedyn gradcheck`: checks the gradient at γ₀, or at the γ of `parameters_file` when it is
+// not empty (a parameters.csv of `liedyn optimize`, e.g. the point where an optimisation
+// stalled); prints one row per checked parameter (with --verbose) and then the last line
+// exactly
 //   gradcheck: max_rel_error=<float> params=<int> tolerance=<float>
-// Returns 0 when within tolerance, 1 otherwise.
+// Returns 0 when within tolerance, 1 otherwise. A parameters file that cannot be read, or
+// whose rows are not this scene's parameters in order, is a SceneError naming the line.
 int run_gradcheck(const Scene& scene, const GradientCheckOptions& options, bool verbose,
-                  std::ostream& out);
+                  std::ostream& out, const std::filesystem::path& parameters_file = {});
 
 struct OptimizeOptions {
   std::filesystem::path out;              // output directory (created)

@@ -1061,6 +1061,52 @@ TEST_F(OptimizationCli, GradcheckOfTheDieThrowPasses) {
   EXPECT_TRUE(std::regex_match(last_line(v.out), kGradcheckLine)) << v.out;
 }
 
+// gradcheck --parameters: the gradient at the γ an optimisation ended at (parameters.csv),
+// e.g. where it stalled; the file's rows must be the scene's parameters, in order.
+TEST_F(OptimizationCli, GradcheckAtTheParametersOfARun) {
+  ASSERT_EQ(run({"optimize", die(), "--out", "die", "--max-iterations", "3"}).exit_code, 3);
+  const auto loss_of = [](const std::string& out) {
+    std::smatch m;
+    EXPECT_TRUE(std::regex_search(out, m, std::regex("(?:^|\n)loss ([0-9.eE+-]+);"))) << out;
+    return m.size() == 2 ? std::stod(m[1].str()) : -1.0;
+  };
+  const Result at_start = run({"gradcheck", die()});
+  const Result at_run = run({"gradcheck", die(), "--parameters", "die/parameters.csv", "--verbose"});
+  ASSERT_EQ(at_run.exit_code, 0) << at_run.out << at_run.err;
+  EXPECT_TRUE(std::regex_match(last_line(at_run.out), kGradcheckLine)) << at_run.out;
+  // The loss there is the run's best, not the start's.
+  const nlohmann::json checkpoint =
+      nlohmann::json::parse(liedyn::test::read_file(dir_ / "die/checkpoint.json"));
+  EXPECT_NEAR(loss_of(at_run.out), checkpoint.at("best_loss").get<double>(),
+              1e-5 * checkpoint.at("best_loss").get<double>());
+  EXPECT_LT(loss_of(at_run.out), 0.9 * loss_of(at_start.out));
+
+  const std::string good = liedyn::test::read_file(dir_ / "die/parameters.csv");
+  const std::vector<std::string> rows = split(good, '\n');
+  ASSERT_EQ(rows.size(), 7u);
+  const auto rejected_with = [&](const std::string& text, const std::string& message) {
+    SCOPED_TRACE(message);
+    { std::ofstream(dir_ / "bad.csv") << text; }
+    const Result r = run({"gradcheck", die(), "--parameters", "bad.csv"});
+    EXPECT_EQ(r.exit_code, 2) << r.out << r.err;
+    EXPECT_NE(r.err.find("bad.csv: " + message), std::string::npos) << r.err;
+  };
+  std::string lines;
+  for (std::size_t i = 1; i < rows.size(); ++i) lines += rows[i] + "\n";
+  rejected_with(lines, "line 1: must be the header \"parameter,value\"");
+  rejected_with("parameter,value\n" + rows[2] + "\n", "line 2: expected the parameter bodies[0].angular_velocity[0]");
+  rejected_with("parameter,value\n" + rows[1] + "\n", "line 3: missing: the scene has 6 parameters, the file 1");
+  rejected_with("parameter,value\nbodies[0].angular_velocity[0],fast\n",
+                "line 2: the value of bodies[0].angular_velocity[0] must be a finite number (got \"fast\")");
+  rejected_with("parameter,value\nbodies[0].angular_velocity[0],1e999\n", "line 2: the value of");
+  rejected_with("parameter,value\nbodies[0].angular_velocity[0],1.5x\n", "line 2: the value of");
+  rejected_with(good + "bodies[0].angular_velocity[0],1\n", "line 8: more rows than the scene's 6");
+  const Result missing = run({"gradcheck", die(), "--parameters", "none.csv"});
+  EXPECT_EQ(missing.exit_code, 2);
+  EXPECT_NE(missing.err.find("none.csv: cannot open the parameters file"), std::string::npos)
+      << missing.err;
+}
+
 TEST_F(OptimizationCli, GradcheckAtToleranceZeroFails) {
   const Result r = run({"gradcheck", die(), "--tolerance", "0"});
   EXPECT_EQ(r.exit_code, 1) << r.out << r.err;
