@@ -85,8 +85,11 @@ struct Model {
   bool static_equilibrium = false;
   int load_steps = 1;
 
-  // Index in State::points of a rod's node, and in State::rotations of a rod's edge.
+  // Index in State::points of a rod's node, and in State::rotations of a rod's edge (rod =
+  // rods.size() with node or edge 0: one past the last).
   int rod_point(int rod, int node) const;
+  // Size of State::points: every body, then every rod's nodes.
+  int point_count() const { return rod_point(static_cast<int>(rods.size()), 0); }
   int rod_rotation(int rod, int edge) const;
 
   // Throws ModelError naming the first offending field. Checks finiteness, positivity,

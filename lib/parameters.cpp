@@ -367,9 +367,7 @@ void ParameterSet::add_initial_gradient(const Model& applied, const Eigen::Vecto
                                         const Eigen::VectorXd& a0, const Eigen::VectorXd& da0,
                                         Eigen::VectorXd& dgamma) const {
   const double h = applied.time_step;
-  int rod_points = 0;  // points before each rod's first node: all bodies, then earlier rods
-  for (const RodSpec& rod : applied.rods) rod_points += rod.node_count();
-  const int point_count = static_cast<int>(applied.bodies.size()) + rod_points;
+  const int point_count = applied.point_count();  // rotations follow the points
   for (const ParameterBlock& b : blocks_) {
     auto block = dgamma.segment(b.offset, b.size);
     const int body_point = tangent_point(b.index);
