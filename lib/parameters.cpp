@@ -112,8 +112,13 @@ long long ParameterSet::block_size(const Model& model, ParameterKind kind, int i
 void ParameterSet::add(const Model& model, ParameterKind kind, int index, int sub,
                        const std::string& field) {
   const auto out_of_range = [&](const char* what, std::size_t count) {
-    throw ModelError(field, std::string("refers to ") + what + " " + std::to_string(index) +
-                                ", but the model has " + std::to_string(count));
+    // Forces, torques and springs are chosen by "index"; bodies and rods by name (resolved
+    // by the caller), so an index of theirs is the caller's error, reported at the block.
+    const bool by_index = kind == ParameterKind::kForce || kind == ParameterKind::kTorque ||
+                          kind == ParameterKind::kSpringStiffness;
+    throw ModelError(by_index ? field + ".index" : field,
+                     std::string("refers to ") + what + " " + std::to_string(index) +
+                         ", but the model has " + std::to_string(count));
   };
   if (on_body(kind) && (index < 0 || index >= static_cast<int>(model.bodies.size()))) {
     out_of_range("body", model.bodies.size());
@@ -134,13 +139,13 @@ void ParameterSet::add(const Model& model, ParameterKind kind, int index, int su
   }
   if (kind == ParameterKind::kNodeForce &&
       (sub < 0 || sub >= static_cast<int>(model.rods[index].node_forces.size()))) {
-    throw ModelError(field, "refers to node force " + std::to_string(sub) + " of rod " +
+    throw ModelError(field + ".node_force", "refers to node force " + std::to_string(sub) + " of rod " +
                                 std::to_string(index) + ", which has " +
                                 std::to_string(model.rods[index].node_forces.size()));
   }
   if (kind == ParameterKind::kCableTension &&
       (sub < 0 || sub >= static_cast<int>(model.rods[index].cables.size()))) {
-    throw ModelError(field, "refers to cable " + std::to_string(sub) + " of rod " +
+    throw ModelError(field + ".cable", "refers to cable " + std::to_string(sub) + " of rod " +
                                 std::to_string(index) + ", which has " +
                                 std::to_string(model.rods[index].cables.size()));
   }

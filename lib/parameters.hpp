@@ -76,8 +76,9 @@ class ParameterSet {
   static constexpr int kMaxSize = 10000000;
 
   // Appends a block; throws ModelError naming `field` (e.g. "optimization.parameters[2]")
-  // when the index does not exist in the model, the block repeats one already added, or γ
-  // would exceed kMaxSize.
+  // when the block repeats one already added or γ would exceed kMaxSize, and the key of an
+  // index that does not exist in the model (`field`.index for forces, torques and springs,
+  // .node_force, .cable).
   void add(const Model& model, ParameterKind kind, int index, int sub, const std::string& field);
 
   // Bounds of the last block added; throws ModelError naming `field` unless lower < upper

@@ -549,21 +549,21 @@ TEST(OptimizationErrors, NamesThatDoNotExist) {
 
 TEST(OptimizationErrors, IndicesOutOfRange) {
   expect_parameter_rejected(R"({"kind": "node_force", "rod": "arm", "node_force": 2})",
-                            "optimization.parameters[0]", "node force 2 of rod 1, which has 2");
+                            "optimization.parameters[0].node_force", "node force 2 of rod 1, which has 2");
   expect_parameter_rejected(R"({"kind": "node_force", "rod": "stub", "node_force": 0})",
-                            "optimization.parameters[0]", "node force 0 of rod 0, which has 0");
+                            "optimization.parameters[0].node_force", "node force 0 of rod 0, which has 0");
   expect_parameter_rejected(R"({"kind": "node_force", "rod": "arm", "node_force": -1})",
                             "optimization.parameters[0].node_force", "must be an integer in [0,");
   expect_parameter_rejected(R"({"kind": "cable_tension", "rod": "arm", "cable": 2})",
-                            "optimization.parameters[0]", "cable 2 of rod 1, which has 2");
+                            "optimization.parameters[0].cable", "cable 2 of rod 1, which has 2");
   expect_parameter_rejected(R"({"kind": "cable_tension", "rod": "arm"})",
                             "optimization.parameters[0].cable", "required but missing");
-  expect_parameter_rejected(R"({"kind": "force", "index": 2})", "optimization.parameters[0]",
+  expect_parameter_rejected(R"({"kind": "force", "index": 2})", "optimization.parameters[0].index",
                             "force 2");
-  expect_parameter_rejected(R"({"kind": "torque", "index": 5})", "optimization.parameters[0]",
+  expect_parameter_rejected(R"({"kind": "torque", "index": 5})", "optimization.parameters[0].index",
                             "torque 5");
   expect_parameter_rejected(R"({"kind": "spring_stiffness", "index": 2})",
-                            "optimization.parameters[0]", "spring 2");
+                            "optimization.parameters[0].index", "spring 2");
   expect_parameter_rejected(R"({"kind": "rest_darboux", "rod": "stub"})",
                             "optimization.parameters[0]", "no interior node");
   expect_term_rejected(
