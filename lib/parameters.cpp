@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <iomanip>
 #include <sstream>
 
 #include "so3.hpp"
@@ -222,7 +223,8 @@ void ParameterSet::set_bounds(double lower, double upper, const std::string& fie
   if (blocks_.empty()) throw ModelError(field, "bounds without a parameter block");
   if (std::isnan(lower) || std::isnan(upper) || !(lower < upper)) {
     std::ostringstream os;
-    os << "the lower bound (" << lower << ") must be below the upper bound (" << upper << ")";
+    os << std::setprecision(17) << "the lower bound (" << lower
+       << ") must be below the upper bound (" << upper << ")";
     throw ModelError(field, os.str());
   }
   blocks_.back().lower = lower;

@@ -1,6 +1,7 @@
 #include "optimization.hpp"
 
 #include <algorithm>
+#include <cctype>
 #include <chrono>
 #include <cmath>
 #include <fstream>
@@ -95,27 +96,44 @@ void parse_parameter(ObjectReader& r, const Scene& scene, OptimizationSpec& spec
   }
 }
 
-// The initial γ must lie within the bounds, and the optimiser must be able to keep them.
-void check_bounds(const OptimizationSpec& spec, const Scene& scene, const ObjectReader& o) {
-  const Eigen::VectorXd gamma = spec.parameters.initial_values(scene.model);
-  const std::vector<ParameterBlock>& blocks = spec.parameters.blocks();
-  for (std::size_t b = 0; b < blocks.size(); ++b) {
-    const std::string path = item_path(o.field("parameters"), b);
-    for (int i = blocks[b].offset; i < blocks[b].offset + blocks[b].size; ++i) {
-      const bool below = gamma(i) < blocks[b].lower, above = gamma(i) > blocks[b].upper;
-      if (!below && !above) continue;
-      std::ostringstream reason;
-      reason << "the initial value " << gamma(i) << " of " << spec.parameters.describe(scene.model, i)
-             << " is " << (below ? "below" : "above") << " this bound ("
-             << (below ? blocks[b].lower : blocks[b].upper) << ")";
-      o.fail(path + (below ? ".lower" : ".upper"), reason.str());
+// The first entry of γ outside its block's bounds, or −1.
+int outside_bounds(const ParameterSet& parameters, const Eigen::VectorXd& gamma) {
+  for (const ParameterBlock& b : parameters.blocks()) {
+    for (int i = b.offset; i < b.offset + b.size; ++i) {
+      if (!(b.lower <= gamma(i) && gamma(i) <= b.upper)) return i;
     }
   }
-  if (spec.parameters.bounded() && spec.optimizer.optimizer == Optimizer::kCeresLbfgs) {
-    o.fail(o.field("optimizer"), "ceres-lbfgs cannot respect the parameters' bounds (Ceres's "
-                                 "GradientProblemSolver is unconstrained): use nlopt-lbfgs or "
-                                 "ipopt-lbfgs");
-  }
+  return -1;
+}
+
+// The block holding entry i of γ.
+const ParameterBlock& block_of(const ParameterSet& parameters, int i) {
+  return *std::find_if(parameters.blocks().begin(), parameters.blocks().end(),
+                       [i](const ParameterBlock& b) { return i < b.offset + b.size; });
+}
+
+// "the value 2.5 of rods[1].cables[1].frame[1] is above its upper bound (2)", for entry i.
+std::string bound_violation(const ParameterSet& parameters, const Model& model,
+                            const Eigen::VectorXd& gamma, int i, const char* what) {
+  const ParameterBlock& block = block_of(parameters, i);
+  const bool below = !(gamma(i) >= block.lower);
+  std::ostringstream reason;
+  reason << std::setprecision(17) << "the " << what << ' ' << gamma(i) << " of "
+         << parameters.describe(model, i) << " is " << (below ? "below its lower" : "above its upper")
+         << " bound (" << (below ? block.lower : block.upper) << ")";
+  return reason.str();
+}
+
+// The scene's initial γ must lie within the bounds (the optimisers start there).
+void check_initial_within_bounds(const OptimizationSpec& spec, const Scene& scene,
+                                 const ObjectReader& o) {
+  const Eigen::VectorXd gamma = spec.parameters.initial_values(scene.model);
+  const int i = outside_bounds(spec.parameters, gamma);
+  if (i < 0) return;
+  const ParameterBlock& b = block_of(spec.parameters, i);
+  const std::size_t index = static_cast<std::size_t>(&b - spec.parameters.blocks().data());
+  o.fail(item_path(o.field("parameters"), index) + (gamma(i) >= b.lower ? ".upper" : ".lower"),
+         bound_violation(spec.parameters, scene.model, gamma, i, "initial value"));
 }
 
 // The 2×3 orthographic projection onto two world axes, "xy", "xz" or "yz".
@@ -292,7 +310,7 @@ OptimizationSpec parse_optimization(const json& value, const Scene& scene) {
   if (spec.loss_scale < 0.0) o.fail(o.field("loss_scale"), "must be > 0 (or absent: the initial loss)");
   o.finish();
   spec.optimizer.validate();
-  check_bounds(spec, scene, o);
+  check_initial_within_bounds(spec, scene, o);
   return spec;
 }
 
@@ -307,27 +325,44 @@ DifferentiableSimulation make_differentiable_simulation(const Scene& scene) {
 namespace {
 
 // γ from a parameters.csv ("parameter,value", then one row per entry of γ, named as
-// ParameterSet::describe names it); the names must be the scene's, in order.
+// ParameterSet::describe names it); the names must be the scene's, in order. Each line is
+// read without surrounding whitespace (a CRLF file reads as an LF one); blank lines are
+// skipped; the line numbers in errors are the file's.
 Eigen::VectorXd read_parameters(const std::filesystem::path& file,
                                 const DifferentiableSimulation& sim, const Model& model) {
   const std::string source = file.string();
   std::ifstream in(file);
-  if (!in) throw SceneError(source, "", "cannot open the parameters file");
+  if (!std::filesystem::is_regular_file(file) || !in) {
+    throw SceneError(source, "", "cannot open the parameters file (not a readable file)");
+  }
+  int number = 0;
   std::string line;
-  if (!std::getline(in, line) || line != "parameter,value") {
-    throw SceneError(source, "line 1", "must be the header \"parameter,value\"");
+  const auto next = [&] {  // the next non-blank line, trimmed; false at the end
+    while (std::getline(in, line)) {
+      ++number;
+      const std::size_t first = line.find_first_not_of(" \t\r");
+      if (first == std::string::npos) continue;
+      line = line.substr(first, line.find_last_not_of(" \t\r") - first + 1);
+      return true;
+    }
+    return false;
+  };
+  const auto where = [&] { return "line " + std::to_string(number); };
+  if (!next()) throw SceneError(source, "", "is empty (expected the header \"parameter,value\")");
+  if (line != "parameter,value") {
+    throw SceneError(source, where(), "must be the header \"parameter,value\" (got \"" + line + "\")");
   }
   Eigen::VectorXd gamma(sim.parameters().size());
   for (int i = 0; i < gamma.size(); ++i) {
-    const std::string where = "line " + std::to_string(i + 2);
     const std::string name = sim.parameters().describe(model, i);
-    if (!std::getline(in, line)) {
-      throw SceneError(source, where, "missing: the scene has " + std::to_string(gamma.size()) +
-                                          " parameters, the file " + std::to_string(i));
+    if (!next()) {
+      throw SceneError(source, "line " + std::to_string(number + 1),
+                       "missing: the scene has " + std::to_string(gamma.size()) +
+                           " parameters, the file " + std::to_string(i));
     }
     const std::size_t comma = line.rfind(',');
     if (comma == std::string::npos || line.substr(0, comma) != name) {
-      throw SceneError(source, where, "expected the parameter " + name + " (got \"" + line + "\")");
+      throw SceneError(source, where(), "expected the parameter " + name + " (got \"" + line + "\")");
     }
     const std::string value = line.substr(comma + 1);
     std::size_t used = 0;
@@ -336,13 +371,14 @@ Eigen::VectorXd read_parameters(const std::filesystem::path& file,
     } catch (const std::exception&) {
       used = 0;
     }
-    if (used == 0 || used != value.size() || !std::isfinite(gamma(i))) {
-      throw SceneError(source, where, "the value of " + name + " must be a finite number (got \"" +
-                                          value + "\")");
+    if (value.empty() || std::isspace(static_cast<unsigned char>(value[0])) ||
+        used != value.size() || !std::isfinite(gamma(i))) {
+      throw SceneError(source, where(), "the value of " + name + " must be a finite number (got \"" +
+                                            value + "\")");
     }
   }
-  if (std::getline(in, line) && !line.empty()) {
-    throw SceneError(source, "line " + std::to_string(gamma.size() + 2),
+  if (next()) {
+    throw SceneError(source, where(),
                      "more rows than the scene's " + std::to_string(gamma.size()) + " parameters");
   }
   return gamma;
@@ -458,10 +494,9 @@ int run_optimize(const Scene& scene, const OptimizeOptions& options, std::ostrea
   optimizer.validate();
   Bounds bounds;
   if (sim.parameters().bounded()) {
-    if (optimizer.optimizer == Optimizer::kCeresLbfgs) {
-      throw SceneError(scene.source, "optimization.parameters",
-                       "has bounds, which --optimizer ceres-lbfgs cannot respect (Ceres's "
-                       "GradientProblemSolver is unconstrained): use nlopt-lbfgs or ipopt-lbfgs");
+    if (optimizer.optimizer == Optimizer::kCeresLbfgs) {  // bad input: before anything is written
+      throw SceneError(scene.source, options.optimizer ? "--optimizer" : "optimization.optimizer",
+                       std::string("the parameters have bounds, and ") + kCeresHasNoBounds);
     }
     bounds = {sim.parameters().lower_bounds(), sim.parameters().upper_bounds()};
   }
@@ -478,6 +513,12 @@ int run_optimize(const Scene& scene, const OptimizeOptions& options, std::ostrea
       throw SceneError(checkpoint_file.string(), "", e.what());
     }
     start = checkpoint.best;
+    // The scene's bounds may have changed since the checkpoint was written.
+    if (const int i = outside_bounds(sim.parameters(), start); i >= 0) {
+      throw SceneError(checkpoint_file.string(), "best",
+                       bound_violation(sim.parameters(), scene.model, start, i, "value") +
+                           " in the scene: resume cannot start there");
+    }
     out << "resuming from " << checkpoint_file.string() << ": " << checkpoint.history.size()
         << " evaluations, best normalized loss " << checkpoint.best_loss / checkpoint.loss_scale
         << '\n';

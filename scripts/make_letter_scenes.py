@@ -2,7 +2,7 @@
 """Writes problems/scenes/letters/letter_<L>.json: the "SIGGRAPH" letters of paper Fig. 1 /
 Table 3. A straight rod, at rest, whose initial node velocities are optimised so that after
 100 frames its nodes lie on the letter (problems/letters.cpp, 0.5 m high at the origin).
-Rod settings from paper Table 2 (Fig. 1 row) except two, both measured (scripts/letters_table.sh
+Rod settings from paper Table 2 (Fig. 1 row) except two, both measured (scripts/letters_table.py
 prints the horizon sweep; README "Differentiable simulation"):
 * Bending and twist stiffness are 1e-2 N m^2, not Table 2's 1e2: with our bend-twist energy
   (1/2 l dw^T K dw per interior node, lib/rod_terms.hpp) a 1e2 rod cannot be bent into a letter

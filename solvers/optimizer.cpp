@@ -431,9 +431,11 @@ class LbfgsNlp final : public Ipopt::TNLP {
     // Beyond ±nlp_lower/upper_bound_inf (±1e19): no bound.
     std::fill(x_l, x_l + n, -2e19);
     std::fill(x_u, x_u + n, 2e19);
-    for (Ipopt::Index i = 0; i < n && !bounds_.empty(); ++i) {
-      if (std::isfinite(bounds_.lower(i))) x_l[i] = bounds_.lower(i);
-      if (std::isfinite(bounds_.upper(i))) x_u[i] = bounds_.upper(i);
+    if (!bounds_.empty()) {
+      for (Ipopt::Index i = 0; i < n; ++i) {
+        if (std::isfinite(bounds_.lower(i))) x_l[i] = bounds_.lower(i);
+        if (std::isfinite(bounds_.upper(i))) x_u[i] = bounds_.upper(i);
+      }
     }
     return true;
   }
@@ -563,9 +565,7 @@ void check_bounds(const Bounds& bounds, const Eigen::VectorXd& x0, Optimizer opt
   }
   const bool finite = (bounds.lower.array().isFinite() || bounds.upper.array().isFinite()).any();
   if (finite && optimizer == Optimizer::kCeresLbfgs) {
-    throw std::invalid_argument(
-        "minimize: ceres-lbfgs cannot respect bounds (Ceres's GradientProblemSolver is "
-        "unconstrained): use nlopt-lbfgs or ipopt-lbfgs");
+    throw std::invalid_argument(std::string("minimize: ") + kCeresHasNoBounds);
   }
 }
 

@@ -143,6 +143,10 @@ struct Bounds {
   Eigen::VectorXd lower, upper;
   bool empty() const { return lower.size() == 0 && upper.size() == 0; }
 };
+// Why a bounded problem is refused for Ceres (minimize, and `liedyn optimize` before it).
+inline constexpr const char* kCeresHasNoBounds =
+    "ceres-lbfgs cannot respect bounds (Ceres's GradientProblemSolver is unconstrained): use "
+    "nlopt-lbfgs or ipopt-lbfgs";
 
 // Returns f(x) and writes ∇f(x) into `gradient` (already sized like x; do not resize it).
 // May throw std::exception (e.g. a forward simulation step that did not converge).

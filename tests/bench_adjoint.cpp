@@ -40,14 +40,12 @@ const Problem& problem(const std::string& scene) {
     const liedyn::Scene s = liedyn::load_scene(std::string(LIEDYN_SOURCE_DIR) + "/" + scene);
     DifferentiableSimulation sim = liedyn::make_differentiable_simulation(s);
     const Eigen::VectorXd gamma0 = sim.initial_parameters();
-    liedyn::OptimizerOptions options;
+    liedyn::OptimizerOptions options = s.optimization->optimizer;  // the scene's, but NLopt
+    options.optimizer = liedyn::Optimizer::kNloptLbfgs;
     options.max_iterations = 5;
     options.target_normalized_loss = 0.0;
     const auto f = [&sim](const Eigen::VectorXd& x, Eigen::VectorXd& gradient) {
-      Eigen::VectorXd g;
-      const double loss = sim.evaluate(x, &g).loss;
-      gradient = g;
-      return loss;
+      return sim.evaluate(x, &gradient).loss;
     };
     const double scale = sim.evaluate(gamma0, nullptr).loss;
     liedyn::Bounds bounds;  // the scene's (the cables pull)

@@ -674,14 +674,19 @@ TEST(OptimizationErrors, Bounds) {
   // the arm's cable 1 pulls with 2.5.
   expect_parameter_rejected(R"({"kind": "force", "index": 1, "lower": 0.5})",
                             "optimization.parameters[0].lower",
-                            "the initial value 0 of forces[1].frame[1][0] is below this bound (0.5)");
+                            "the initial value 0 of forces[1].frame[1][0] is below its lower bound (0.5)");
   expect_parameter_rejected(
       kForceParameter + R"(, {"kind": "cable_tension", "rod": "arm", "cable": 1, "upper": 2})",
-      "optimization.parameters[1].upper", "the initial value 2.5 of rods[1].cables[1]");
-  // Ceres's L-BFGS is unconstrained: a bounded problem for it is refused, not run unbounded.
-  expect_rejected(scene_text(block(R"({"kind": "force", "index": 1, "upper": 5})", kEffortTerm,
-                                   R"(, "optimizer": "ceres-lbfgs")")),
-                  "optimization.optimizer", "ceres-lbfgs cannot respect the parameters' bounds");
+      "optimization.parameters[1].upper",
+      "the initial value 2.5 of rods[1].cables[1].tension.frame[1] is above its upper bound (2)");
+  // Bounds that differ beyond 6 digits are printed so that they differ.
+  expect_parameter_rejected(R"({"kind": "force", "index": 1, "lower": 0.1000001, "upper": 0.1})",
+                            "optimization.parameters[0].lower", "(0.10000009999999999) must be below the upper bound (0.10000000000000001)");
+  // A bounded scene whose optimizer is Ceres still loads (gradcheck and simulate need no
+  // optimiser; `optimize` refuses it, OptimizationCli.CablesOnlyPull).
+  const Scene ceres = parsed(scene_text(block(R"({"kind": "force", "index": 1, "upper": 5})",
+                                              kEffortTerm, R"(, "optimizer": "ceres-lbfgs")")));
+  EXPECT_TRUE(ceres.optimization->parameters.bounded());
 }
 
 TEST(OptimizationErrors, BlockStructure) {
@@ -1101,6 +1106,21 @@ TEST_F(OptimizationCli, GradcheckAtTheParametersOfARun) {
   rejected_with("parameter,value\nbodies[0].angular_velocity[0],1e999\n", "line 2: the value of");
   rejected_with("parameter,value\nbodies[0].angular_velocity[0],1.5x\n", "line 2: the value of");
   rejected_with(good + "bodies[0].angular_velocity[0],1\n", "line 8: more rows than the scene's 6");
+  rejected_with(good + "\n\njunk\n", "line 10: more rows than the scene's 6");
+  rejected_with("parameter,value\nbodies[0].angular_velocity[0], 1\n", "line 2: the value of");
+  rejected_with("", "is empty");
+  rejected_with("\n  \n", "is empty");
+  const Result directory = run({"gradcheck", die(), "--parameters", "die"});
+  EXPECT_EQ(directory.exit_code, 2);
+  EXPECT_NE(directory.err.find("die: cannot open the parameters file"), std::string::npos)
+      << directory.err;
+  // CRLF line endings, surrounding blanks and blank lines are read as the plain file.
+  std::string crlf = "\r\n";
+  for (const std::string& row : rows) crlf += "  " + row + " \r\n\r\n";
+  { std::ofstream(dir_ / "crlf.csv") << crlf; }
+  const Result windows = run({"gradcheck", die(), "--parameters", "crlf.csv"});
+  EXPECT_EQ(windows.exit_code, 0) << windows.out << windows.err;
+  EXPECT_NEAR(loss_of(windows.out), loss_of(at_run.out), 1e-12 * loss_of(at_run.out));
   const Result missing = run({"gradcheck", die(), "--parameters", "none.csv"});
   EXPECT_EQ(missing.exit_code, 2);
   EXPECT_NE(missing.err.find("none.csv: cannot open the parameters file"), std::string::npos)
@@ -1295,10 +1315,49 @@ TEST_F(OptimizationCli, CablesOnlyPull) {
 
   const Result ceres = run({"optimize", scene, "--out", "ceres", "--optimizer", "ceres-lbfgs"});
   EXPECT_EQ(ceres.exit_code, 2) << ceres.out << ceres.err;
-  EXPECT_NE(ceres.err.find("cable_tip_curve.json: optimization.parameters: has bounds"),
+  EXPECT_NE(ceres.err.find("cable_tip_curve.json: --optimizer: the parameters have bounds, and "
+                           "ceres-lbfgs cannot respect bounds"),
             std::string::npos)
       << ceres.err;
   EXPECT_FALSE(fs::exists(dir_ / "ceres"));
+
+  // The same with Ceres named in the scene: the error names the scene's field, and an
+  // override to NLopt runs.
+  nlohmann::json with_ceres = nlohmann::json::parse(liedyn::test::read_file(scene));
+  with_ceres["optimization"]["optimizer"] = "ceres-lbfgs";
+  with_ceres["optimization"]["max_iterations"] = 2;
+  { std::ofstream(dir_ / "ceres.json") << with_ceres.dump(); }
+  const Result named = run({"optimize", "ceres.json", "--out", "named"});
+  EXPECT_EQ(named.exit_code, 2) << named.out << named.err;
+  EXPECT_NE(named.err.find("ceres.json: optimization.optimizer: the parameters have bounds"),
+            std::string::npos)
+      << named.err;
+  EXPECT_FALSE(fs::exists(dir_ / "named"));
+  const Result overridden =
+      run({"optimize", "ceres.json", "--out", "overridden", "--optimizer", "nlopt-lbfgs"});
+  EXPECT_EQ(overridden.exit_code, 3) << overridden.out << overridden.err;  // 2 iterations: short
+}
+
+// --resume from a checkpoint whose best point lies outside bounds added to the scene since:
+// bad input naming the checkpoint and the entry (exit 2), nothing changed.
+TEST_F(OptimizationCli, ResumeOutsideNewBoundsExits2) {
+  ASSERT_EQ(run({"optimize", die(), "--out", "die", "--max-iterations", "2"}).exit_code, 3);
+  const std::string before = liedyn::test::read_file(dir_ / "die/history.csv");
+  const nlohmann::json checkpoint =
+      nlohmann::json::parse(liedyn::test::read_file(dir_ / "die/checkpoint.json"));
+  const double vz = checkpoint.at("best").at(5).get<double>();  // bodies[0].linear_velocity[2]
+  nlohmann::json bounded = nlohmann::json::parse(liedyn::test::read_file(die()));
+  bounded["optimization"]["parameters"][1]["lower"] = -10;
+  bounded["optimization"]["parameters"][1]["upper"] = 1.0;  // v_0 = (0.5, 0, 1) is within
+  { std::ofstream(dir_ / "bounded.json") << bounded.dump(); }
+  ASSERT_GT(vz, 1.0) << "the set-up: the run raised v_z above the new upper bound";
+  const Result r = run({"optimize", "bounded.json", "--out", "die", "--resume"});
+  EXPECT_EQ(r.exit_code, 2) << r.out << r.err;
+  EXPECT_NE(r.err.find("checkpoint.json: best: the value "), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("of bodies[0].linear_velocity[2] is above its upper bound (1) in the scene"),
+            std::string::npos)
+      << r.err;
+  EXPECT_EQ(liedyn::test::read_file(dir_ / "die/history.csv"), before);
 }
 
 TEST_F(OptimizationCli, ResumeContinuesTheHistory) {
