@@ -8,6 +8,7 @@
 #include <iomanip>
 #include <limits>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <ostream>
 #include <sstream>
 
@@ -96,44 +97,39 @@ void parse_parameter(ObjectReader& r, const Scene& scene, OptimizationSpec& spec
   }
 }
 
-// The first entry of γ outside its block's bounds, or −1.
-int outside_bounds(const ParameterSet& parameters, const Eigen::VectorXd& gamma) {
-  for (const ParameterBlock& b : parameters.blocks()) {
-    for (int i = b.offset; i < b.offset + b.size; ++i) {
-      if (!(b.lower <= gamma(i) && gamma(i) <= b.upper)) return i;
+// The first entry of γ outside its block's bounds: its block, which bound, and the reason,
+// e.g. "the value 2.5 of rods[1].cables[1].tension.frame[1] is above its upper bound (2)".
+struct BoundViolation {
+  std::size_t block = 0;
+  bool below = false;  // under the lower bound (else over the upper one)
+  std::string reason;
+};
+std::optional<BoundViolation> bound_violation(const ParameterSet& parameters, const Model& model,
+                                              const Eigen::VectorXd& gamma, const char* what) {
+  const std::vector<ParameterBlock>& blocks = parameters.blocks();
+  for (std::size_t b = 0; b < blocks.size(); ++b) {
+    for (int i = blocks[b].offset; i < blocks[b].offset + blocks[b].size; ++i) {
+      if (blocks[b].lower <= gamma(i) && gamma(i) <= blocks[b].upper) continue;
+      const bool below = !(gamma(i) >= blocks[b].lower);
+      std::ostringstream reason;
+      reason << std::setprecision(17) << "the " << what << ' ' << gamma(i) << " of "
+             << parameters.describe(model, i) << " is "
+             << (below ? "below its lower" : "above its upper") << " bound ("
+             << (below ? blocks[b].lower : blocks[b].upper) << ")";
+      return BoundViolation{b, below, reason.str()};
     }
   }
-  return -1;
-}
-
-// The block holding entry i of γ.
-const ParameterBlock& block_of(const ParameterSet& parameters, int i) {
-  return *std::find_if(parameters.blocks().begin(), parameters.blocks().end(),
-                       [i](const ParameterBlock& b) { return i < b.offset + b.size; });
-}
-
-// "the value 2.5 of rods[1].cables[1].frame[1] is above its upper bound (2)", for entry i.
-std::string bound_violation(const ParameterSet& parameters, const Model& model,
-                            const Eigen::VectorXd& gamma, int i, const char* what) {
-  const ParameterBlock& block = block_of(parameters, i);
-  const bool below = !(gamma(i) >= block.lower);
-  std::ostringstream reason;
-  reason << std::setprecision(17) << "the " << what << ' ' << gamma(i) << " of "
-         << parameters.describe(model, i) << " is " << (below ? "below its lower" : "above its upper")
-         << " bound (" << (below ? block.lower : block.upper) << ")";
-  return reason.str();
+  return std::nullopt;
 }
 
 // The scene's initial γ must lie within the bounds (the optimisers start there).
 void check_initial_within_bounds(const OptimizationSpec& spec, const Scene& scene,
                                  const ObjectReader& o) {
   const Eigen::VectorXd gamma = spec.parameters.initial_values(scene.model);
-  const int i = outside_bounds(spec.parameters, gamma);
-  if (i < 0) return;
-  const ParameterBlock& b = block_of(spec.parameters, i);
-  const std::size_t index = static_cast<std::size_t>(&b - spec.parameters.blocks().data());
-  o.fail(item_path(o.field("parameters"), index) + (gamma(i) >= b.lower ? ".upper" : ".lower"),
-         bound_violation(spec.parameters, scene.model, gamma, i, "initial value"));
+  if (const auto v = bound_violation(spec.parameters, scene.model, gamma, "initial value")) {
+    o.fail(item_path(o.field("parameters"), v->block) + (v->below ? ".lower" : ".upper"),
+           v->reason);
+  }
 }
 
 // The 2×3 orthographic projection onto two world axes, "xy", "xz" or "yz".
@@ -514,10 +510,9 @@ int run_optimize(const Scene& scene, const OptimizeOptions& options, std::ostrea
     }
     start = checkpoint.best;
     // The scene's bounds may have changed since the checkpoint was written.
-    if (const int i = outside_bounds(sim.parameters(), start); i >= 0) {
+    if (const auto v = bound_violation(sim.parameters(), scene.model, start, "value")) {
       throw SceneError(checkpoint_file.string(), "best",
-                       bound_violation(sim.parameters(), scene.model, start, i, "value") +
-                           " in the scene: resume cannot start there");
+                       v->reason + " in the scene: resume cannot start there");
     }
     out << "resuming from " << checkpoint_file.string() << ": " << checkpoint.history.size()
         << " evaluations, best normalized loss " << checkpoint.best_loss / checkpoint.loss_scale

@@ -17,6 +17,7 @@
 #include <map>
 #include <memory>
 #include <string>
+#include <utility>
 
 #include "problems/optimization.hpp"
 #include "problems/scene.hpp"
@@ -74,20 +75,21 @@ void BM_Adjoint_Evaluation(benchmark::State& state, const std::string& scene) {
   state.counters["backward_over_forward"] = backward / forward;
 }
 
-BENCHMARK_CAPTURE(BM_Adjoint_Evaluation, LetterS, std::string("problems/scenes/letters/letter_S.json"))
-    ->Unit(benchmark::kMillisecond);
-BENCHMARK_CAPTURE(BM_Adjoint_Evaluation, LetterP, std::string("problems/scenes/letters/letter_P.json"))
-    ->Unit(benchmark::kMillisecond);
-BENCHMARK_CAPTURE(BM_Adjoint_Evaluation, RestShape,
-                  std::string("problems/scenes/optimization/rest_shape_tip_curve.json"))
-    ->Unit(benchmark::kMillisecond);
-BENCHMARK_CAPTURE(BM_Adjoint_Evaluation, Cables,
-                  std::string("problems/scenes/optimization/cable_tip_curve.json"))
-    ->Unit(benchmark::kMillisecond);
-BENCHMARK_CAPTURE(BM_Adjoint_Evaluation, Die, std::string("problems/scenes/optimization/die_throw.json"))
-    ->Unit(benchmark::kMillisecond);
-BENCHMARK_CAPTURE(BM_Adjoint_Evaluation, DieThroughContact,
-                  std::string("problems/scenes/optimization/die_throw_contact.json"))
-    ->Unit(benchmark::kMillisecond);
+// The problems, registered from one table (name, scene).
+const int registered = [] {
+  const std::pair<const char*, const char*> problems[] = {
+      {"LetterS", "problems/scenes/letters/letter_S.json"},
+      {"LetterP", "problems/scenes/letters/letter_P.json"},
+      {"RestShape", "problems/scenes/optimization/rest_shape_tip_curve.json"},
+      {"Cables", "problems/scenes/optimization/cable_tip_curve.json"},
+      {"Die", "problems/scenes/optimization/die_throw.json"},
+      {"DieThroughContact", "problems/scenes/optimization/die_throw_contact.json"}};
+  for (const auto& [name, scene] : problems) {
+    benchmark::RegisterBenchmark((std::string("BM_Adjoint_Evaluation/") + name).c_str(),
+                                 BM_Adjoint_Evaluation, std::string(scene))
+        ->Unit(benchmark::kMillisecond);
+  }
+  return 0;
+}();
 
 }  // namespace
