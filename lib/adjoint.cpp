@@ -1,4 +1,4 @@
-// The adjoint blocks of the incremental potential (incremental_potential.hpp, DESIGN.md §6):
+// The adjoint blocks of the incremental potential (incremental_potential.hpp, docs/design.md §8):
 // each term's Jacobians come from the term itself (inertia.hpp, loads.hpp, rod_terms.hpp,
 // spring.hpp); this file gathers z onto each term's stencil and scatters the products.
 

@@ -22,7 +22,7 @@
 //             direction of approach), so no bounded curvature exists; 0 is the curvature of
 //             the cone along its rays and adds nothing that Newton could mistake for stiffness.
 //
-// Parameter derivative (adjoint, DESIGN.md §6 eq. 21): V is linear in T, so
+// Parameter derivative (adjoint, docs/design.md §8; paper eq. 21): V is linear in T, so
 //   ∂C/∂T = ∂(Lie gradient)/∂T = the Lie gradient at T = 1 = Jdᵀ n   (tension_gradient),
 // and (∂C/∂T)ᵀ z = tension_gradient(q) · z_local. The term reads only q_k: it has no mixed
 // blocks with q_{k−1} or Δq_{k−1}.

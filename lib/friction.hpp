@@ -20,7 +20,7 @@
 // Least-squares form (contract: term.hpp), 1 residual: r = √(2D) (D ≥ μλε/3 > 0 whenever
 // λ > 0, so r is smooth), J = gradientᵀ/r; r = 0, J = 0 when λ = 0.
 //
-// The adjoint (DESIGN.md §6): λ, n and p̂ are functions of q_{k−1}, so the gradient C has the
+// The adjoint (docs/design.md §8): λ, n and p̂ are functions of q_{k−1}, so the gradient C has the
 // mixed block ∂C/∂q_{k−1} (previous_jacobian): with G = ∇φ(p̂), g = ‖G‖, N̂ = ∇²φ(p̂),
 //   ∂λ/∂p̂ = −k G  (λ > 0),   ∂n/∂p̂ = P N̂/g,   ∂u/∂p̂ = −P − (n wᵀ + (n·w) I) ∂n/∂p̂,  w = p − p̂,
 //   ∂f/∂p̂ = μ φ₁ u (∂λ/∂p̂)ᵀ + μλ (φ₁ I + φ₁′ y û ûᵀ) ∂u/∂p̂,

@@ -105,7 +105,7 @@ class IncrementalPotential {
     return scale;
   }
 
-  // ---- Adjoint blocks (paper §5, DESIGN.md §6; lib/adjoint.cpp) -------------------------
+  // ---- Adjoint blocks (paper §5, docs/design.md §8; lib/adjoint.cpp) --------------------
   // The derivatives of C = ∇Ψ other than the Hessian, at the converged q = q_k of a step set
   // up by begin_step(previous, previous_step, k). z is this component's adjoint vector
   // (component layout). Whole-state tangent vectors ("full" layout) hold 3 entries per point,
@@ -163,7 +163,7 @@ struct Component {
 std::vector<Component> build_components(const Model& model);
 
 // The component of rod r: lumped inertia, gravity, stretch, shear, bend–twist and node
-// forces over its free nodes and edges (DESIGN.md §5).
+// forces over its free nodes and edges (docs/design.md §6).
 Component build_rod_component(const Model& model, int r);
 
 // ---------------------------------------------------------------------------------------

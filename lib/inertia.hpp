@@ -56,7 +56,7 @@ struct TranslationalInertia {
   using Residual = LocalResidual<kResiduals>;
   using ResidualJacobian = LocalResidualJacobian<kResiduals, kBlocks>;
   // With a = m/h² and a constant world force `load` on the point (its potential −load·x;
-  // e.g. gravity's scale·weight plus node forces, DESIGN.md §8), completing the square:
+  // e.g. gravity's scale·weight plus node forces, docs/design.md §9.3), completing the square:
   //   a/2 ‖x − x̃‖² − load·x = ½‖r‖² − load·x̃ − ‖load‖²/(2a),
   //   r = √a (x − x̃ − load/a) = √a (x − x̃) − load/√a,   J = √a I.
   // So ½‖r‖² = evaluate() − load·x + const, and Jᵀr = evaluate()'s gradient − load.

@@ -1,5 +1,5 @@
 #pragma once
-// Cosserat rod energy terms (paper §6.2; Spillmann & Teschner 2007; DESIGN.md §5).
+// Cosserat rod energy terms (paper §6.2; Spillmann & Teschner 2007; docs/design.md §6).
 //
 // Layout: positions at nodes x_i (State::points), rotations at edges R_i (State::rotations);
 // edge i joins nodes i and i+1 and carries the material frame R_i (R_i e_z is the edge

@@ -64,7 +64,7 @@ Eigen::Quaterniond to_quaternion(const Matrix3& R);
 
 // Nearest rotation, for a matrix within round-off of SO(3): one Newton step of the polar
 // decomposition, R ← R (3I − RᵀR)/2, which squares the orthonormality error.
-// Called after every update so that drift never accumulates (DESIGN.md §4).
+// Called after every update so that drift never accumulates (docs/design.md §2.3).
 Matrix3 orthonormalize(const Matrix3& R);
 
 // Geodesic distance ‖log(A Bᵀ)‖ ∈ [0, π].

@@ -44,7 +44,7 @@ template <int R, int B>
 using LocalResidualJacobian = Eigen::Matrix<double, R, 3 * B>;
 
 // A term's quantity that may change from frame to frame and may be an optimisation parameter
-// (a force, a torque, a cable tension, a rest Darboux vector; paper §5, DESIGN.md §6).
+// (a force, a torque, a cable tension, a rest Darboux vector; paper §5, docs/design.md §5.1, §8).
 //   * schedule: its value during step k (the step that produces q_k, k ≥ 1) is schedule[k−1];
 //     empty: the term's constant value is kept. IncrementalPotential::begin_step applies it.
 //   * slot: index in the parameter vector γ of its value during step 1 (−1: not a

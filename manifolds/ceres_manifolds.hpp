@@ -1,5 +1,5 @@
 #pragma once
-// Unit quaternions as a Ceres manifold (ceres::Manifold, Ceres 2.1; DESIGN.md §8), with Lie
+// Unit quaternions as a Ceres manifold (ceres::Manifold, Ceres 2.1; docs/design.md §9.3), with Lie
 // derivatives.
 //
 // Ceres's cost functions return Jacobians with respect to a parameter block's AMBIENT
@@ -11,7 +11,7 @@
 // and since M(x) · PlusJacobian(x) = I (Minus inverts Plus), Ceres sees
 //   J_amb · PlusJacobian(x) = J_Lie,
 // exactly the Lie Jacobian, without differentiating R(q) (A.23); and numeric checks through
-// Plus pass (padding [J_Lie 0] with a fake PlusJacobian would not: DESIGN.md §8).
+// Plus pass (padding [J_Lie 0] with a fake PlusJacobian would not: docs/design.md §9.3).
 //
 // * UnitQuaternionRetraction — q = (x, y, z, s) (manifolds/quaternion.hpp), 4 doubles:
 //     Plus(q, δ)  = (q + Q(q) δ)/‖q + Q(q) δ‖   (quat::retract: turns by 2 atan(‖δ‖/2)),

@@ -1,6 +1,6 @@
 #pragma once
 // Unit quaternions q = (x, y, z, s) (vector part, then scalar part: the order and formulas of
-// the thesis appendix in ../shared/seeds/001, eqs. A.13–A.25), as a rotation parameterisation
+// docs/design.md §10.3, eqs. A.13–A.25), as a rotation parameterisation
 // for Newton's method beside the Lie one (solvers/newton.hpp).
 //
 // Unit norm is kept by the update, not by a constraint: a Newton step δ ∈ R³ moves q along

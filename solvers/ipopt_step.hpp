@@ -1,5 +1,5 @@
 #pragma once
-// The backward-Euler step as an unconstrained NLP for Ipopt 3.11 (DESIGN.md §8): minimise
+// The backward-Euler step as an unconstrained NLP for Ipopt 3.11 (docs/design.md §9.4): minimise
 // the component's incremental potential Ψ (paper §4.2) over n = component.dofs variables,
 // with no constraints (m = 0) and no bounds. Ipopt has no manifolds, so each rotation is
 // written in a chart around a reference R₀ (manifolds/rotation_chart.hpp):
@@ -12,7 +12,7 @@
 // (quat is rejected by SolverOptions::validate: it would need the unit-norm constraint.)
 //
 // Derivatives (manifolds/rotation_vector.hpp), exact, from the Lie gradient g and Lie
-// Hessian H that the terms provide (DESIGN.md §2):
+// Hessian H that the terms provide (docs/design.md §1.4):
 //   ∂Ψ/∂θ   = J_l(θ)ᵀ g,
 //   ∂²Ψ/∂θ² = J_l(θ)ᵀ H_θθ J_l(θ) + C(θ, g),   ∂²Ψ/∂x∂θ = H_xθ J_l(θ),
 // because exp(θ + ε) R₀ = exp(J_l(θ) ε + O(ε²)) exp(θ) R₀: a change ε of the variable is a

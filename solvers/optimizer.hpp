@@ -1,11 +1,11 @@
 #pragma once
-// The outer optimisers of trajectory optimisation (DESIGN.md §6, §8): three L-BFGS back-ends
+// The outer optimisers of trajectory optimisation (docs/design.md §11): three L-BFGS back-ends
 // behind one function, with the same objective, gradient and stopping rule, so that they can
 // be compared on the same problem.
 //
 // Problem. Minimise a loss f(x) over parameters x ∈ Rⁿ (initial velocities, per-frame forces,
 // rest shape, …). One call of the objective returns f(x) and its exact gradient ∇f(x) — for
-// a trajectory, one forward simulation and one adjoint pass (DESIGN.md §6), typically
+// a trajectory, one forward simulation and one adjoint pass (docs/design.md §8), typically
 // 1–100 ms: evaluations are what counts. The back-ends' own work is O(m n) per iteration for
 // memory m, except Ipopt's fixed bookkeeping of about 1 ms per iteration and more (a KKT
 // factorisation, timing, option look-ups), which dominates for cheap objectives.

@@ -15,7 +15,8 @@
 //                                    gradient pulled back: ∇φ(δ) = blockdiag(I, J_l(δ_j)ᵀ) g(q ⊕ δ)
 //                                    (f(exp(δ+η)R) = f(exp(J_l(δ)η) exp(δ)R)). Differencing the
 //                                    Lie gradient FIELD g(q ⊕ δ) instead would give H − ½hat(g)
-//                                    (DESIGN.md §2), which is why the J_l(δ)ᵀ factor is there.
+//                                    (docs/design.md §1.4), which is why the J_l(δ)ᵀ factor is
+//                                    there.
 //       check_lie_hessian_from_value second differences of φ itself (needs no gradient).
 //   * Jacobian of a State → State map: output rotations are differenced in the tangent space,
 //     (log(Q(q ⊕ εe)Q(q)ᵀ) − log(Q(q ⊖ εe)Q(q)ᵀ)) / 2ε.
@@ -441,7 +442,7 @@ template <class Term>
 // Test points shared by the term suites.
 
 // Rotation angles every term is evaluated at: 0, tiny, the Taylor-branch switch, ordinary,
-// near π and π, near 2π (DESIGN.md: the extremes of the parameterisation).
+// near π and π, near 2π (docs/design.md §1.6: the extremes of the parameterisation).
 inline const std::vector<double> kAngles = {
     0.0, 1e-9, 1e-4, 1.0, 2.5, std::numbers::pi - 1e-6, std::numbers::pi,
     2.0 * std::numbers::pi - 1e-3, 2.0 * std::numbers::pi - 1e-6};

@@ -191,7 +191,7 @@ TEST_P(AdjointGradient, CantileverPerFrameControls) {
   expect_matches(m, p, g);
 }
 
-// How the adjoint's error depends on the forward Newton tolerance (DESIGN.md §6): the rod of
+// How the adjoint's error depends on the forward Newton tolerance (docs/design.md §8.5): the rod of
 // RodNodeVelocitiesRestShapeAndStiffness, tolerances 1e-4 … 1e-12 against the tight reference.
 // Measured (Release): 1e-4 → 8.9e-3, 1e-6 → 3.8e-4, 1e-8 … 1e-12 → 4.9e-8 (the resolution of
 // the differences; see the README); asserted: the error falls by at least 100× from 1e-4 to

@@ -1,5 +1,5 @@
-// The adjoint blocks of the energy terms and of the assembled potential (paper §5, DESIGN.md
-// §6): derivatives of a term's Lie gradient C (what evaluate() writes into g) with respect to
+// The adjoint blocks of the energy terms and of the assembled potential (paper §5, docs/design.md
+// §8): derivatives of a term's Lie gradient C (what evaluate() writes into g) with respect to
 // things other than the current state q, against central finite differences of C itself,
 // with the comparison, round-off floor and non-zero requirement of tests/fd_check.hpp.
 //

@@ -1,8 +1,8 @@
 // The unit-quaternion manifold for Ceres (manifolds/ceres_manifolds.hpp): Plus/Minus
 // consistency, their Jacobians against central finite differences, and — the property the
 // back-end relies on — that a cost returning J_Lie · MinusJacobian passes Ceres's own
-// GradientChecker, while the padded [J_Lie 0] of DESIGN.md §8 does not. At the extreme angles
-// of tests/fd_check.hpp.
+// GradientChecker, while the padded [J_Lie 0] of docs/design.md §9.3 does not. At the extreme
+// angles of tests/fd_check.hpp.
 
 #include <ceres/ceres.h>
 #include <ceres/gradient_checker.h>

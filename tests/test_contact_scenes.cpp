@@ -266,7 +266,7 @@ TEST(ContactFriction, ASpinningDiskOnAPlaneLosesItsSpinAtCoulombsRate) {
   // Each sample slides at a ω ≫ ε_v, so friction is exactly Coulomb's, μ λ per sample; with
   // Σλ = m g the torque is μ m g a and I_z = ½ m a² gives α = 2 μ g / a, until the spin stops
   // (and never reverses). Backward Euler itself slows a spin too: its energy factor
-  // (1 + ω²h²)⁻² per step (DESIGN.md §10) is a deceleration c ω³ with c ≈ h. c is measured on
+  // (1 + ω²h²)⁻² per step (docs/design.md §13) is a deceleration c ω³ with c ≈ h. c is measured on
   // the same disk without friction and added at the friction run's own ⟨ω³⟩ (1.2 % of α
   // here), which leaves 0.2 % for the ripple of the normal force.
   const DiskSpin frictionless = spin_disk(0.0);

@@ -1,4 +1,5 @@
-// Unit quaternions (manifolds/quaternion.hpp; thesis appendix eqs. A.13–A.25, order (x, y, z, s)):
+// Unit quaternions (manifolds/quaternion.hpp; docs/design.md §10.3, eqs. A.13–A.25, order
+// (x, y, z, s)):
 // the algebra against Eigen, the rotation matrix and its derivatives, the round trip through
 // rotation matrices at the hard angles, the rate matrix as a world-frame velocity, and the
 // header's central claim — the gradient and Hessian of δ ↦ Ψ(R(retract(q, δ))) at δ = 0 are

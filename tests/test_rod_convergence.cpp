@@ -1,4 +1,4 @@
-// Convergence of the discrete Cosserat rod in the number of edges N (DESIGN.md §5, §10;
+// Convergence of the discrete Cosserat rod in the number of edges N (docs/design.md §6, §13;
 // issue 3: "convergence in the number of edges"). The same physical cantilever — length L,
 // node 0 and edge 0 clamped — is discretised with N = 4, 8, 16, 32, 64 edges, and a quantity
 // q_N is compared with its continuum value q:

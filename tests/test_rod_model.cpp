@@ -1,5 +1,5 @@
 // Rods in the model (lib/rod.hpp, lib/model.hpp, build_rod_component): discretisation,
-// validation, and first checks against beam mechanics (DESIGN.md §10). The full validation
+// validation, and first checks against beam mechanics (docs/design.md §13). The full validation
 // suite of issue 3 (elastica, vibration, convergence studies) is still to come.
 
 #include <gtest/gtest.h>

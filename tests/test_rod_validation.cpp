@@ -1,4 +1,4 @@
-// Validation of Cosserat rods against beam mechanics (DESIGN.md §10, issue 3):
+// Validation of Cosserat rods against beam mechanics (docs/design.md §13, issue 3):
 //   * large-deflection cantilever under a dead tip load vs the elastica (shooting + RK4);
 //   * first bending mode of a cantilever: period of the tip oscillation vs Euler–Bernoulli;
 //   * a rod hanging under gravity: exact discrete (and continuum) axial stretch.

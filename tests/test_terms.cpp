@@ -78,7 +78,7 @@ TEST(TermFdCheck, RejectsWrongDerivativesAndZeroComparisons) {
   EXPECT_FALSE(fd::check_lie_hessian(grad, q, dofs, Eigen::MatrixXd(H - half_hat_g)));
   EXPECT_FALSE(fd::check_lie_hessian_from_value(f, q, dofs, Eigen::MatrixXd(H * (1.0 + 1e-3))));
 
-  // DESIGN.md §2: differentiating the Lie gradient FIELD R ↦ g(R) along left perturbations
+  // docs/design.md §1.4: differentiating the Lie gradient FIELD R ↦ g(R) along left perturbations
   // gives H − ½hat(g) (not symmetric), because f(exp(θ+η)R) = f(exp(J_l(θ)η)exp(θ)R) and
   // J_l(θ)ᵀ = I − ½hat(θ) + O(θ²).
   const fd::StateFunction field = [&](const State& s) {

@@ -1,4 +1,4 @@
-// Validation against analytical mechanics (DESIGN.md §10):
+// Validation against analytical mechanics (docs/design.md §13):
 //   * torque-free asymmetric body vs the closed-form solution of Euler's equations
 //     (Landau & Lifshitz, Mechanics §37): period of the body-frame angular velocity;
 //   * kinetic energy of a free body never increases (backward Euler only dissipates);
@@ -264,10 +264,10 @@ TEST(Validation, FreeBodyKineticEnergyNeverIncreases) {
 // ---------------------------------------------------------------------------------------
 // 3. Orientation stays on SO(3): 10⁵ steps of a fast-spinning generic body (|ω| h ≈ 0.25
 // rad per step initially). Each Newton update and the step extrapolation re-orthonormalise
-// (DESIGN.md §4), which keeps the error at round-off, ~1e-16 per entry; 1e-12 leaves
+// (docs/design.md §2.3), which keeps the error at round-off, ~1e-16 per entry; 1e-12 leaves
 // room for the norms of a 3×3 matrix and slow accumulation, yet catches any drift: without
 // re-orthonormalisation the R̃ = 2R_{k−1} − R_{k−2} extrapolation amplifies round-off from
-// step to step (DESIGN.md §4 reports blow-up within ~50 steps at h = 0.01).
+// step to step (docs/design.md §2.3 reports blow-up within ~50 steps at h = 0.01).
 TEST(Validation, FreeBodyOrientationStaysOrthonormal) {
   Model model = free_body(0.01, generic_inertia(), so3::exp(Vector3(1.0, -2.0, 0.5)),
                           Vector3(9.0, -14.0, 19.0));
