@@ -210,6 +210,13 @@ std::vector<CompareRow> compare_solvers(const Scene& scene, const CompareOptions
       solver.rotation = rotation;
       std::vector<State> trajectory;
       CompareRow row = run_row(scene, solver, options.repeats, every, trajectory);
+      if (options.progress != nullptr) {
+        std::ostringstream line;  // formatted apart so the caller's stream keeps its settings
+        line << "row " << rows.size() + 1 << "/" << backends.size() * rotations.size() << " "
+             << row.label() << ": "
+             << (row.failed ? "failed" : format_number(row.total_seconds, 3) + " s") << "\n";
+        *options.progress << line.str() << std::flush;
+      }
       if (rows.empty()) {
         row.reference = true;
         reference = std::move(trajectory);

@@ -21,6 +21,7 @@
 // iterations). The gradient norm is comparable across back-ends: StepReport::gradient_norm,
 // the Lie gradient at the end of each step, which every back-end reports.
 
+#include <iosfwd>
 #include <limits>
 #include <string>
 #include <vector>
@@ -40,6 +41,7 @@ struct CompareOptions {
   // frame up to kDenseConditionDofs DOFs and about 20 frames beyond.
   int condition_every = 0;
   static constexpr int kDenseConditionDofs = 300;
+  std::ostream* progress = nullptr;  // a line per row as it finishes (the driver: a terminal)
 };
 
 // Per frame, for paper Fig. 4.

@@ -1,5 +1,5 @@
 // liedyn — command-line driver.
-//   liedyn simulate SCENE.json --out DIR [--allow-unconverged] [--quiet]
+//   liedyn simulate SCENE.json --out DIR [--allow-unconverged] [--quiet] [--ipopt-log FILE]
 //   liedyn bench SCENE.json [--repeat N] [--json]     (cost per Newton iteration; no files)
 //   liedyn compare SCENE.json [--backends newton,ceres,ipopt] [--rotations lie,rotvec,quat]
 //                  [--csv | --json] [--repeat N] [--frames-csv FILE] [--condition-every N]
@@ -86,8 +86,11 @@ int run_sweep_command(const std::string& scene_file, const std::vector<std::stri
   if (!rotation_names.empty()) options.axes.push_back({"solver.rotation", rotation_names});
   options.progress = quiet ? nullptr : &std::cerr;
   options.progress_bar = ::isatty(STDERR_FILENO) != 0;
-  const liedyn::SweepResult result = liedyn::run_sweep(liedyn::read_scene_file(scene_file), scene_file, options);
-  liedyn::write_sweep(result, out_dir);
+  std::optional<liedyn::OutputFolder> folder;
+  options.before_runs = [&] { folder.emplace(out_dir, "sweep " + scene_file, &std::cerr); };
+  const liedyn::SweepResult result =
+      liedyn::run_sweep(liedyn::read_scene_file(scene_file), scene_file, options);
+  liedyn::write_sweep(result, *folder);
   std::cout << liedyn::format_sweep(result);
   std::cout << "outputs: " << out_dir << "/sweep.csv and the *_vs_time.png plots\n";
   const bool failed = std::any_of(result.runs.begin(), result.runs.end(),
@@ -111,6 +114,8 @@ int main(int argc, char** argv) {
   simulate->add_flag("--allow-unconverged", allow_unconverged,
                      "Exit 0 even if steps end at max_iterations");
   simulate->add_flag("--quiet", quiet, "No progress on stderr");
+  std::string ipopt_log;
+  simulate->add_option("--ipopt-log", ipopt_log, "Ipopt's log file (the ipopt back-end only)");
 
   int repeats = 5;
   bool json = false;
@@ -153,6 +158,7 @@ int main(int argc, char** argv) {
                       "Newton's condition number every N frames (0: every frame up to 300 DOFs, "
                       "else ~20 frames)")
       ->check(CLI::NonNegativeNumber);
+  compare->add_option("--ipopt-log", ipopt_log, "Ipopt's log file (rows of the ipopt back-end)");
 
   std::string out_file;
   int samples = 361;
@@ -230,6 +236,7 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   sweep->add_flag("--quiet", quiet, "No progress on stderr");
 
+  liedyn::install_output_signal_handlers();
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -264,7 +271,8 @@ int main(int argc, char** argv) {
       return run_sweep_command(scene_file, set_texts, backend_names, rotation_names, out_dir,
                                quiet, sweep_options);
     }
-    const liedyn::Scene scene = liedyn::load_scene(scene_file);
+    liedyn::Scene scene = liedyn::load_scene(scene_file);
+    scene.solver.ipopt.output_file = ipopt_log;
     if ((gradcheck->parsed() || optimize->parsed()) && !scene.optimization) {
       std::cerr << "liedyn: " << scene_file
                 << ": optimization: is required but missing (nothing to differentiate)\n";
@@ -275,12 +283,14 @@ int main(int argc, char** argv) {
     }
     if (optimize->parsed()) {
       optimize_options.out = out_dir;
+      if (::isatty(STDERR_FILENO) != 0) optimize_options.progress = &std::cerr;
       if (optimize_iterations > 0) optimize_options.max_iterations = optimize_iterations;
       return liedyn::run_optimize(scene, optimize_options, std::cout);
     }
     if (compare->parsed()) {
       options.condition_every = condition_every;
       options.repeats = compare_repeats;
+      if (::isatty(STDERR_FILENO) != 0) options.progress = &std::cerr;
       const std::vector<liedyn::CompareRow> rows = liedyn::compare_solvers(scene, options);
       if (!frames_csv.empty()) {
         liedyn::AtomicFile file(frames_csv);

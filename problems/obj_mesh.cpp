@@ -2,8 +2,10 @@
 
 #include <tiny_obj_loader.h>
 
+#include <charconv>
 #include <cmath>
 #include <cstddef>
+#include <cstdlib>
 #include <fstream>
 #include <iterator>
 #include <sstream>
@@ -11,6 +13,7 @@
 #include <string>
 #include <system_error>
 #include <type_traits>
+#include <vector>
 
 // Coordinates are parsed in double precision: build against the tinyobjloader_double library
 // (CMake target tinyobjloader::tinyobjloader_double, which defines TINYOBJLOADER_USE_DOUBLE).
@@ -43,6 +46,87 @@ bool double_library_linked() {
   return ok;
 }
 
+// The text of one OBJ token for a message: at most 40 bytes, control bytes as '?'.
+std::string quoted(std::string_view token) {
+  std::string s(token.substr(0, 40));
+  for (char& ch : s) {
+    if (static_cast<unsigned char>(ch) < 0x20 || ch == 0x7f) ch = '?';
+  }
+  return "'" + s + (token.size() > 40 ? "...'" : "'");
+}
+
+// Reads one coordinate token strictly: the whole token must be a decimal number (an optional
+// sign, digits with an optional point, an optional exponent), as std::from_chars reads it
+// (locale-independent, correctly rounded), and finite. tinyobjloader's own parser reads "abc",
+// "nan" and "0x10" as 0 and "1.5.3" as 1.5 without a word: each would put a vertex somewhere
+// the file does not say. Returns an empty string, or the reason the token is refused.
+std::string check_coordinate(std::string_view token) {
+  std::string_view digits = token;
+  if (!digits.empty() && digits.front() == '+') digits.remove_prefix(1);  // from_chars has no '+'
+  double value = 0.0;
+  const char* const end = digits.data() + digits.size();
+  const auto [ptr, ec] = std::from_chars(digits.data(), end, value);
+  if (digits.empty() || (!digits.empty() && digits.front() == '-' && token.front() == '+') ||
+      ptr != end || (ec != std::errc() && ec != std::errc::result_out_of_range)) {
+    return quoted(token) + " is not a number";
+  }
+  if (ec == std::errc::result_out_of_range) {
+    // Underflow (1e-400) is a tiny number, as tinyobjloader reads it; overflow is not finite.
+    value = std::strtod(std::string(digits).c_str(), nullptr);
+  }
+  if (!std::isfinite(value)) return quoted(token) + " is not finite";
+  return {};
+}
+
+// Checks what tinyobjloader does not (it reads text as C strings, and a malformed coordinate
+// as 0): no NUL byte anywhere, and every vertex line `v x y z ...` with three coordinates that
+// are finite decimal numbers (check_coordinate). Lines are split as tinyobjloader splits them
+// (at "\n", "\r\n" or a lone "\r"), and a vertex line is what it takes for one (optional
+// spaces or tabs, 'v', a space or tab), so the k-th vertex line found here is its k-th vertex:
+// returns the 1-based line of every vertex, for the messages. Values after z (w, or the r g b
+// of the vertex-colour extension) are not read.
+std::vector<std::size_t> check_text(const std::filesystem::path& file, const std::string& text,
+                                    void (*fail)(const std::filesystem::path&,
+                                                 const std::string&)) {
+  std::vector<std::size_t> vertex_lines;
+  std::size_t line = 1;
+  std::size_t begin = 0;
+  while (begin <= text.size()) {
+    std::size_t end = text.find_first_of("\r\n", begin);
+    if (end == std::string::npos) end = text.size();
+    const std::string_view row(text.data() + begin, end - begin);
+    if (const std::size_t nul = row.find('\0'); nul != std::string_view::npos) {
+      fail(file, "line " + std::to_string(line) + ": a NUL byte (byte " +
+                     std::to_string(begin + nul + 1) + " of the file): not a text OBJ file");
+    }
+    std::size_t i = row.find_first_not_of(" \t");
+    if (i != std::string_view::npos && row[i] == 'v' && i + 1 < row.size() &&
+        (row[i + 1] == ' ' || row[i + 1] == '\t')) {
+      const std::string where = "line " + std::to_string(line) + ": vertex " +
+                                std::to_string(vertex_lines.size() + 1) + " (1-based): ";
+      i += 2;
+      static const char* const kAxis[] = {"x", "y", "z"};
+      for (int axis = 0; axis < 3; ++axis) {
+        i = row.find_first_not_of(" \t", i);
+        if (i == std::string_view::npos) {
+          fail(file, where + "has " + std::to_string(axis) +
+                         " coordinates, expected x y z (a missing one is not read as 0)");
+        }
+        std::size_t stop = row.find_first_of(" \t", i);
+        if (stop == std::string_view::npos) stop = row.size();
+        const std::string reason = check_coordinate(row.substr(i, stop - i));
+        if (!reason.empty()) fail(file, where + kAxis[axis] + " = " + reason);
+        i = stop;
+      }
+      vertex_lines.push_back(line);
+    }
+    if (end == text.size()) break;
+    begin = end + (text[end] == '\r' && end + 1 < text.size() && text[end + 1] == '\n' ? 2 : 1);
+    ++line;
+  }
+  return vertex_lines;
+}
+
 std::string trimmed(std::string s) {
   while (!s.empty() && (s.back() == '\n' || s.back() == '\r' || s.back() == ' ')) s.pop_back();
   return s;
@@ -71,6 +155,8 @@ TriangleMesh load_obj_mesh(const std::filesystem::path& file, double scale) {
          "(CMake target tinyobjloader::tinyobjloader_double), not libtinyobjloader");
   }
 
+  const std::vector<std::size_t> vertex_lines = check_text(file, text, fail);
+
   // ParseFromString ignores `mtllib`: materials are never read.
   tinyobj::ObjReader reader;
   tinyobj::ObjReaderConfig config;
@@ -81,13 +167,18 @@ TriangleMesh load_obj_mesh(const std::filesystem::path& file, double scale) {
   }
 
   const std::vector<tinyobj::real_t>& coords = reader.GetAttrib().vertices;
+  if (coords.size() != 3 * vertex_lines.size()) {
+    fail(file, "tinyobjloader read " + std::to_string(coords.size() / 3) + " vertices, but the file has " +
+                   std::to_string(vertex_lines.size()) + " vertex lines");
+  }
   TriangleMesh mesh;
   mesh.vertices.reserve(coords.size() / 3);
   for (std::size_t i = 0; i + 2 < coords.size(); i += 3) {
     const Vector3 x = scale * Vector3(coords[i], coords[i + 1], coords[i + 2]);
     if (!x.allFinite()) {
       std::ostringstream s;
-      s << "vertex " << i / 3 + 1 << " (1-based) is not finite after scaling by " << scale << ": ("
+      s << "line " << vertex_lines[i / 3] << ": vertex " << i / 3 + 1
+        << " (1-based) is not finite after scaling by " << scale << ": ("
         << coords[i] << ", " << coords[i + 1] << ", " << coords[i + 2] << ")";
       fail(file, s.str());
     }

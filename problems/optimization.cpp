@@ -6,6 +6,7 @@
 #include <cmath>
 #include <fstream>
 #include <iomanip>
+#include <iostream>
 #include <limits>
 #include <nlohmann/json.hpp>
 #include <optional>
@@ -357,7 +358,7 @@ Eigen::VectorXd read_parameters(const std::filesystem::path& file,
                            " parameters, the file " + std::to_string(i));
     }
     const std::size_t comma = line.rfind(',');
-    if (comma == std::string::npos || line.substr(0, comma) != name) {
+    if (comma == std::string::npos || line.substr(0, comma) != csv_field(name)) {
       throw SceneError(source, where(), "expected the parameter " + name + " (got \"" + line + "\")");
     }
     const std::string value = line.substr(comma + 1);
@@ -393,7 +394,7 @@ int run_gradcheck(const Scene& scene, const GradientCheckOptions& options, bool 
   if (verbose) {
     out << "parameter,adjoint,finite_difference,relative_error\n";
     for (const GradientCheckEntry& e : r.entries) {
-      out << sim.parameters().describe(scene.model, e.index) << ',' << e.adjoint << ','
+      out << csv_field(sim.parameters().describe(scene.model, e.index)) << ',' << e.adjoint << ','
           << e.finite_difference << ',' << e.relative_error << '\n';
     }
   }
@@ -422,20 +423,30 @@ struct Checkpoint {
   double best_loss = INFINITY;
   double loss_scale = 0.0;
   double seconds = 0.0;  // wall time of earlier runs
+  json problem;          // what the checkpoint belongs to (problem_of)
 };
 
-void write_history(const std::filesystem::path& file, const std::vector<HistoryRow>& rows) {
-  AtomicFile f(file);
-  f.stream() << std::setprecision(17) << "iteration,loss,normalized_loss,gradient_norm,seconds\n";
-  for (const HistoryRow& h : rows) {
-    f.stream() << h.iteration << ',' << h.loss << ',' << h.normalized_loss << ',' << h.gradient_norm
-               << ',' << h.seconds << '\n';
-  }
-  f.commit();
+// The identity of an optimisation problem: the scene's content (Scene::identity) and the
+// optimiser settings that shape its path. max_iterations is left out: continuing a run for
+// longer is the same problem.
+json problem_of(const Scene& scene, const OptimizerOptions& optimizer) {
+  return {{"scene", scene.identity},
+          {"optimizer", to_string(optimizer.optimizer)},
+          {"lbfgs_memory", optimizer.lbfgs_memory},
+          {"target_normalized_loss", optimizer.target_normalized_loss}};
 }
 
-void write_checkpoint(const std::filesystem::path& file, const Checkpoint& c) {
+void write_history(std::ostream& f, const std::vector<HistoryRow>& rows) {
+  f << std::setprecision(17) << "iteration,loss,normalized_loss,gradient_norm,seconds\n";
+  for (const HistoryRow& h : rows) {
+    f << h.iteration << ',' << h.loss << ',' << h.normalized_loss << ',' << h.gradient_norm << ','
+      << h.seconds << '\n';
+  }
+}
+
+void write_checkpoint(std::ostream& f, const Checkpoint& c) {
   json j;
+  j["problem"] = c.problem;
   j["best"] = std::vector<double>(c.best.data(), c.best.data() + c.best.size());
   j["best_loss"] = c.best_loss;
   j["loss_scale"] = c.loss_scale;
@@ -445,26 +456,49 @@ void write_checkpoint(const std::filesystem::path& file, const Checkpoint& c) {
     rows.push_back({h.iteration, h.loss, h.normalized_loss, h.gradient_norm, h.seconds});
   }
   j["history"] = rows;
-  AtomicFile f(file);
-  f.stream() << j.dump() << '\n';
-  f.commit();
+  f << j.dump() << '\n';
 }
 
-Checkpoint read_checkpoint(const std::filesystem::path& file, int size) {
+// The checkpoint at `file`, refused (SceneError naming the file and the field) unless it
+// belongs to `problem`, has `size` parameters and finite values.
+Checkpoint read_checkpoint(const std::filesystem::path& file, const json& problem, int size) {
+  const std::string source = file.string();
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(file, ec)) {
+    throw SceneError(source, "", "cannot resume: no checkpoint (not a regular file)");
+  }
   std::ifstream in(file);
-  if (!in) throw std::runtime_error("cannot open the checkpoint to resume from");
+  if (!in) throw SceneError(source, "", "cannot open the checkpoint to resume from");
   json j;
   try {
     j = json::parse(in);
   } catch (const json::exception& e) {
-    throw std::runtime_error(std::string("not a checkpoint (") + e.what() + ")");
+    throw SceneError(source, "", std::string("not a checkpoint (") + e.what() + ")");
   }
   Checkpoint c;
   try {
+    if (!j.contains("problem")) {
+      throw SceneError(source, "problem",
+                       "is missing: the checkpoint does not say which problem it belongs to "
+                       "(written by an older liedyn?); start without --resume");
+    }
+    c.problem = j.at("problem");
+    for (const auto& [key, value] : problem.items()) {
+      if (!c.problem.contains(key) || c.problem[key] != value) {
+        throw SceneError(source, "problem." + key,
+                         "is " + (c.problem.contains(key) ? c.problem[key].dump() : "missing") +
+                             ", this run's " + value.dump() +
+                             ": the checkpoint belongs to another problem (" +
+                             (key == "scene" ? "the scene's content differs"
+                                             : "the optimiser settings differ") +
+                             ")");
+      }
+    }
     const std::vector<double> best = j.at("best").get<std::vector<double>>();
     if (static_cast<int>(best.size()) != size) {
-      throw std::runtime_error("best: has " + std::to_string(best.size()) +
-                               " parameters, the scene " + std::to_string(size));
+      throw SceneError(source, "best",
+                       "has " + std::to_string(best.size()) + " parameters, the scene " +
+                           std::to_string(size));
     }
     c.best = Eigen::Map<const Eigen::VectorXd>(best.data(), size);
     c.best_loss = j.at("best_loss").get<double>();
@@ -475,7 +509,11 @@ Checkpoint read_checkpoint(const std::filesystem::path& file, int size) {
                            row.at(3).get<double>(), row.at(4).get<double>()});
     }
   } catch (const json::exception& e) {
-    throw std::runtime_error(std::string("not a checkpoint of this format (") + e.what() + ")");
+    throw SceneError(source, "", std::string("not a checkpoint of this format (") + e.what() + ")");
+  }
+  if (!c.best.allFinite()) throw SceneError(source, "best", "must be finite numbers");
+  if (!(std::isfinite(c.loss_scale) && c.loss_scale > 0.0)) {
+    throw SceneError(source, "loss_scale", "must be a finite number > 0");
   }
   return c;
 }
@@ -497,22 +535,35 @@ int run_optimize(const Scene& scene, const OptimizeOptions& options, std::ostrea
     bounds = {sim.parameters().lower_bounds(), sim.parameters().upper_bounds()};
   }
   const std::filesystem::path checkpoint_file = options.out / "checkpoint.json";
-  const std::filesystem::path history_file = options.out / "history.csv";
 
+  // The folder is locked from here to the end: no other run mixes its files in, and the
+  // checkpoint cannot change under us.
+  OutputFolder folder(options.out, "optimize " + scene.source, &std::cerr);
   Checkpoint checkpoint;
+  checkpoint.problem = problem_of(scene, optimizer);
   Eigen::VectorXd start = sim.initial_parameters();
   if (options.resume) {
-    // Before anything is written: a missing or foreign checkpoint is bad input (exit 2).
-    try {
-      checkpoint = read_checkpoint(checkpoint_file, sim.parameters().size());
-    } catch (const std::runtime_error& e) {
-      throw SceneError(checkpoint_file.string(), "", e.what());
-    }
+    // A missing, foreign or edited checkpoint is bad input (exit 2).
+    checkpoint = read_checkpoint(checkpoint_file, checkpoint.problem, sim.parameters().size());
     start = checkpoint.best;
     // The scene's bounds may have changed since the checkpoint was written.
     if (const auto v = bound_violation(sim.parameters(), scene.model, start, "value")) {
       throw SceneError(checkpoint_file.string(), "best",
                        v->reason + " in the scene: resume cannot start there");
+    }
+    // Trust no stored number: the best loss must be the loss at the best point.
+    double loss = NAN;
+    try {
+      loss = sim.evaluate(start, nullptr).loss;
+    } catch (const std::exception& e) {
+      throw SceneError(checkpoint_file.string(), "best",
+                       std::string("cannot be evaluated: ") + e.what());
+    }
+    if (!(std::abs(loss - checkpoint.best_loss) <= 1e-9 * std::max(std::abs(loss), checkpoint.loss_scale))) {
+      throw SceneError(checkpoint_file.string(), "best_loss",
+                       "is " + format_number(checkpoint.best_loss, 17) +
+                           ", but the loss at the checkpoint's best point is " +
+                           format_number(loss, 17) + " (the checkpoint was edited or is stale)");
     }
     out << "resuming from " << checkpoint_file.string() << ": " << checkpoint.history.size()
         << " evaluations, best normalized loss " << checkpoint.best_loss / checkpoint.loss_scale
@@ -526,7 +577,6 @@ int run_optimize(const Scene& scene, const OptimizeOptions& options, std::ostrea
       return 4;
     }
   }
-  std::filesystem::create_directories(options.out);
   const int first_iteration =
       checkpoint.history.empty() ? 0 : checkpoint.history.back().iteration + 1;
   const double earlier_seconds = checkpoint.seconds;
@@ -543,6 +593,8 @@ int run_optimize(const Scene& scene, const OptimizeOptions& options, std::ostrea
       throw InfeasiblePoint(e.what());
     }
   };
+  auto last_progress = std::chrono::steady_clock::now();
+  bool progress_shown = false;
   const EvaluationCallback record = [&](const Evaluation& e, const Eigen::VectorXd& gamma,
                                         const Eigen::VectorXd&) {
     checkpoint.history.push_back({first_iteration + e.evaluation - 1, e.loss, e.normalized_loss,
@@ -552,26 +604,39 @@ int run_optimize(const Scene& scene, const OptimizeOptions& options, std::ostrea
       checkpoint.best = gamma;
     }
     checkpoint.seconds = earlier_seconds + e.seconds;
-    write_history(history_file, checkpoint.history);
-    write_checkpoint(checkpoint_file, checkpoint);
+    if (options.progress != nullptr) {
+      const auto now = std::chrono::steady_clock::now();
+      if (now - last_progress > std::chrono::milliseconds(250)) {
+        std::ostringstream line;  // formatted apart so the caller's stream keeps its settings
+        line << std::setprecision(4) << "\revaluation " << checkpoint.history.size() << ": loss "
+             << e.normalized_loss << ", best " << checkpoint.best_loss / checkpoint.loss_scale
+             << " (normalised), " << checkpoint.seconds << " s   ";
+        *options.progress << line.str() << std::flush;
+        last_progress = now;
+        progress_shown = true;
+      }
+    }
+    write_history(folder.add("history.csv"), checkpoint.history);
+    write_checkpoint(folder.add("checkpoint.json"), checkpoint);
+    folder.commit();
   };
   const OptimizationResult result =
       minimize(f, start, checkpoint.loss_scale, optimizer, record, bounds);
+  if (progress_shown) *options.progress << '\n';
 
   const Eigen::VectorXd& best =
       checkpoint.best.size() == start.size() ? checkpoint.best : result.best_x;
-  {
-    AtomicFile p(options.out / "parameters.csv");
-    p.stream() << std::setprecision(17) << "parameter,value\n";
-    for (int i = 0; i < best.size(); ++i) {
-      p.stream() << sim.parameters().describe(scene.model, i) << ',' << best(i) << '\n';
-    }
-    p.commit();
+  // The best γ and its trajectory, replaced together.
+  std::ostream& p = folder.add("parameters.csv");
+  p << std::setprecision(17) << "parameter,value\n";
+  for (int i = 0; i < best.size(); ++i) {
+    p << csv_field(sim.parameters().describe(scene.model, i)) << ',' << best(i) << '\n';
   }
   Scene optimized = scene;
   optimized.model = sim.parameters().apply(scene.model, best);
   optimized.optimization.reset();
-  simulate_scene(optimized, options.out, nullptr);
+  simulate_into(optimized, folder, nullptr);
+  folder.commit();
 
   out << "optimizer " << to_string(optimizer.optimizer) << ": " << result.status
       << (result.message.empty() ? "" : " (" + result.message + ")") << '\n'

@@ -37,17 +37,21 @@ struct OptimizeOptions {
   std::optional<Optimizer> optimizer;     // overrides the scene's
   std::optional<int> max_iterations;      // overrides the scene's
   bool resume = false;                    // continue from out/checkpoint.json
+  std::ostream* progress = nullptr;       // evaluation, loss, best, elapsed (a terminal)
 };
 
-// `liedyn optimize`: minimises the scene's objective. Writes, atomically (temporary file,
-// then rename) after every evaluation:
+// `liedyn optimize`: minimises the scene's objective. The output folder is locked for the
+// run (output_folder.hpp); after every evaluation one unit replaces
 //   out/history.csv       iteration,loss,normalized_loss,gradient_norm,seconds (one row per
 //                         evaluation of loss and gradient)
-//   out/checkpoint.json   the best parameters so far, the history and the evaluation count
-// and at the end out/parameters.csv (name,value of the best γ) and out/trajectory.csv (its
-// forward simulation, the format of `liedyn simulate`). With resume, the optimisation
-// restarts from the checkpoint's best parameters (the L-BFGS memory is not kept) and
-// appends to its history. Returns 0 when the target was reached, 3 when it stopped
+//   out/checkpoint.json   the problem it belongs to (the scene's content hash and the
+//                         optimiser settings), the best parameters so far and the history
+// and at the end one unit replaces out/parameters.csv (name,value of the best γ) with
+// out/trajectory.csv and out/frames.csv (its forward simulation, the format of `liedyn
+// simulate`). With resume, a checkpoint of another problem, or whose best loss is not the
+// loss re-evaluated at its best point, is refused (SceneError: exit 2); otherwise the
+// optimisation restarts from the checkpoint's best parameters (the L-BFGS memory is not
+// kept) and appends to its history. Returns 0 when the target was reached, 3 when it stopped
 // otherwise (iterations, round-off, back-end convergence), 4 on failure.
 int run_optimize(const Scene& scene, const OptimizeOptions& options, std::ostream& out);
 

@@ -704,9 +704,10 @@ cairo_status_t write_to_stream(void* closure, const unsigned char* data, unsigne
 
 }  // namespace
 
-void write_png(const ScatterPlot& plot, const std::filesystem::path& file, int width, int height) {
+void write_png(const ScatterPlot& plot, std::ostream& out, const std::string& what, int width,
+               int height) {
   if (width < 320 || height < 240 || width > 8192 || height > 8192) {
-    throw std::runtime_error(file.string() + ": plot size " + std::to_string(width) + "x" +
+    throw std::runtime_error(what + ": plot size " + std::to_string(width) + "x" +
                              std::to_string(height) + " outside 320x240 ... 8192x8192");
   }
   const std::unique_ptr<cairo_surface_t, decltype(&cairo_surface_destroy)> surface(
@@ -717,17 +718,19 @@ void write_png(const ScatterPlot& plot, const std::filesystem::path& file, int w
     Renderer(cr.get(), plot, width, height).render();
     const cairo_status_t status = cairo_status(cr.get());
     if (status != CAIRO_STATUS_SUCCESS) {
-      throw std::runtime_error(file.string() + ": cannot render the plot: " +
+      throw std::runtime_error(what + ": cannot render the plot: " +
                                cairo_status_to_string(status));
     }
   }
-  AtomicFile out(file);
-  const cairo_status_t status =
-      cairo_surface_write_to_png_stream(surface.get(), write_to_stream, &out.stream());
+  const cairo_status_t status = cairo_surface_write_to_png_stream(surface.get(), write_to_stream, &out);
   if (status != CAIRO_STATUS_SUCCESS) {
-    throw std::runtime_error(file.string() + ": cannot write the PNG: " +
-                             cairo_status_to_string(status));
+    throw std::runtime_error(what + ": cannot write the PNG: " + cairo_status_to_string(status));
   }
+}
+
+void write_png(const ScatterPlot& plot, const std::filesystem::path& file, int width, int height) {
+  AtomicFile out(file);
+  write_png(plot, out.stream(), file.string(), width, height);
   out.commit();
 }
 

@@ -44,9 +44,12 @@ struct ScatterPlot {
 // Indices of the points on the Pareto front, sorted by x (then y, then index).
 std::vector<std::size_t> pareto_front(const std::vector<PlotPoint>& points);
 
-// Renders `plot` as a width × height PNG, written atomically (AtomicFile, problems/output.hpp:
-// a temporary file beside `file`, renamed over it). Throws std::runtime_error naming the file
-// when it cannot be written or the size is outside 320×240 … 8192×8192.
+// Renders `plot` as a width × height PNG onto `out` (a binary stream: an AtomicFile's or an
+// OutputFolder's). Throws std::runtime_error naming `what` (the file) when it cannot be
+// rendered or the size is outside 320×240 … 8192×8192.
+void write_png(const ScatterPlot& plot, std::ostream& out, const std::string& what,
+               int width = 900, int height = 600);
+// The same, written atomically to `file` (AtomicFile, problems/output.hpp).
 void write_png(const ScatterPlot& plot, const std::filesystem::path& file, int width = 900,
                int height = 600);
 

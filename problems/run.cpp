@@ -7,7 +7,6 @@
 
 #include "../lib/so3.hpp"
 #include "../solvers/simulator.hpp"
-#include "output.hpp"
 
 namespace liedyn {
 namespace {
@@ -17,7 +16,7 @@ void write_trajectory_rows(std::ostream& out, const Simulator& sim) {
   for (std::size_t i = 0; i < bodies.size(); ++i) {
     const Vector3& x = sim.state().points[i];
     const Eigen::Quaterniond q = so3::to_quaternion(sim.state().rotations[i]);
-    out << sim.frame() << ',' << sim.time() << ',' << bodies[i].name << ",body,0," << x.x() << ','
+    out << sim.frame() << ',' << sim.time() << ',' << csv_field(bodies[i].name) << ",body,0," << x.x() << ','
         << x.y() << ',' << x.z() << ',' << q.w() << ',' << q.x() << ',' << q.y() << ',' << q.z()
         << '\n';
   }
@@ -28,7 +27,7 @@ void write_trajectory_rows(std::ostream& out, const Simulator& sim) {
     const int rod = static_cast<int>(r);
     for (int i = 0; i < rods[r].node_count(); ++i) {
       const Vector3& x = sim.state().points[sim.model().rod_point(rod, i)];
-      out << sim.frame() << ',' << sim.time() << ',' << rods[r].name << ",node," << i << ','
+      out << sim.frame() << ',' << sim.time() << ',' << csv_field(rods[r].name) << ",node," << i << ','
           << x.x() << ',' << x.y() << ',' << x.z() << ",,,,\n";
     }
     for (int j = 0; j < rods[r].edge_count(); ++j) {
@@ -36,7 +35,7 @@ void write_trajectory_rows(std::ostream& out, const Simulator& sim) {
                                sim.state().points[sim.model().rod_point(rod, j + 1)]);
       const Eigen::Quaterniond q =
           so3::to_quaternion(sim.state().rotations[sim.model().rod_rotation(rod, j)]);
-      out << sim.frame() << ',' << sim.time() << ',' << rods[r].name << ",edge," << j << ','
+      out << sim.frame() << ',' << sim.time() << ',' << csv_field(rods[r].name) << ",edge," << j << ','
           << x.x() << ',' << x.y() << ',' << x.z() << ',' << q.w() << ',' << q.x() << ','
           << q.y() << ',' << q.z() << '\n';
     }
@@ -60,29 +59,31 @@ void write_frame_row(std::ostream& out, const Simulator& sim, const StepReport* 
 
 }  // namespace
 
-SimulationSummary simulate_scene(const Scene& scene, const std::filesystem::path& out_dir,
-                                 std::ostream* progress) {
+SimulationSummary simulate_into(const Scene& scene, OutputFolder& out, std::ostream* progress) {
   using Clock = std::chrono::steady_clock;
-  std::filesystem::create_directories(out_dir);
-  AtomicFile trajectory(out_dir / "trajectory.csv");
-  AtomicFile frames(out_dir / "frames.csv");
-  trajectory.stream() << "frame,time,object,kind,index,x,y,z,qw,qx,qy,qz\n";
-  frames.stream() << "frame,time,newton_iterations,gradient_norm,converged,kinetic_energy,"
-                     "potential_energy,angular_momentum_x,angular_momentum_y,angular_momentum_z,"
-                     "step_norm,regularized_iterations,status,max_penetration\n";
+  std::ostream& trajectory = out.add("trajectory.csv");
+  std::ostream& frames = out.add("frames.csv");
+  trajectory << "frame,time,object,kind,index,x,y,z,qw,qx,qy,qz\n";
+  frames << "frame,time,newton_iterations,gradient_norm,converged,kinetic_energy,"
+            "potential_energy,angular_momentum_x,angular_momentum_y,angular_momentum_z,"
+            "step_norm,regularized_iterations,status,max_penetration\n";
 
   Simulator sim(scene.model, scene.solver);
   SimulationSummary summary;
   summary.frames_requested = scene.frames;
   summary.initial_energy = sim.kinetic_energy() + sim.potential_energy();
-  write_trajectory_rows(trajectory.stream(), sim);
-  write_frame_row(frames.stream(), sim, nullptr);
+  write_trajectory_rows(trajectory, sim);
+  write_frame_row(frames, sim, nullptr);
 
   const auto start = Clock::now();
   auto last_progress = start;
+  Clock::duration solving{}, writing{};
   bool progress_shown = false;
   for (int k = 1; k <= scene.frames; ++k) {
+    const auto before = Clock::now();
     const StepReport report = sim.step();
+    const auto solved = Clock::now();
+    solving += solved - before;
     if (!report.state_updated()) {
       summary.failed = true;
       summary.failure =
@@ -95,10 +96,11 @@ SimulationSummary simulate_scene(const Scene& scene, const std::filesystem::path
     summary.max_gradient_norm = std::max(summary.max_gradient_norm, report.gradient_norm);
     if (!report.converged()) ++summary.unconverged_steps;
     if (report.regularized_iterations > 0) ++summary.regularized_steps;
-    write_trajectory_rows(trajectory.stream(), sim);
-    write_frame_row(frames.stream(), sim, &report);
+    write_trajectory_rows(trajectory, sim);
+    write_frame_row(frames, sim, &report);
 
     const auto now = Clock::now();
+    writing += now - solved;
     if (progress != nullptr && now - start > std::chrono::seconds(1) &&
         now - last_progress > std::chrono::milliseconds(250)) {
       std::ostringstream line;  // formatted apart so the caller's stream keeps its settings
@@ -109,11 +111,21 @@ SimulationSummary simulate_scene(const Scene& scene, const std::filesystem::path
     }
   }
   if (progress_shown) *progress << "\n";
-  summary.wall_seconds = std::chrono::duration<double>(Clock::now() - start).count();
+  summary.solve_seconds = std::chrono::duration<double>(solving).count();
+  summary.output_seconds = std::chrono::duration<double>(writing).count();
   summary.final_energy = sim.kinetic_energy() + sim.potential_energy();
-  // Commit even after a failed step: the frames up to it are valid and are kept.
-  trajectory.commit();
-  frames.commit();
+  return summary;
+}
+
+SimulationSummary simulate_scene(const Scene& scene, const std::filesystem::path& out_dir,
+                                 std::ostream* progress) {
+  OutputFolder out(out_dir, "simulate " + scene.source, progress);
+  SimulationSummary summary = simulate_into(scene, out, progress);
+  // Committed even after a failed step: the frames up to it are valid and are kept.
+  const auto start = std::chrono::steady_clock::now();
+  out.commit();
+  summary.output_seconds +=
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return summary;
 }
 
@@ -139,12 +151,12 @@ std::string format_summary(const Scene& scene, const SimulationSummary& s) {
      << " s, " << to_string(scene.solver.backend) << "/" << to_string(scene.solver.rotation)
      << ", tolerance " << scene.solver.tolerance << ", max_iterations "
      << scene.solver.max_iterations << "\n";
-  os << "frames       " << s.frames_completed << " of " << s.frames_requested << " in "
-     << std::setprecision(3) << s.wall_seconds << " s";
+  os << "frames       " << s.frames_completed << " of " << s.frames_requested << " solved in "
+     << std::setprecision(3) << s.solve_seconds << " s";
   if (s.frames_completed > 0) {
-    os << " (" << 1e6 * s.wall_seconds / s.frames_completed << " µs/step)";
+    os << " (" << 1e6 * s.solve_seconds / s.frames_completed << " µs/step)";
   }
-  os << "\n";
+  os << "; outputs written in " << s.output_seconds << " s\n";
   os << "iterations   " << s.total_iterations << " (" << to_string(scene.solver.backend)
      << "), "
      << (s.frames_completed ? double(s.total_iterations) / s.frames_completed : 0.0)

@@ -1,11 +1,12 @@
 #pragma once
-// `liedyn simulate`: runs a scene and writes trajectory.csv and frames.csv atomically
-// (each is written to a temporary file in the output directory, then renamed).
+// `liedyn simulate`: runs a scene and writes trajectory.csv and frames.csv into an output
+// folder as one unit (output_folder.hpp): they are replaced together or not at all.
 
 #include <filesystem>
 #include <iosfwd>
 #include <string>
 
+#include "output_folder.hpp"
 #include "scene.hpp"
 
 namespace liedyn {
@@ -18,15 +19,20 @@ struct SimulationSummary {
   int total_iterations = 0;
   int max_iterations_in_step = 0;
   double max_gradient_norm = 0.0;
-  double wall_seconds = 0.0;
+  double solve_seconds = 0.0;   // wall time of the time steps alone
+  double output_seconds = 0.0;  // wall time of formatting and writing the outputs
   double initial_energy = 0.0, final_energy = 0.0;  // kinetic + potential
   bool failed = false;          // a step failed (NaN, no descent): the run stopped early
   std::string failure;          // message when failed
 };
 
-// Simulates the scene, writing outputs into out_dir (created if missing). Progress goes to
-// `progress` (if non-null) for runs longer than a second. Files written up to a failed step
-// are kept. Throws std::runtime_error on I/O errors.
+// Simulates the scene, adding trajectory.csv and frames.csv to `out`'s current unit (the
+// caller commits it, with whatever else belongs to the run). Progress goes to `progress` (if
+// non-null) for runs longer than a second. The frames up to a failed step are written.
+SimulationSummary simulate_into(const Scene& scene, OutputFolder& out, std::ostream* progress);
+
+// simulate_into a locked OutputFolder at `out_dir` (created if missing), committed at the
+// end. Throws std::runtime_error on I/O errors (the folder's previous outputs then stay).
 SimulationSummary simulate_scene(const Scene& scene, const std::filesystem::path& out_dir,
                                  std::ostream* progress);
 

@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <functional>
@@ -56,11 +58,26 @@ int body_index(ObjectReader& r, const std::string& key, const std::map<std::stri
 
 // Names of bodies and rods share one namespace (trajectory.csv's `object` column). Checks a
 // new name at `field` and records it as belonging to `owner` (e.g. "bodies[0]").
+// Names end up in CSV and JSON outputs and in terminal messages: commas and quotes are
+// quoted there (RFC 4180), but a control character (a line break, NUL, ESC) would split a
+// row or rewrite the terminal, so it is refused here.
+void check_printable_name(const ObjectReader& r, const std::string& name, const std::string& field) {
+  for (const char ch : name) {
+    const auto byte = static_cast<unsigned char>(ch);
+    if (byte < 0x20 || byte == 0x7f) {
+      char code[8];
+      std::snprintf(code, sizeof code, "0x%02x", byte);
+      r.fail(field, std::string("must not contain control characters (found ") + code + ")");
+    }
+  }
+}
+
 void claim_name(const ObjectReader& r, const std::string& name, const std::string& field,
                 const std::string& owner, std::map<std::string, std::string>& taken) {
   if (name.empty() || name == "world") {
     r.fail(field, "must be a non-empty name other than \"world\"");
   }
+  check_printable_name(r, name, field);
   const auto [it, inserted] = taken.emplace(name, owner);
   if (!inserted) r.fail(field, "repeats the name \"" + name + "\" of " + it->second);
 }
@@ -220,6 +237,7 @@ Collider parse_collider(const json& value, const std::string& path, const std::s
   ObjectReader c(value, path, source);
   Collider collider;
   collider.name = c.string("name", path);
+  check_printable_name(c, collider.name, c.field("name"));
   collider.position = c.vector<3>("position", Vector3::Zero());
   collider.orientation = orientation_of(c, "orientation");
   collider.inside = c.boolean("inside", false);
@@ -390,6 +408,20 @@ RodSpec parse_rod(const json& value, const std::string& path, const std::string&
   rod.bending_stiffness = r.vector<3>("bending_stiffness");
   rod.fixed_nodes = index_list(r, "fixed_nodes");
   rod.fixed_edges = index_list(r, "fixed_edges");
+  if (r.has("node_velocities")) {
+    // One velocity per node; a clamped node's must be zero (Model::validate_rod, which names
+    // the entry, after checking fixed_nodes).
+    const json& velocities = r.array("node_velocities");
+    if (velocities.size() != rod.nodes.size()) {
+      r.fail(r.field("node_velocities"),
+             "has " + std::to_string(velocities.size()) + " entries, but the rod has " +
+                 std::to_string(rod.nodes.size()) + " nodes (give one velocity per node)");
+    }
+    for (std::size_t i = 0; i < velocities.size(); ++i) {
+      rod.node_velocities.push_back(
+          r.to_vector<3>(velocities[i], item_path(r.field("node_velocities"), i)));
+    }
+  }
   if (r.has("node_forces")) {
     const json& forces = r.array("node_forces");
     for (std::size_t i = 0; i < forces.size(); ++i) {
@@ -466,7 +498,7 @@ Scene parse(const json& root, const std::string& source) {
   scene.description = top.string("description", "");
   scene.model.time_step = top.number("time_step");
   if (scene.model.time_step <= 0.0) top.fail("time_step", "must be positive");
-  scene.frames = top.integer("frames", 0);
+  scene.frames = top.integer("frames", 0, kMaxFrames);
   scene.model.gravity = top.vector<3>("gravity", Vector3::Zero());
   const std::string mode = top.string("mode", "dynamic");
   if (mode != "dynamic" && mode != "static") {
@@ -515,7 +547,13 @@ Scene parse(const json& root, const std::string& source) {
       o.hessian_approximation = i.string("hessian_approximation", o.hessian_approximation);
       if (i.has("print_level")) o.print_level = i.integer("print_level", 0, 12);
       o.derivative_test = i.string("derivative_test", o.derivative_test);
-      o.output_file = i.string("output_file", o.output_file);
+      // A scene is untrusted input and never chooses where liedyn writes: Ipopt's log file
+      // is named on the command line (--ipopt-log), not here.
+      if (i.has("output_file")) {
+        i.fail(i.field("output_file"),
+               "is not read from scene files (a scene must not choose where liedyn writes); "
+               "give the log file on the command line: --ipopt-log FILE");
+      }
       if (i.has("max_recentrings")) o.max_recentrings = i.integer("max_recentrings", 0);
       i.finish();
     }
@@ -707,7 +745,34 @@ class PathTracker {
 
 }  // namespace
 
+// FNV-1a (64 bits) of the scene's JSON as nlohmann dumps it (keys sorted, numbers at full
+// precision: one text per content, whatever the file's layout), without
+// optimization.max_iterations, so that continuing a run for longer is the same problem. An
+// identity, not a signature: the checkpoint it guards is also re-evaluated on resume.
+namespace {
+
+std::string identity_of(json root) {
+  if (root.is_object() && root.contains("optimization") && root["optimization"].is_object()) {
+    root["optimization"].erase("max_iterations");
+  }
+  std::uint64_t hash = 0xcbf29ce484222325ULL;
+  for (const char ch : root.dump()) {
+    hash ^= static_cast<unsigned char>(ch);
+    hash *= 0x100000001b3ULL;
+  }
+  char text[20];
+  std::snprintf(text, sizeof text, "%016llx", static_cast<unsigned long long>(hash));
+  return text;
+}
+
+}  // namespace
+
 Scene parse_scene(const std::string& json_text, const std::string& source) {
+  // The JSON parser would stop at a NUL byte and ignore what follows.
+  if (const std::size_t nul = json_text.find('\0'); nul != std::string::npos) {
+    throw SceneError(source, "", "contains a NUL byte at offset " + std::to_string(nul) +
+                                     " (not a text file)");
+  }
   json root;
   PathTracker tracker(source);
   try {
@@ -718,16 +783,30 @@ Scene parse_scene(const std::string& json_text, const std::string& source) {
   } catch (const json::exception& e) {
     throw SceneError(source, "", std::string("invalid JSON: ") + e.what());
   }
-  return parse(root, source);
+  Scene scene = parse(root, source);
+  scene.identity = identity_of(root);
+  return scene;
 }
 
 std::string read_scene_file(const std::filesystem::path& file) {
+  // Only regular files, and not huge ones: a FIFO would block forever and /dev/zero would
+  // be read until memory runs out.
   std::error_code ec;
-  if (std::filesystem::is_directory(file, ec)) {
+  const auto status = std::filesystem::status(file, ec);
+  if (std::filesystem::is_directory(status)) {
     throw SceneError(file.string(), "", "is a directory, not a scene file");
   }
-  std::ifstream in(file);
+  if (std::filesystem::exists(status) && !std::filesystem::is_regular_file(status)) {
+    throw SceneError(file.string(), "", "is not a regular file (a FIFO, socket or device)");
+  }
+  std::ifstream in(file, std::ios::binary);
   if (!in) throw SceneError(file.string(), "", "cannot open the file for reading");
+  const auto size = std::filesystem::file_size(file, ec);
+  if (!ec && size > kMaxSceneFileBytes) {
+    throw SceneError(file.string(), "",
+                     "is " + std::to_string(size) + " bytes, more than a scene file may be (" +
+                         std::to_string(kMaxSceneFileBytes) + ")");
+  }
   std::ostringstream text;
   text << in.rdbuf();
   return text.str();

@@ -44,10 +44,18 @@ enum class AnalyticSolution {
   kAxialStretch,  // "axial_stretch": axial tip load on a straight rod fixed at node 0
 };
 
+// The most frames a scene may ask for: frame counters and loops are `int`, and 1e9 steps
+// are already beyond any run that fits in a session (so the cap refuses nothing real).
+inline constexpr int kMaxFrames = 1'000'000'000;
+
+// The largest scene file read (scenes are a few kB; generated ones a few MB).
+inline constexpr std::uintmax_t kMaxSceneFileBytes = 64u << 20;
+
 struct Scene {
   std::string source;  // file name (or a label) used in messages
   std::string description;
-  int frames = 0;      // time steps to simulate; frame 0 is the initial state
+  std::string identity;  // a hash of the scene's content (checkpoints name their problem by it)
+  int frames = 0;      // time steps to simulate; frame 0 is the initial state, ≤ kMaxFrames
   Model model;
   SolverOptions solver;
   std::optional<OptimizationSpec> optimization;

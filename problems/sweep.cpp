@@ -467,6 +467,8 @@ SweepResult run_sweep(const std::string& scene_text, const std::string& source,
     }
   }
 
+  if (options.before_runs) options.before_runs();
+
   // Groups of runs that share a reference: the same values on every model axis.
   // In grid order of their first run.
   std::vector<std::pair<std::string, std::vector<std::size_t>>> groups;
@@ -678,11 +680,8 @@ std::string format_sweep(const SweepResult& result) {
   return os.str();
 }
 
-void write_sweep(const SweepResult& result, const std::filesystem::path& dir) {
-  std::filesystem::create_directories(dir);
-  AtomicFile csv(dir / "sweep.csv");
-  csv.stream() << sweep_csv(result);
-  csv.commit();
+void write_sweep(const SweepResult& result, OutputFolder& out) {
+  out.add("sweep.csv") << sweep_csv(result);
   for (const Metric& m : kMetrics) {
     if (std::none_of(result.runs.begin(), result.runs.end(),
                      [&](const SweepRun& r) { return std::isfinite(r.*m.value) && r.*m.value > 0.0; })) {
@@ -714,8 +713,10 @@ void write_sweep(const SweepResult& result, const std::filesystem::path& dir) {
                              static_cast<int>(it - series.begin())});
     }
     plot.series_names = series;
-    write_png(plot, dir / (std::string(m.key) + "_vs_time.png"));
+    const std::string name = std::string(m.key) + "_vs_time.png";
+    write_png(plot, out.add(name), (out.path() / name).string());
   }
+  out.commit();
 }
 
 }  // namespace liedyn

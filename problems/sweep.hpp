@@ -48,11 +48,13 @@
 // A run whose step fails is kept, marked failed, with the errors of the frames it completed.
 
 #include <filesystem>
+#include <functional>
 #include <iosfwd>
 #include <limits>
 #include <string>
 #include <vector>
 
+#include "output_folder.hpp"
 #include "scene.hpp"
 
 namespace liedyn {
@@ -71,6 +73,9 @@ struct SweepOptions {
   int reference_refinement = 4;      // reference h = smallest h on the grid / this, ≥ 1
   int gradient_sample = 8;           // parameters checked for gradient_error (0: all)
   int repeats = 1;                   // timed runs per grid point; wall_seconds is their median
+  // Called once every grid point has parsed, before the first run (the driver locks its
+  // output folder there: bad input creates nothing, a busy folder fails before the runs).
+  std::function<void()> before_runs;
   std::ostream* progress = nullptr;  // progress reports, if set:
   bool progress_bar = false;         //   a bar redrawn in place (a terminal), else a line per run
 };
@@ -115,7 +120,8 @@ std::string sweep_csv(const SweepResult& result);
 std::string format_sweep(const SweepResult& result);
 // DIR/sweep.csv, and DIR/<metric>_vs_time.png for every metric with a positive finite value
 // (the plots are log-log; a body spinning in place has no position error to show).
-// Atomic (temporary files, then rename); DIR is created if missing.
-void write_sweep(const SweepResult& result, const std::filesystem::path& dir);
+// Added to `out`'s current unit and committed: they replace the folder's earlier sweep
+// outputs together.
+void write_sweep(const SweepResult& result, OutputFolder& out);
 
 }  // namespace liedyn

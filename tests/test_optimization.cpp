@@ -24,6 +24,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <limits>
 #include <map>
 #include <nlohmann/json.hpp>
@@ -1013,10 +1014,10 @@ class OptimizationCli : public liedyn::test::CliFixture {
     return (kSourceDir / "problems/scenes/optimization/die_throw.json").string();
   }
 
-  // No temporary file of AtomicFile ("<name>.tmp-<pid>") is left in `out`.
+  // No temporary file or staging folder (problems/output_folder.hpp) is left in `out`.
   static void expect_no_temporaries(const fs::path& out) {
     for (const auto& entry : fs::directory_iterator(out)) {
-      EXPECT_EQ(entry.path().filename().string().find(".tmp-"), std::string::npos) << entry.path();
+      EXPECT_EQ(entry.path().filename().string().find(".liedyn-"), std::string::npos) << entry.path();
     }
   }
 
@@ -1347,21 +1348,91 @@ TEST_F(OptimizationCli, CablesOnlyPull) {
 
 // --resume from a checkpoint whose best point lies outside bounds added to the scene since:
 // bad input naming the checkpoint and the entry (exit 2), nothing changed.
-TEST_F(OptimizationCli, ResumeOutsideNewBoundsExits2) {
+TEST_F(OptimizationCli, ResumeOfAnEditedSceneExits2) {
+  // Bounds added to the scene make it another problem: its checkpoint is refused.
   ASSERT_EQ(run({"optimize", die(), "--out", "die", "--max-iterations", "2"}).exit_code, 3);
   const std::string before = liedyn::test::read_file(dir_ / "die/history.csv");
-  const nlohmann::json checkpoint =
-      nlohmann::json::parse(liedyn::test::read_file(dir_ / "die/checkpoint.json"));
-  const double vz = checkpoint.at("best").at(5).get<double>();  // bodies[0].linear_velocity[2]
   nlohmann::json bounded = nlohmann::json::parse(liedyn::test::read_file(die()));
   bounded["optimization"]["parameters"][1]["lower"] = -10;
-  bounded["optimization"]["parameters"][1]["upper"] = 1.0;  // v_0 = (0.5, 0, 1) is within
+  bounded["optimization"]["parameters"][1]["upper"] = 1.0;
   { std::ofstream(dir_ / "bounded.json") << bounded.dump(); }
-  ASSERT_GT(vz, 1.0) << "the set-up: the run raised v_z above the new upper bound";
+  const Result r = run({"optimize", "bounded.json", "--out", "die", "--resume"});
+  EXPECT_EQ(r.exit_code, 2) << r.out << r.err;
+  EXPECT_NE(r.err.find("checkpoint.json: problem.scene: is \""), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("the checkpoint belongs to another problem (the scene's content differs)"),
+            std::string::npos)
+      << r.err;
+  EXPECT_EQ(liedyn::test::read_file(dir_ / "die/history.csv"), before);
+  // A longer run of the same scene is the same problem.
+  const Result longer = run({"optimize", die(), "--out", "die", "--resume", "--max-iterations", "3"});
+  EXPECT_NE(longer.exit_code, 2) << longer.out << longer.err;
+}
+
+TEST_F(OptimizationCli, ResumeFromACheckpointOfAnotherProblemExits2) {
+  // Letter I's checkpoint copied into letter A's folder used to resume and report I's loss.
+  const fs::path letters = kSourceDir / "problems/scenes/letters";
+  ASSERT_EQ(run({"optimize", (letters / "letter_I.json").string(), "--out", "I", "--max-iterations", "2"}).exit_code, 3);
+  ASSERT_EQ(run({"optimize", (letters / "letter_A.json").string(), "--out", "A", "--max-iterations", "2"}).exit_code, 3);
+  fs::copy_file(dir_ / "I/checkpoint.json", dir_ / "A/checkpoint.json",
+                fs::copy_options::overwrite_existing);
+  const Result r = run({"optimize", (letters / "letter_A.json").string(), "--out", "A", "--resume"});
+  EXPECT_EQ(r.exit_code, 2) << r.out << r.err;
+  EXPECT_NE(r.err.find("problem.scene"), std::string::npos) << r.err;
+  // Another optimiser is another problem too.
+  const Result other = run({"optimize", die(), "--out", "die", "--max-iterations", "2"});
+  ASSERT_EQ(other.exit_code, 3) << other.err;
+  const Result switched = run({"optimize", die(), "--out", "die", "--resume", "--optimizer", "ipopt-lbfgs"});
+  EXPECT_EQ(switched.exit_code, 2) << switched.out << switched.err;
+  EXPECT_NE(switched.err.find("problem.optimizer: is \"nlopt-lbfgs\", this run's \"ipopt-lbfgs\""),
+            std::string::npos)
+      << switched.err;
+}
+
+TEST_F(OptimizationCli, ResumeChecksTheStoredNumbers) {
+  ASSERT_EQ(run({"optimize", die(), "--out", "die", "--max-iterations", "2"}).exit_code, 3);
+  const nlohmann::json good = nlohmann::json::parse(liedyn::test::read_file(dir_ / "die/checkpoint.json"));
+  const auto resume_with = [&](const std::function<void(nlohmann::json&)>& edit) {
+    nlohmann::json c = good;
+    edit(c);
+    std::ofstream(dir_ / "die/checkpoint.json") << c.dump();
+    return run({"optimize", die(), "--out", "die", "--resume"});
+  };
+  // best_loss -5 used to exit 0 with "target reached".
+  Result r = resume_with([](nlohmann::json& c) { c["best_loss"] = -5; });
+  EXPECT_EQ(r.exit_code, 2) << r.out << r.err;
+  EXPECT_NE(r.err.find("checkpoint.json: best_loss: is -5, but the loss at the checkpoint's best point is"),
+            std::string::npos)
+      << r.err;
+  r = resume_with([](nlohmann::json& c) { c["best"][5] = c["best"][5].get<double>() + 0.1; });
+  EXPECT_EQ(r.exit_code, 2) << r.out << r.err;
+  EXPECT_NE(r.err.find("best_loss"), std::string::npos) << r.err;
+  r = resume_with([](nlohmann::json& c) { c["loss_scale"] = 0; });
+  EXPECT_EQ(r.exit_code, 2) << r.out << r.err;
+  EXPECT_NE(r.err.find("loss_scale: must be a finite number > 0"), std::string::npos) << r.err;
+  r = resume_with([](nlohmann::json& c) { c.erase("problem"); });
+  EXPECT_EQ(r.exit_code, 2) << r.out << r.err;
+  EXPECT_NE(r.err.find("problem: is missing"), std::string::npos) << r.err;
+  // The untouched checkpoint resumes.
+  r = resume_with([](nlohmann::json&) {});
+  EXPECT_NE(r.exit_code, 2) << r.out << r.err;
+}
+
+TEST_F(OptimizationCli, ResumeOutsideNewBoundsExits2) {
+  // A checkpoint whose best point was moved outside the scene's bounds.
+  nlohmann::json bounded = nlohmann::json::parse(liedyn::test::read_file(die()));
+  bounded["optimization"]["parameters"][1]["lower"] = -10;
+  bounded["optimization"]["parameters"][1]["upper"] = 10.0;
+  { std::ofstream(dir_ / "bounded.json") << bounded.dump(); }
+  ASSERT_EQ(run({"optimize", "bounded.json", "--out", "die", "--max-iterations", "2"}).exit_code, 3);
+  nlohmann::json checkpoint =
+      nlohmann::json::parse(liedyn::test::read_file(dir_ / "die/checkpoint.json"));
+  checkpoint["best"][5] = 11.0;  // bodies[0].linear_velocity[2]
+  { std::ofstream(dir_ / "die/checkpoint.json") << checkpoint.dump(); }
+  const std::string before = liedyn::test::read_file(dir_ / "die/history.csv");
   const Result r = run({"optimize", "bounded.json", "--out", "die", "--resume"});
   EXPECT_EQ(r.exit_code, 2) << r.out << r.err;
   EXPECT_NE(r.err.find("checkpoint.json: best: the value "), std::string::npos) << r.err;
-  EXPECT_NE(r.err.find("of bodies[0].linear_velocity[2] is above its upper bound (1) in the scene"),
+  EXPECT_NE(r.err.find("of bodies[0].linear_velocity[2] is above its upper bound (10) in the scene"),
             std::string::npos)
       << r.err;
   EXPECT_EQ(liedyn::test::read_file(dir_ / "die/history.csv"), before);

@@ -148,7 +148,7 @@ class Plot : public ::testing::Test {
   int temporaries() const {
     int n = 0;
     for (const auto& entry : fs::directory_iterator(dir_)) {
-      n += entry.path().filename().string().find(".tmp-") != std::string::npos ? 1 : 0;
+      n += entry.path().filename().string().find(".liedyn-") != std::string::npos ? 1 : 0;
     }
     return n;
   }

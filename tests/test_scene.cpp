@@ -452,14 +452,13 @@ TEST(Scene, BackendsAndTheirOptions) {
   const Scene ipopt = parse_scene(
       scene(kBody, R"("solver": {"backend": "ipopt", "rotation": "rotvec", "ipopt": {
             "hessian_approximation": "limited-memory", "print_level": 3,
-            "derivative_test": "second-order", "output_file": "ipopt.log",
-            "max_recentrings": 1}}, )"),
+            "derivative_test": "second-order", "max_recentrings": 1}}, )"),
       kSource);
   EXPECT_EQ(ipopt.solver.backend, Backend::kIpopt);
   EXPECT_EQ(ipopt.solver.ipopt.hessian_approximation, "limited-memory");
   EXPECT_EQ(ipopt.solver.ipopt.print_level, 3);
   EXPECT_EQ(ipopt.solver.ipopt.derivative_test, "second-order");
-  EXPECT_EQ(ipopt.solver.ipopt.output_file, "ipopt.log");
+  EXPECT_EQ(ipopt.solver.ipopt.output_file, "");  // never from a scene (test_output.cpp)
   EXPECT_EQ(ipopt.solver.ipopt.max_recentrings, 1);
   // Defaults.
   const Scene plain = parse_scene(scene(), kSource);

@@ -562,15 +562,22 @@ TEST_F(SweepFiles, WritesTheCsvAndAPlotPerFiniteMetric) {
     run.energy_drift = 0.5;
   }
   const fs::path out = dir_ / "nested" / "out";
-  write_sweep(r, out);
+  {
+    OutputFolder folder(out, "sweep", nullptr);
+    write_sweep(r, folder);
+  }
   EXPECT_EQ(listing(out), (std::vector<std::string>{"energy_drift_vs_time.png",
                                                     "orientation_error_vs_time.png",
-                                                    "position_error_vs_time.png", "sweep.csv"}));
+                                                    "position_error_vs_time.png", "run.json",
+                                                    "sweep.csv"}));
   EXPECT_EQ(test::read_file(out / "sweep.csv"), sweep_csv(r));
   EXPECT_EQ(test::read_file(out / "position_error_vs_time.png").substr(1, 3), "PNG");
 
   r.runs[0].gradient_error = 0.1;  // one finite value is enough for a plot
-  write_sweep(r, out);
+  {
+    OutputFolder folder(out, "sweep", nullptr);
+    write_sweep(r, folder);
+  }
   EXPECT_TRUE(fs::exists(out / "gradient_error_vs_time.png"));
   EXPECT_FALSE(fs::exists(out / "momentum_drift_vs_time.png"));
 }
