@@ -38,6 +38,7 @@
 #include "optimization.hpp"
 #include "output.hpp"
 #include "run.hpp"
+#include "scene_checks.hpp"
 #include "sweep.hpp"
 
 #include <unistd.h>
@@ -63,6 +64,12 @@ bool parse_names(const std::vector<std::string>& names,
   return true;
 }
 
+void print_warnings(const liedyn::Scene& scene) {
+  for (const std::string& w : liedyn::scene_warnings(scene)) {
+    std::cerr << "liedyn: warning: " << scene.source << ": " << w << "\n";
+  }
+}
+
 // `liedyn sweep`: the axes from --set, --rotations and --backends, the runs, the outputs.
 int run_sweep_command(const std::string& scene_file, const std::vector<std::string>& set_texts,
                       const std::vector<std::string>& backend_names,
@@ -86,6 +93,7 @@ int run_sweep_command(const std::string& scene_file, const std::vector<std::stri
   if (!rotation_names.empty()) options.axes.push_back({"solver.rotation", rotation_names});
   options.progress = quiet ? nullptr : &std::cerr;
   options.progress_bar = ::isatty(STDERR_FILENO) != 0;
+  print_warnings(liedyn::load_scene(scene_file));
   std::optional<liedyn::OutputFolder> folder;
   options.before_runs = [&] { folder.emplace(out_dir, "sweep " + scene_file, &std::cerr); };
   const liedyn::SweepResult result =
@@ -273,6 +281,7 @@ int main(int argc, char** argv) {
     }
     liedyn::Scene scene = liedyn::load_scene(scene_file);
     scene.solver.ipopt.output_file = ipopt_log;
+    print_warnings(scene);
     if ((gradcheck->parsed() || optimize->parsed()) && !scene.optimization) {
       std::cerr << "liedyn: " << scene_file
                 << ": optimization: is required but missing (nothing to differentiate)\n";

@@ -1,0 +1,94 @@
+#include "scene_checks.hpp"
+
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <sstream>
+
+namespace liedyn {
+namespace {
+
+std::string collider_label(const Model& model, std::size_t c) {
+  return "colliders[" + std::to_string(c) + "] (\"" + model.colliders[c].name + "\")";
+}
+
+// The first collider `p` starts inside by more than `radius` (its centre inside the solid):
+// a message, or empty.
+std::string deepest_start(const Model& model, const Vector3& p, double radius,
+                          const std::string& what) {
+  for (std::size_t c = 0; c < model.colliders.size(); ++c) {
+    const double phi = model.colliders[c].evaluate(p, false).distance;
+    if (phi < 0.0) {
+      std::ostringstream os;
+      os << what << " starts " << -phi + radius << " m inside " << collider_label(model, c)
+         << ", deeper than its radius " << radius
+         << " m: the penalty will push it out hard (move it outside)";
+      return os.str();
+    }
+  }
+  return {};
+}
+
+}  // namespace
+
+std::vector<std::string> scene_warnings(const Scene& scene) {
+  const Model& model = scene.model;
+  std::vector<std::string> warnings;
+  bool anything_touches = false;
+  std::vector<Eigen::AlignedBox3d> boxes(model.bodies.size());  // of the samples' spheres
+  for (std::size_t b = 0; b < model.bodies.size(); ++b) {
+    const RigidBody& body = model.bodies[b];
+    if (!body.contact.enabled() || body.contact_points.empty()) continue;
+    anything_touches = true;
+    const std::string label = "bodies[" + std::to_string(b) + "] (\"" + body.name + "\")";
+    bool warned = false;
+    for (std::size_t i = 0; i < body.contact_points.size(); ++i) {
+      const Vector3 p = body.position + body.orientation * body.contact_points[i];
+      boxes[b].extend(p - Vector3::Constant(body.contact.radius));
+      boxes[b].extend(p + Vector3::Constant(body.contact.radius));
+      if (warned) continue;
+      const std::string w = deepest_start(model, p, body.contact.radius,
+                                          label + ": contact sample " + std::to_string(i));
+      if (!w.empty()) {
+        warnings.push_back(w);
+        warned = true;  // one per body is enough to act on
+      }
+    }
+  }
+  for (std::size_t r = 0; r < model.rods.size(); ++r) {
+    const RodSpec& rod = model.rods[r];
+    if (!rod.contact.enabled()) continue;
+    anything_touches = true;
+    for (int i = 0; i < rod.node_count(); ++i) {
+      if (std::find(rod.fixed_nodes.begin(), rod.fixed_nodes.end(), i) != rod.fixed_nodes.end()) {
+        continue;  // clamped nodes have no contact
+      }
+      const std::string w =
+          deepest_start(model, rod.nodes[static_cast<std::size_t>(i)], rod.contact.radius,
+                        "rods[" + std::to_string(r) + "] (\"" + rod.name + "\"): node " +
+                            std::to_string(i));
+      if (!w.empty()) {
+        warnings.push_back(w);
+        break;
+      }
+    }
+  }
+  if (!model.colliders.empty() && !anything_touches) {
+    warnings.push_back(std::to_string(model.colliders.size()) +
+                       " collider(s) touch nothing: no body or rod has a contact block (give "
+                       "bodies \"contact\" with samples, or rods \"contact\")");
+  }
+  for (std::size_t a = 0; a < boxes.size(); ++a) {
+    for (std::size_t b = a + 1; b < boxes.size(); ++b) {
+      if (!boxes[a].isEmpty() && !boxes[b].isEmpty() && boxes[a].intersects(boxes[b])) {
+        warnings.push_back("bodies[" + std::to_string(a) + "] (\"" + model.bodies[a].name +
+                           "\") and bodies[" + std::to_string(b) + "] (\"" + model.bodies[b].name +
+                           "\") start with overlapping contact samples (their bounding boxes "
+                           "intersect): bodies touch colliders, not each other, so they will "
+                           "pass through one another");
+      }
+    }
+  }
+  return warnings;
+}
+
+}  // namespace liedyn
