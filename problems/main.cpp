@@ -37,6 +37,7 @@
 #include "compare.hpp"
 #include "optimization.hpp"
 #include "output.hpp"
+#include "memory_budget.hpp"
 #include "run.hpp"
 #include "scene_checks.hpp"
 #include "sweep.hpp"
@@ -93,7 +94,6 @@ int run_sweep_command(const std::string& scene_file, const std::vector<std::stri
   if (!rotation_names.empty()) options.axes.push_back({"solver.rotation", rotation_names});
   options.progress = quiet ? nullptr : &std::cerr;
   options.progress_bar = ::isatty(STDERR_FILENO) != 0;
-  print_warnings(liedyn::load_scene(scene_file));
   std::optional<liedyn::OutputFolder> folder;
   options.before_runs = [&] { folder.emplace(out_dir, "sweep " + scene_file, &std::cerr); };
   const liedyn::SweepResult result =
@@ -244,6 +244,13 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   sweep->add_flag("--quiet", quiet, "No progress on stderr");
 
+  std::string memory_limit_text;
+  for (CLI::App* command : {simulate, bench, compare, gradcheck, optimize, sweep}) {
+    command->add_option("--memory-limit", memory_limit_text,
+                        "Refuse runs estimated to need more memory than this (e.g. 4G; "
+                        "default: the machine's available memory)");
+  }
+
   liedyn::install_output_signal_handlers();
   try {
     app.parse(argc, argv);
@@ -275,13 +282,28 @@ int main(int argc, char** argv) {
         return 2;
       }
     }
+    std::optional<std::uint64_t> memory_limit;
+    if (!memory_limit_text.empty()) {
+      try {
+        memory_limit = liedyn::parse_byte_size(memory_limit_text);
+      } catch (const std::invalid_argument& e) {
+        std::cerr << "liedyn: " << e.what() << "\n";
+        return 2;
+      }
+    }
     if (sweep->parsed()) {
+      const liedyn::Scene base = liedyn::load_scene(scene_file);
+      print_warnings(base);
+      liedyn::admit_memory(base, base.optimization ? 1 : 0, memory_limit);
       return run_sweep_command(scene_file, set_texts, backend_names, rotation_names, out_dir,
                                quiet, sweep_options);
     }
     liedyn::Scene scene = liedyn::load_scene(scene_file);
     scene.solver.ipopt.output_file = ipopt_log;
     print_warnings(scene);
+    // Trajectories kept whole: the adjoint's (gradcheck, optimize), compare's two.
+    const int trajectories = gradcheck->parsed() || optimize->parsed() ? 1 : compare->parsed() ? 2 : 0;
+    liedyn::admit_memory(scene, trajectories, memory_limit);
     if ((gradcheck->parsed() || optimize->parsed()) && !scene.optimization) {
       std::cerr << "liedyn: " << scene_file
                 << ": optimization: is required but missing (nothing to differentiate)\n";
