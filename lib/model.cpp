@@ -1,6 +1,7 @@
 #include "model.hpp"
 
 #include <Eigen/Eigenvalues>
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 #include <sstream>
@@ -303,6 +304,20 @@ void Model::validate_rod(const RodSpec& rod, const std::string& path) {
   for (std::size_t i = 0; i < rod.node_velocities.size(); ++i) {
     require_finite(rod.node_velocities[i], field("node_velocities") + "[" + std::to_string(i) + "]");
   }
+  // A clamped node keeps its prescribed position (it is not a DOF; only a prescribed motion
+  // moves it), so an initial velocity of it would contradict the clamp.
+  if (!rod.node_velocities.empty()) {
+    std::vector<bool> clamped(rod.node_count(), false);
+    for (int i : rod.fixed_nodes) clamped[i] = true;  // indices checked above
+    for (int i = 0; i < rod.node_count(); ++i) {
+      if (clamped[i] && !rod.node_velocities[i].isZero(0.0)) {
+        throw ModelError(field("node_velocities") + "[" + std::to_string(i) + "]",
+                         "must be zero: node " + std::to_string(i) +
+                             " is clamped (in fixed_nodes), and a clamped node keeps its "
+                             "prescribed position (only a prescribed motion moves it)");
+      }
+    }
+  }
   const std::size_t interior = rod.nodes.size() - 2;
   check_count(rod.rest_darboux.size(), interior, "rest_darboux", "interior nodes");
   for (std::size_t i = 0; i < rod.rest_darboux.size(); ++i) {
@@ -416,11 +431,17 @@ Step Model::initial_step() const {
     dq.points.push_back(time_step * b.linear_velocity);
     dq.rotations.push_back(so3::exp(time_step * b.angular_velocity));
   }
-  for (const RodSpec& rod : rods) {  // edges start at rest; nodes too unless given velocities
-    if (rod.node_velocities.empty()) {
-      dq.points.insert(dq.points.end(), rod.node_count(), Vector3::Zero());
-    } else {
-      for (const Vector3& v : rod.node_velocities) dq.points.push_back(time_step * v);
+  // Rod edges start at rest, and nodes too unless given velocities; clamped nodes always
+  // (validate refuses a velocity on one): a Δx_0 of theirs would be carried into every step.
+  for (const RodSpec& rod : rods) {
+    const std::size_t first = dq.points.size();
+    dq.points.insert(dq.points.end(), rod.node_count(), Vector3::Zero());
+    if (!rod.node_velocities.empty()) {
+      const int given = std::min(rod.node_count(), static_cast<int>(rod.node_velocities.size()));
+      for (int i = 0; i < given; ++i) dq.points[first + i] = time_step * rod.node_velocities[i];
+      for (int i : rod.fixed_nodes) {
+        if (i >= 0 && i < rod.node_count()) dq.points[first + i].setZero();
+      }
     }
     dq.rotations.insert(dq.rotations.end(), rod.edge_count(), Matrix3::Identity());
   }

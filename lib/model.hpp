@@ -107,8 +107,10 @@ struct Model {
   // The contact checks of validate(): colliders, materials, samples; `path` as above.
   static void validate_contact(const ContactMaterial& contact, const std::string& path);
 
-  // State q_0 and step Δq_0 = (h v_0, exp(h ω_0)) (DESIGN.md §3); rods start at rest in
-  // their initial shape, with parallel-transported edge frames.
+  // State q_0 and step Δq_0 = (h v_0, exp(h ω_0)) (docs/design.md §2.2); rods start in their
+  // initial shape, with parallel-transported edge frames, edges at rest and nodes at their
+  // node_velocities (none: at rest). Clamped nodes start at rest whatever node_velocities
+  // says (validate refuses a non-zero one): a Δx_0 would carry them along in every step.
   State initial_state() const;
   Step initial_step() const;
 };

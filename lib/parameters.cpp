@@ -57,6 +57,21 @@ ScheduledParameter<3> schedule_from(const Eigen::VectorXd& gamma, int slot, int 
   return s;
 }
 
+// The nodes of a rod that are not clamped, in increasing order: the nodes of a
+// rod_node_velocities block (a clamped node keeps its prescribed state, so it has no initial
+// velocity to choose). Clamped indices out of range are left to Model::validate_rod.
+std::vector<int> free_nodes(const RodSpec& rod) {
+  std::vector<bool> clamped(rod.node_count(), false);
+  for (int i : rod.fixed_nodes) {
+    if (i >= 0 && i < rod.node_count()) clamped[i] = true;
+  }
+  std::vector<int> nodes;
+  for (int i = 0; i < rod.node_count(); ++i) {
+    if (!clamped[i]) nodes.push_back(i);
+  }
+  return nodes;
+}
+
 // "[i]" (appended piecewise: GCC 12 warns falsely (-Wrestrict) on "[" + std::to_string(i)).
 std::string bracket(int i) {
   std::string s = "[";
@@ -91,7 +106,7 @@ long long ParameterSet::block_size(const Model& model, ParameterKind kind, int i
     case ParameterKind::kBendingStiffness:
       return 3;
     case ParameterKind::kRodNodeVelocities:
-      return 3 * nodes;
+      return 3 * static_cast<long long>(free_nodes(model.rods[index]).size());
     case ParameterKind::kForce:
     case ParameterKind::kTorque:
     case ParameterKind::kNodeForce:
@@ -154,6 +169,10 @@ void ParameterSet::add(const Model& model, ParameterKind kind, int index, int su
       model.rods[index].node_count() < 3) {
     throw ModelError(field, "rod " + std::to_string(index) + " has no interior node");
   }
+  if (kind == ParameterKind::kRodNodeVelocities && free_nodes(model.rods[index]).empty()) {
+    throw ModelError(field, "rod " + std::to_string(index) +
+                                " has no free node: every node is clamped (fixed_nodes)");
+  }
   if ((kind == ParameterKind::kBodyLinearVelocity || kind == ParameterKind::kBodyAngularVelocity ||
        kind == ParameterKind::kRodNodeVelocities) &&
       model.static_equilibrium) {
@@ -194,8 +213,8 @@ std::string ParameterSet::describe(const Model& model, int i) const {
       case ParameterKind::kBodyAngularVelocity: return body + ".angular_velocity" + axis;
       case ParameterKind::kBodyPosition: return body + ".position" + axis;
       case ParameterKind::kBodyOrientation: return body + ".orientation_increment" + axis;
-      case ParameterKind::kRodNodeVelocities:
-        return rod + ".node_velocities" + bracket(j / 3) + axis;
+      case ParameterKind::kRodNodeVelocities:  // named by the node's own index
+        return rod + ".node_velocities" + bracket(free_nodes(model.rods[b.index])[j / 3]) + axis;
       case ParameterKind::kForce: return "forces" + bracket(b.index) + step;
       case ParameterKind::kTorque: return "torques" + bracket(b.index) + step;
       case ParameterKind::kNodeForce:
@@ -263,9 +282,10 @@ Eigen::VectorXd ParameterSet::initial_values(const Model& model) const {
       case ParameterKind::kBodyOrientation: break;  // ε = 0
       case ParameterKind::kRodNodeVelocities: {
         const RodSpec& rod = model.rods[b.index];
-        for (int i = 0; i < rod.node_count(); ++i) {
-          block.segment<3>(3 * i) =
-              rod.node_velocities.empty() ? Vector3::Zero() : rod.node_velocities[i];
+        const std::vector<int> nodes = free_nodes(rod);
+        for (std::size_t k = 0; k < nodes.size(); ++k) {
+          block.segment<3>(3 * k) =
+              rod.node_velocities.empty() ? Vector3::Zero() : rod.node_velocities[nodes[k]];
         }
         break;
       }
@@ -308,10 +328,13 @@ Model ParameterSet::apply(const Model& base, const Eigen::VectorXd& gamma) const
         m.bodies[b.index].orientation =
             so3::orthonormalize(so3::exp(block) * base.bodies[b.index].orientation);
         break;
-      case ParameterKind::kRodNodeVelocities: {
+      case ParameterKind::kRodNodeVelocities: {  // the clamped nodes stay at rest
         RodSpec& rod = m.rods[b.index];
-        rod.node_velocities.resize(rod.node_count());
-        for (int i = 0; i < rod.node_count(); ++i) rod.node_velocities[i] = block.segment<3>(3 * i);
+        const std::vector<int> nodes = free_nodes(rod);
+        rod.node_velocities.resize(rod.node_count(), Vector3::Zero());
+        for (std::size_t k = 0; k < nodes.size(); ++k) {
+          rod.node_velocities[nodes[k]] = block.segment<3>(3 * k);
+        }
         break;
       }
       case ParameterKind::kForce:
@@ -392,9 +415,12 @@ void ParameterSet::add_initial_gradient(const Model& applied, const Eigen::Vecto
         block += so3::left_jacobian(gamma.segment<3>(b.offset)).transpose() *
                  a0.segment<3>(body_rotation);
         break;
-      case ParameterKind::kRodNodeVelocities: {  // Δx_0 = h v_0 per node
+      case ParameterKind::kRodNodeVelocities: {  // Δx_0 = h v_0 per free node
         const int first = applied.rod_point(b.index, 0);
-        block += h * da0.segment(tangent_point(first), b.size);
+        const std::vector<int> nodes = free_nodes(applied.rods[b.index]);
+        for (std::size_t k = 0; k < nodes.size(); ++k) {
+          block.segment<3>(3 * k) += h * da0.segment<3>(tangent_point(first + nodes[k]));
+        }
         break;
       }
       default:  // enters the potential, not q_0 or Δq_0

@@ -2,7 +2,7 @@
 // The parameters γ of a trajectory optimisation (paper §5, §7.3–7.4): which numbers of a
 // Model are free, their place in the vector γ, writing γ into a Model, and the part of the
 // gradient that comes through the initial state and step,
-//   dg/dγ ⊇ (∂q_0/∂γ)ᵀ a_0 + (∂Δq_0/∂γ)ᵀ Δa_0   (DESIGN.md §6).
+//   dg/dγ ⊇ (∂q_0/∂γ)ᵀ a_0 + (∂Δq_0/∂γ)ᵀ Δa_0   (docs/design.md §8.4).
 // Parameters that enter the incremental potential (forces, torques, tensions, rest shape,
 // stiffnesses) are handed to the terms as slots (lib/term.hpp), and their gradient
 // (∂C_k/∂γ)ᵀ z_k is summed by IncrementalPotential::add_parameter_adjoint.
@@ -12,7 +12,9 @@
 //   body_angular_velocity    3       ω_0 (world): ΔR_0 = exp(h ω_0), ∂/∂ω_0 = h J_l(h ω_0)
 //   body_position            3       x_0
 //   body_orientation         3       ε with R_0 = exp(ε) R_scene (γ starts at 0): ∂/∂ε = J_l(ε)
-//   rod_node_velocities      3·nodes initial node velocities of a rod
+//   rod_node_velocities      3·free  v_0 of each free node of a rod, in node order: Δx_0 = h v_0
+//                                    (clamped nodes keep their prescribed state: not in γ;
+//                                    describe names each entry by its node's own index)
 //   force, torque            3·n     per-step world force (at a body point) / torque
 //   node_force               3·n     per-step world force on a rod node (rods[r].node_forces[j])
 //   cable_tension            n       per-step tension of a rod's cable (rods[r].cables[c])
@@ -76,7 +78,8 @@ class ParameterSet {
   static constexpr int kMaxSize = 10000000;
 
   // Appends a block; throws ModelError naming `field` (e.g. "optimization.parameters[2]")
-  // when the block repeats one already added or γ would exceed kMaxSize, and the key of an
+  // when the block repeats one already added, γ would exceed kMaxSize or a rod's node
+  // velocities are asked for when every node of the rod is clamped, and the key of an
   // index that does not exist in the model (`field`.index for forces, torques and springs,
   // .node_force, .cable).
   void add(const Model& model, ParameterKind kind, int index, int sub, const std::string& field);

@@ -1,5 +1,5 @@
 #pragma once
-// A Cosserat rod as a user describes it, and its discretisation (paper §6.2, DESIGN.md §5).
+// A Cosserat rod as a user describes it, and its discretisation (paper §6.2, docs/design.md §6).
 //
 // Nodes carry positions x_i (i = 0…n−1), edges carry rotations R_j (edge j joins nodes j and
 // j+1), with R_j e_z along the edge at rest. Masses are lumped: each edge's mass
@@ -65,7 +65,9 @@ struct RodSpec {
   std::vector<RegionPush> region_pushes;  // forces on the nodes inside a region
   std::vector<CableSpec> cables;       // pulling cables
   std::vector<PrescribedMotion> prescribed_motions;  // of clamped nodes and edges
-  std::vector<Vector3> node_velocities;  // initial, world, m/s; empty: at rest (edges start at rest)
+  // Initial node velocities, world, m/s, one per node; empty: at rest. A clamped node's must
+  // be zero (it keeps its prescribed position). Edges start at rest.
+  std::vector<Vector3> node_velocities;
   // Rest Darboux vectors ω̄ per interior node (1…n−2), material frame of the edge before it;
   // empty: from the rest shape's frames.
   std::vector<Vector3> rest_darboux;

@@ -198,7 +198,7 @@ std::vector<KindCase> kind_cases() {
       {R"({"kind": "body_orientation", "body": "box"})", ParameterKind::kBodyOrientation, 1, -1,
        3, "bodies[1].orientation_increment[0]", {0, 0, 0}, 0},
       {R"({"kind": "rod_node_velocities", "rod": "arm"})", ParameterKind::kRodNodeVelocities, 1,
-       -1, 3 * nodes, "rods[1].node_velocities[0][0]", {0, 0, 0}, 3},
+       -1, 3 * (nodes - 1), "rods[1].node_velocities[1][0]", {0, 0, 0}, 3},
       {R"({"kind": "force", "index": 1})", ParameterKind::kForce, 1, -1, 3 * n,
        "forces[1].frame[1][0]", {0, 1, 0}, 3},
       {R"({"kind": "torque", "index": 1})", ParameterKind::kTorque, 1, -1, 3 * n,
