@@ -105,7 +105,7 @@ OutputFolder::OutputFolder(std::filesystem::path dir, std::string command, std::
 }
 
 OutputFolder::~OutputFolder() {
-  discard_unit();
+  close_unit(Leave::kNothing);  // an uncommitted unit is discarded
   ::close(dirfd_);  // releases the lock
 }
 
@@ -255,12 +255,7 @@ void OutputFolder::commit() {
   for (std::size_t i = 0; i < names.size(); ++i) {
     if (::renameat(staging_fd_, names[i].c_str(), dirfd_, names[i].c_str()) != 0) {
       const int reason = errno;
-      // Keep the staging folder: the next run into the folder finishes the commit.
-      for (Staged& s : staged_) internal::release_removal(s.cleanup_slot);
-      internal::release_removal(staging_slot_);
-      staged_.clear();
-      ::close(staging_fd_);
-      staging_fd_ = -1;
+      close_unit(Leave::kEverything);  // the next run into the folder finishes the commit
       throw std::runtime_error(
           (dir_ / names[i]).string() + ": cannot rename into place (" + error_text(reason) +
           ") after " + std::to_string(i) + " of " + std::to_string(names.size()) +
@@ -269,26 +264,20 @@ void OutputFolder::commit() {
     }
   }
   ::unlinkat(staging_fd_, kCommitRecord, 0);
-  for (Staged& s : staged_) internal::release_removal(s.cleanup_slot);
-  staged_.clear();
-  ::close(staging_fd_);
-  staging_fd_ = -1;
-  ::unlinkat(dirfd_, staging_name_.c_str(), AT_REMOVEDIR);
-  internal::release_removal(staging_slot_);
-  staging_slot_ = -1;
+  close_unit(Leave::kFiles);  // renamed away: only the empty staging folder is removed
 }
 
-void OutputFolder::discard_unit() {
+void OutputFolder::close_unit(Leave leave) {
   if (staging_fd_ < 0) return;
   for (Staged& s : staged_) {
     s.file.reset();
-    ::unlinkat(staging_fd_, s.name.c_str(), 0);
+    if (leave == Leave::kNothing) ::unlinkat(staging_fd_, s.name.c_str(), 0);
     internal::release_removal(s.cleanup_slot);
   }
   staged_.clear();
   ::close(staging_fd_);
   staging_fd_ = -1;
-  ::unlinkat(dirfd_, staging_name_.c_str(), AT_REMOVEDIR);
+  if (leave != Leave::kEverything) ::unlinkat(dirfd_, staging_name_.c_str(), AT_REMOVEDIR);
   internal::release_removal(staging_slot_);
   staging_slot_ = -1;
 }

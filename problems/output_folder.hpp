@@ -66,7 +66,11 @@ class OutputFolder {
   };
   FileStream& stage(const std::string& name);  // a file in the staging folder
   void settle_leftovers(std::ostream* notes);
-  void discard_unit();
+  // Ends the current unit: releases its files and its staging folder, removing what is not
+  // left (kNothing: discard the unit; kFiles: the files were renamed away; kEverything: a
+  // commit cut half-way, for the next run to finish).
+  enum class Leave { kNothing, kFiles, kEverything };
+  void close_unit(Leave leave);
   std::string manifest_text() const;
 
   std::filesystem::path dir_;
