@@ -97,6 +97,16 @@ void Model::validate() const {
          << " rad per step must be below π (reduce time_step)";
       throw ModelError(index_field("bodies", i, "angular_velocity"), os.str());
     }
+    // A finite velocity can still carry an energy beyond double range (|v| ≳ 1e154): every
+    // reported kinetic energy would be inf, and the steps would run on overflowed numbers.
+    if (!std::isfinite(0.5 * b.mass * b.linear_velocity.squaredNorm())) {
+      throw ModelError(index_field("bodies", i, "linear_velocity"),
+                       "the kinetic energy ½ m |v|² overflows a double");
+    }
+    if (!std::isfinite(0.5 * b.angular_velocity.dot(b.inertia * b.angular_velocity))) {
+      throw ModelError(index_field("bodies", i, "angular_velocity"),
+                       "the kinetic energy ½ ωᵀ I ω overflows a double");
+    }
     validate_contact(b.contact, index_field("bodies", i, "contact"));
     for (std::size_t k = 0; k < b.contact_points.size(); ++k) {
       require_finite(b.contact_points[k], index_field("bodies", i, "contact.points") + "[" +
@@ -303,6 +313,12 @@ void Model::validate_rod(const RodSpec& rod, const std::string& path) {
   check_count(rod.node_velocities.size(), rod.nodes.size(), "node_velocities", "nodes");
   for (std::size_t i = 0; i < rod.node_velocities.size(); ++i) {
     require_finite(rod.node_velocities[i], field("node_velocities") + "[" + std::to_string(i) + "]");
+    // As for bodies: no node may carry a kinetic energy beyond double range (its lumped mass
+    // is at most the rod's).
+    if (!std::isfinite(0.5 * rod.mass * rod.node_velocities[i].squaredNorm())) {
+      throw ModelError(field("node_velocities") + "[" + std::to_string(i) + "]",
+                       "the kinetic energy ½ m |v|² overflows a double");
+    }
   }
   // A clamped node keeps its prescribed position (it is not a DOF; only a prescribed motion
   // moves it), so an initial velocity of it would contradict the clamp.

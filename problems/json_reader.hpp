@@ -4,10 +4,14 @@
 
 #include <Eigen/Core>
 #include <cmath>
+#include <functional>
 #include <limits>
 #include <nlohmann/json.hpp>
 #include <set>
+#include <stdexcept>
 #include <string>
+#include <string_view>
+#include <vector>
 
 #include "../lib/state.hpp"
 #include "scene.hpp"
@@ -16,14 +20,62 @@ namespace liedyn::scene_json {
 
 using nlohmann::json;
 
-// A JSON object being read, with the dotted path of its place in the file. Each key read is
-// remembered; finish() rejects the keys nobody asked for (typos must not pass silently).
+// A JSON object being read, with the dotted path of its place in the file.
+//
+// Typos must not pass silently, and must be reported as typos: every reader is made with the
+// keys its object may have, and the object's keys are checked against them at once, before
+// any value is read. Checked only at the end, a misspelt key would hide behind the error its
+// misspelling causes elsewhere in the object (a required key missing, a value read under
+// another name), a message about the wrong field.
+//
+// Each key read is also remembered; finish() rejects the keys allowed but not read (a
+// term's "height" is read with its "letter" only, not with its "targets").
 class ObjectReader {
  public:
-  ObjectReader(const json& value, std::string path, const std::string& source)
+  using Keys = std::vector<std::string_view>;
+
+  // Objects whose kind a member names ("type", "term", "kind") take other keys per kind.
+  struct Variant {
+    std::string_view value;  // of the naming member, e.g. "helix"
+    Keys keys;               // allowed with it besides the common ones
+  };
+  struct Variants {
+    std::string_view key;  // the naming member, e.g. "type"
+    std::vector<Variant> variants;
+  };
+
+  // An object that may have `keys`.
+  ObjectReader(const json& value, std::string path, const std::string& source, const Keys& keys)
+      : ObjectReader(value, std::move(path), source, keys, Variants{}) {}
+
+  // An object that may have `keys` and `variants.key`, and with it the keys of its variant.
+  // An unknown kind (or none) allows the keys of every variant: the naming member's own
+  // error comes from its reading, and only keys no kind takes are unknown here.
+  ObjectReader(const json& value, std::string path, const std::string& source, const Keys& keys,
+               const Variants& variants)
       : value_(value), path_(std::move(path)), source_(source) {
     if (!value_.is_object()) fail(path_, "must be a JSON object");
+    for (const std::string_view k : keys) allowed_.emplace(k);
+    if (!variants.key.empty()) {
+      allowed_.emplace(variants.key);
+      const auto named = value_.find(std::string(variants.key));
+      const Variant* chosen = nullptr;
+      for (const Variant& v : variants.variants) {
+        if (named != value_.end() && named->is_string() && named->get<std::string>() == v.value) {
+          chosen = &v;
+          break;
+        }
+      }
+      for (const Variant& v : variants.variants) {
+        if (chosen != nullptr && chosen != &v) continue;
+        for (const std::string_view k : v.keys) allowed_.emplace(k);
+      }
+    }
+    check_keys();
   }
+
+  // Every reader declares its keys (see above).
+  ObjectReader(const json& value, std::string path, const std::string& source) = delete;
 
   [[noreturn]] void fail(const std::string& field, const std::string& reason) const {
     throw SceneError(source_, field, reason);
@@ -36,6 +88,11 @@ class ObjectReader {
   }
 
   bool has(const std::string& key) {
+    // Every read passes here, present or not: a key read but not declared is a bug of the
+    // reading code (a valid scene giving it would be refused), whatever the scene holds.
+    if (!allowed_.count(key)) {
+      throw std::logic_error("scene reader: " + field(key) + " is read but not declared");
+    }
     known_.insert(key);
     return value_.contains(key);
   }
@@ -151,10 +208,22 @@ class ObjectReader {
   }
 
  private:
+  // The first key (in the object's order) not allowed, with the same message as finish().
+  void check_keys() const {
+    for (const auto& item : value_.items()) {
+      if (!allowed_.count(item.key())) {
+        std::string allowed;
+        for (const std::string& k : allowed_) allowed += (allowed.empty() ? "" : ", ") + k;
+        fail(field(item.key()), "unknown key (allowed here: " + allowed + ")");
+      }
+    }
+  }
+
   const json& value_;
   std::string path_;
   const std::string& source_;
-  std::set<std::string> known_;
+  std::set<std::string, std::less<>> allowed_;  // declared: checked when made
+  std::set<std::string> known_;                 // read: checked by finish()
 };
 
 inline std::string item_path(const std::string& array, std::size_t i) {

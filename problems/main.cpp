@@ -359,7 +359,14 @@ int main(int argc, char** argv) {
     }
     if (summary.unconverged_steps > 0 && !allow_unconverged) {
       std::cerr << "liedyn: " << summary.unconverged_steps
-                << " steps did not meet the tolerance (see frames.csv, column converged)\n";
+                << " steps did not meet the tolerance (see frames.csv, columns converged and status)";
+      if (!summary.free_directions.empty()) {
+        std::cerr << "; the equilibrium is not unique: " << summary.free_directions.front();
+        if (summary.free_directions.size() > 1) {
+          std::cerr << " (and " << summary.free_directions.size() - 1 << " more, listed above)";
+        }
+      }
+      std::cerr << "\n";
       return 3;
     }
     return 0;

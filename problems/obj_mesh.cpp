@@ -11,6 +11,7 @@
 #include <sstream>
 #include <stdexcept>
 #include <string>
+#include <string_view>
 #include <system_error>
 #include <type_traits>
 #include <vector>
@@ -62,12 +63,12 @@ std::string quoted(std::string_view token) {
 // the file does not say. Returns an empty string, or the reason the token is refused.
 std::string check_coordinate(std::string_view token) {
   std::string_view digits = token;
-  if (!digits.empty() && digits.front() == '+') digits.remove_prefix(1);  // from_chars has no '+'
+  // from_chars takes no '+' (and "+-1" is no number).
+  if (digits.size() > 1 && digits.front() == '+' && digits[1] != '-') digits.remove_prefix(1);
   double value = 0.0;
   const char* const end = digits.data() + digits.size();
   const auto [ptr, ec] = std::from_chars(digits.data(), end, value);
-  if (digits.empty() || (!digits.empty() && digits.front() == '-' && token.front() == '+') ||
-      ptr != end || (ec != std::errc() && ec != std::errc::result_out_of_range)) {
+  if (ptr != end || (ec != std::errc() && ec != std::errc::result_out_of_range)) {
     return quoted(token) + " is not a number";
   }
   if (ec == std::errc::result_out_of_range) {
@@ -85,9 +86,7 @@ std::string check_coordinate(std::string_view token) {
 // spaces or tabs, 'v', a space or tab), so the k-th vertex line found here is its k-th vertex:
 // returns the 1-based line of every vertex, for the messages. Values after z (w, or the r g b
 // of the vertex-colour extension) are not read.
-std::vector<std::size_t> check_text(const std::filesystem::path& file, const std::string& text,
-                                    void (*fail)(const std::filesystem::path&,
-                                                 const std::string&)) {
+std::vector<std::size_t> check_text(const std::filesystem::path& file, const std::string& text) {
   std::vector<std::size_t> vertex_lines;
   std::size_t line = 1;
   std::size_t begin = 0;
@@ -102,20 +101,22 @@ std::vector<std::size_t> check_text(const std::filesystem::path& file, const std
     std::size_t i = row.find_first_not_of(" \t");
     if (i != std::string_view::npos && row[i] == 'v' && i + 1 < row.size() &&
         (row[i + 1] == ' ' || row[i + 1] == '\t')) {
-      const std::string where = "line " + std::to_string(line) + ": vertex " +
-                                std::to_string(vertex_lines.size() + 1) + " (1-based): ";
+      const auto where = [&] {  // built only for a message
+        return "line " + std::to_string(line) + ": vertex " +
+               std::to_string(vertex_lines.size() + 1) + " (1-based): ";
+      };
       i += 2;
       static const char* const kAxis[] = {"x", "y", "z"};
       for (int axis = 0; axis < 3; ++axis) {
         i = row.find_first_not_of(" \t", i);
         if (i == std::string_view::npos) {
-          fail(file, where + "has " + std::to_string(axis) +
+          fail(file, where() + "has " + std::to_string(axis) +
                          " coordinates, expected x y z (a missing one is not read as 0)");
         }
         std::size_t stop = row.find_first_of(" \t", i);
         if (stop == std::string_view::npos) stop = row.size();
         const std::string reason = check_coordinate(row.substr(i, stop - i));
-        if (!reason.empty()) fail(file, where + kAxis[axis] + " = " + reason);
+        if (!reason.empty()) fail(file, where() + kAxis[axis] + " = " + reason);
         i = stop;
       }
       vertex_lines.push_back(line);
@@ -155,7 +156,7 @@ TriangleMesh load_obj_mesh(const std::filesystem::path& file, double scale) {
          "(CMake target tinyobjloader::tinyobjloader_double), not libtinyobjloader");
   }
 
-  const std::vector<std::size_t> vertex_lines = check_text(file, text, fail);
+  const std::vector<std::size_t> vertex_lines = check_text(file, text);
 
   // ParseFromString ignores `mtllib`: materials are never read.
   tinyobj::ObjReader reader;

@@ -16,12 +16,17 @@
 
 namespace liedyn {
 
-// Reads `file`. Throws std::runtime_error whose message names the file and the reason: it
-// does not exist or cannot be read, tinyobjloader reports a parse error (e.g. a face index 0
-// or a non-numeric face index), a face index is outside the file's vertices, a coordinate
-// (times scale) is not finite, a face has fewer than 3 vertices, or the file has no faces.
-// Throws std::invalid_argument if scale is not finite or ≤ 0. tinyobjloader itself is lenient:
-// a malformed coordinate ("v abc 0 0", or a missing one) reads as 0 without an error.
+// Reads `file`. Throws std::runtime_error whose message names the file and the reason (and
+// the 1-based line, for a NUL byte or a vertex): it does not exist or cannot be read, it holds
+// a NUL byte (not a text file), a vertex line has fewer than three coordinates or one that is
+// not a finite decimal number ("abc", "nan", "inf", "1e999", "0x10", "1.5.3": tinyobjloader
+// itself would read most of these as 0 without an error), a coordinate times scale is not
+// finite, tinyobjloader reports a parse error (e.g. a face index 0 or a non-numeric face
+// index), a face index is outside the file's vertices, a face has fewer than 3 vertices, or
+// the file has no faces. Only x y z of a vertex line are read (a w or vertex colours after
+// them are ignored). Throws std::invalid_argument if scale is not finite or ≤ 0. In a scene
+// (problems/scene.cpp) the message becomes the reason of a SceneError on the collider's
+// "file" field.
 TriangleMesh load_obj_mesh(const std::filesystem::path& file, double scale = 1.0);
 
 }  // namespace liedyn

@@ -271,7 +271,9 @@ void parse_term(ObjectReader& r, const Scene& scene, OptimizationSpec& spec) {
 
 OptimizationSpec parse_optimization(const json& value, const Scene& scene) {
   const std::string& source = scene.source;
-  ObjectReader o(value, "optimization", source);
+  ObjectReader o(value, "optimization", source,
+                 {"parameters", "objective", "optimizer", "max_iterations",
+                  "target_normalized_loss", "lbfgs_memory", "loss_scale"});
   if (scene.frames < 1) o.fail("frames", "an optimisation needs at least one frame");
   if (scene.frames > kMaxOptimizationFrames) {
     o.fail("frames", "an optimisation keeps every frame in memory: at most " +
@@ -283,13 +285,40 @@ OptimizationSpec parse_optimization(const json& value, const Scene& scene) {
   if (parameters.empty()) o.fail(o.field("parameters"), "must list at least one parameter");
   for (std::size_t i = 0; i < parameters.size(); ++i) {
     const std::string path = item_path(o.field("parameters"), i);
-    ObjectReader r(parameters[i], path, source);
+    // The keys of each kind (parse_parameter, docs/scene-format.md#optimization).
+    ObjectReader r(parameters[i], path, source, {"lower", "upper"},
+                   {"kind",
+                    {{"body_linear_velocity", {"body"}},
+                     {"body_angular_velocity", {"body"}},
+                     {"body_position", {"body"}},
+                     {"body_orientation", {"body"}},
+                     {"rod_node_velocities", {"rod"}},
+                     {"force", {"index"}},
+                     {"torque", {"index"}},
+                     {"node_force", {"rod", "node_force"}},
+                     {"cable_tension", {"rod", "cable"}},
+                     {"rest_darboux", {"rod"}},
+                     {"rest_darboux_per_frame", {"rod"}},
+                     {"spring_stiffness", {"index"}},
+                     {"stretch_stiffness", {"rod"}},
+                     {"shear_stiffness", {"rod"}},
+                     {"bending_stiffness", {"rod"}}}});
     parse_parameter(r, scene, spec, path);
   }
   const json& objective = o.array("objective");
   if (objective.empty()) o.fail(o.field("objective"), "must list at least one term");
   for (std::size_t i = 0; i < objective.size(); ++i) {
-    ObjectReader r(objective[i], item_path(o.field("objective"), i), source);
+    // The keys of each term (parse_term): a projected_trajectory's "node" in a point_targets
+    // term is refused before its "targets" are read.
+    ObjectReader r(objective[i], item_path(o.field("objective"), i), source, {"weight"},
+                   {"term",
+                    {{"point_targets",
+                      {"rod", "frame", "targets", "polyline", "letter", "height", "origin"}},
+                     {"body_pose",
+                      {"body", "frame", "position", "position_weights", "orientation",
+                       "orientation_weight"}},
+                     {"projected_trajectory", {"body", "rod", "node", "plane", "curve"}},
+                     {"effort", {"parameters"}}}});
     parse_term(r, scene, spec);
   }
   const std::string optimizer = o.string("optimizer", to_string(spec.optimizer.optimizer));
@@ -546,6 +575,7 @@ int run_optimize(const Scene& scene, const OptimizeOptions& options, std::ostrea
     // A missing, foreign or edited checkpoint is bad input (exit 2).
     checkpoint = read_checkpoint(checkpoint_file, checkpoint.problem, sim.parameters().size());
     start = checkpoint.best;
+    optimizer.warm_start = true;  // continue from there, not begin (Ipopt: a monotone barrier)
     // The scene's bounds may have changed since the checkpoint was written.
     if (const auto v = bound_violation(sim.parameters(), scene.model, start, "value")) {
       throw SceneError(checkpoint_file.string(), "best",

@@ -95,6 +95,7 @@ SimulationSummary simulate_into(const Scene& scene, OutputFolder& out, std::ostr
     summary.max_iterations_in_step = std::max(summary.max_iterations_in_step, report.iterations);
     summary.max_gradient_norm = std::max(summary.max_gradient_norm, report.gradient_norm);
     if (!report.converged()) ++summary.unconverged_steps;
+    if (report.status == StepStatus::kStalled) ++summary.stalled_steps;
     if (report.regularized_iterations > 0) ++summary.regularized_steps;
     write_trajectory_rows(trajectory, sim);
     write_frame_row(frames, sim, &report);
@@ -111,6 +112,11 @@ SimulationSummary simulate_into(const Scene& scene, OutputFolder& out, std::ostr
     }
   }
   if (progress_shown) *progress << "\n";
+  if (scene.model.static_equilibrium && summary.unconverged_steps > 0) {
+    for (const FreeDirection& d : sim.free_directions()) {
+      summary.free_directions.push_back(d.describe());
+    }
+  }
   summary.solve_seconds = std::chrono::duration<double>(solving).count();
   summary.output_seconds = std::chrono::duration<double>(writing).count();
   summary.final_energy = sim.kinetic_energy() + sim.potential_energy();
@@ -161,7 +167,13 @@ std::string format_summary(const Scene& scene, const SimulationSummary& s) {
      << "), "
      << (s.frames_completed ? double(s.total_iterations) / s.frames_completed : 0.0)
      << " per step (max " << s.max_iterations_in_step << ")\n";
-  os << "unconverged  " << s.unconverged_steps << " steps ended at max_iterations\n";
+  os << "unconverged  " << s.unconverged_steps << " steps did not meet the tolerance";
+  if (s.unconverged_steps > 0) {
+    os << " (" << s.unconverged_steps - s.stalled_steps << " used up max_iterations, "
+       << s.stalled_steps << " stalled with iterations left)";
+  }
+  os << "\n";
+  for (const std::string& d : s.free_directions) os << "cause        " << d << "\n";
   os << "regularized  " << s.regularized_steps << " steps needed a Hessian shift\n";
   os << "energy       " << std::setprecision(6) << s.initial_energy << " -> " << s.final_energy
      << " J\n";

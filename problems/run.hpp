@@ -5,6 +5,7 @@
 #include <filesystem>
 #include <iosfwd>
 #include <string>
+#include <vector>
 
 #include "output_folder.hpp"
 #include "scene.hpp"
@@ -14,7 +15,8 @@ namespace liedyn {
 struct SimulationSummary {
   int frames_requested = 0;
   int frames_completed = 0;     // steps taken successfully
-  int unconverged_steps = 0;    // steps that ended at max_iterations
+  int unconverged_steps = 0;    // steps that did not meet the tolerance (state updated)
+  int stalled_steps = 0;        // of those, the ones that stopped with iterations left
   int regularized_steps = 0;    // steps in which the Hessian needed a shift
   int total_iterations = 0;
   int max_iterations_in_step = 0;
@@ -22,6 +24,9 @@ struct SimulationSummary {
   double solve_seconds = 0.0;   // wall time of the time steps alone
   double output_seconds = 0.0;  // wall time of formatting and writing the outputs
   double initial_energy = 0.0, final_energy = 0.0;  // kinetic + potential
+  // Static mode with unconverged steps: the directions nothing holds at the last state
+  // (Simulator::free_directions, described), the likely cause; empty otherwise.
+  std::vector<std::string> free_directions;
   bool failed = false;          // a step failed (NaN, no descent): the run stopped early
   std::string failure;          // message when failed
 };

@@ -114,7 +114,11 @@ int generator_edges(ObjectReader& g, RodBudget& budget) {
 // Node positions from a "shape" generator object at `path` (docs/scene-format.md#rods).
 std::vector<Vector3> rod_shape(const json& value, const std::string& path,
                                const std::string& source, RodBudget& budget) {
-  ObjectReader g(value, path, source);
+  // Its "type" selects the members allowed with it.
+  ObjectReader g(value, path, source, {},
+                 {"type",
+                  {{"line", {"start", "end", "edges"}},
+                   {"helix", {"radius", "pitch", "turns", "edges", "center"}}}});
   const std::string type = g.string("type");
   std::vector<Vector3> nodes;
   double size = 0.0;  // of the shape: consecutive nodes closer than 1e-12 · size coincide
@@ -175,7 +179,7 @@ std::vector<int> index_list(ObjectReader& r, const std::string& key) {
 // pivot defaults to the centroid of the moved nodes, or of the moved edges' midpoints.
 PrescribedMotion parse_motion(const json& value, const std::string& path,
                               const std::string& source, const RodSpec& rod) {
-  ObjectReader m(value, path, source);
+  ObjectReader m(value, path, source, {"nodes", "edges", "center", "keyframes"});
   PrescribedMotion motion;
   motion.nodes = index_list(m, "nodes");
   motion.edges = index_list(m, "edges");
@@ -202,7 +206,8 @@ PrescribedMotion parse_motion(const json& value, const std::string& path,
   }
   const json& keys = m.array("keyframes");
   for (std::size_t k = 0; k < keys.size(); ++k) {
-    ObjectReader f(keys[k], item_path(m.field("keyframes"), k), source);
+    ObjectReader f(keys[k], item_path(m.field("keyframes"), k), source,
+                   {"time", "translation", "rotation"});
     Keyframe key;
     key.time = f.number("time");
     key.translation = f.vector<3>("translation", Vector3::Zero());
@@ -234,7 +239,14 @@ constexpr int kMaxContactSamples = 1000000;
 // pose ("position", "orientation"; a plane may give its "normal" instead) and "inside".
 Collider parse_collider(const json& value, const std::string& path, const std::string& source,
                         int& budget) {
-  ObjectReader c(value, path, source);
+  ObjectReader c(value, path, source, {"name", "position", "orientation", "inside"},
+                 {"type",
+                  {{"plane", {"normal"}},
+                   {"sphere", {"radius"}},
+                   {"box", {"half_extents", "rounding"}},
+                   {"capsule", {"half_length", "radius"}},
+                   {"tube", {"points", "samples_per_segment", "radius"}},
+                   {"mesh", {"file", "scale", "cell_size", "padding"}}}});
   Collider collider;
   collider.name = c.string("name", path);
   check_printable_name(c, collider.name, c.field("name"));
@@ -245,9 +257,12 @@ Collider parse_collider(const json& value, const std::string& path, const std::s
   if (type == "plane") {
     if (c.has("normal")) {
       if (c.has("orientation")) c.fail(c.field("normal"), "give \"normal\" or \"orientation\", not both");
+      // Scaled by its largest |component| before normalising: ‖n‖² of a finite n overflows
+      // from ~1.4e154 (n/‖n‖ = 0: a horizontal plane) and underflows below ~1e-154.
       const Vector3 n = c.vector<3>("normal");
-      if (!(n.norm() > 0.0)) c.fail(c.field("normal"), "must be a non-zero vector");
-      collider.orientation = minimal_rotation(Vector3::UnitZ(), n.normalized());
+      const double largest = n.cwiseAbs().maxCoeff();
+      if (!(largest > 0.0)) c.fail(c.field("normal"), "must be a non-zero vector");
+      collider.orientation = minimal_rotation(Vector3::UnitZ(), (n / largest).normalized());
     }
     collider.shape = PlaneShape{};
   } else if (type == "sphere") {
@@ -297,6 +312,8 @@ Collider parse_collider(const json& value, const std::string& path, const std::s
     try {
       collider.shape = MeshShape{std::make_shared<const GridSdf>(load_obj_mesh(file, scale),
                                                                  cell_size, padding)};
+    } catch (const GridSdfTooCostly& e) {  // too many cells, or too much work: cell_size
+      c.fail(c.field("cell_size"), e.what());
     } catch (const std::exception& e) {
       c.fail(c.field("file"), e.what());
     }
@@ -312,7 +329,10 @@ Collider parse_collider(const json& value, const std::string& path, const std::s
 // node; radius defaults to the rod's). Units and defaults: lib/contact.hpp.
 ContactMaterial parse_contact(ObjectReader& owner, double default_radius,
                               std::vector<Vector3>* points, int& budget) {
-  ObjectReader c(owner.get("contact"), owner.field("contact"), owner.source());
+  // A body's contact gives its samples; a rod's samples are its nodes.
+  ObjectReader::Keys keys = {"stiffness", "radius", "friction", "friction_velocity"};
+  if (points != nullptr) keys.insert(keys.end(), {"points", "box"});
+  ObjectReader c(owner.get("contact"), owner.field("contact"), owner.source(), keys);
   ContactMaterial m;
   m.stiffness = c.number("stiffness");
   if (!(m.stiffness > 0.0)) c.fail(c.field("stiffness"), "must be positive");
@@ -329,7 +349,7 @@ ContactMaterial parse_contact(ObjectReader& owner, double default_radius,
     if (c.has("box")) {
       // Samples on a box's surface: its 8 corners, `per_edge` evenly spaced points inside
       // each of its 12 edges and a per_edge × per_edge grid inside each of its 6 faces.
-      ObjectReader b(c.get("box"), c.field("box"), owner.source());
+      ObjectReader b(c.get("box"), c.field("box"), owner.source(), {"half_extents", "per_edge"});
       const Vector3 half = b.vector<3>("half_extents");
       if (!(half.minCoeff() > 0.0)) b.fail(b.field("half_extents"), "must be positive");
       const int per_edge = b.has("per_edge") ? b.integer("per_edge", 0, 1000) : 0;
@@ -365,7 +385,11 @@ ContactMaterial parse_contact(ObjectReader& owner, double default_radius,
 
 RodSpec parse_rod(const json& value, const std::string& path, const std::string& source,
                   std::map<std::string, std::string>& taken, RodBudget& budget) {
-  ObjectReader r(value, path, source);
+  ObjectReader r(value, path, source,
+                 {"name", "nodes", "shape", "rest_nodes", "rest_shape", "mass", "radius",
+                  "stretch_stiffness", "shear_stiffness", "bending_stiffness", "fixed_nodes",
+                  "fixed_edges", "node_velocities", "node_forces", "cables", "region_pushes",
+                  "contact", "prescribed_motions"});
   RodSpec rod;
   rod.name = r.string("name");
   claim_name(r, rod.name, r.field("name"), path, taken);
@@ -433,7 +457,7 @@ RodSpec parse_rod(const json& value, const std::string& path, const std::string&
   if (r.has("node_forces")) {
     const json& forces = r.array("node_forces");
     for (std::size_t i = 0; i < forces.size(); ++i) {
-      ObjectReader f(forces[i], item_path(r.field("node_forces"), i), source);
+      ObjectReader f(forces[i], item_path(r.field("node_forces"), i), source, {"node", "force"});
       NodeForce force;
       force.node = f.integer("node", std::numeric_limits<int>::min());
       force.force = f.vector<3>("force");
@@ -446,7 +470,8 @@ RodSpec parse_rod(const json& value, const std::string& path, const std::string&
     // frames' z axis (0: along the frame's x axis), `radius` from the axis (default: the rod's).
     const json& cables = r.array("cables");
     for (std::size_t i = 0; i < cables.size(); ++i) {
-      ObjectReader c(cables[i], item_path(r.field("cables"), i), source);
+      ObjectReader c(cables[i], item_path(r.field("cables"), i), source,
+                     {"edges", "angle", "radius", "tension"});
       const Eigen::Vector2d edges = c.vector<2>("edges");
       // Range-checked before the conversion: converting 1e300 to int is undefined behaviour.
       const bool in_range =
@@ -475,7 +500,8 @@ RodSpec parse_rod(const json& value, const std::string& path, const std::string&
   if (r.has("region_pushes")) {
     const json& pushes = r.array("region_pushes");
     for (std::size_t i = 0; i < pushes.size(); ++i) {
-      ObjectReader f(pushes[i], item_path(r.field("region_pushes"), i), source);
+      ObjectReader f(pushes[i], item_path(r.field("region_pushes"), i), source,
+                     {"force", "center", "radius"});
       RegionPush push;
       push.force = f.vector<3>("force");
       push.center = f.vector<3>("center");
@@ -502,7 +528,10 @@ RodSpec parse_rod(const json& value, const std::string& path, const std::string&
 Scene parse(const json& root, const std::string& source) {
   Scene scene;
   scene.source = source;
-  ObjectReader top(root, "", source);
+  ObjectReader top(root, "", source,
+                   {"description", "time_step", "frames", "gravity", "mode", "solver", "bodies",
+                    "rods", "colliders", "springs", "forces", "torques", "optimization",
+                    "analytic"});
   scene.description = top.string("description", "");
   scene.model.time_step = top.number("time_step");
   if (scene.model.time_step <= 0.0) top.fail("time_step", "must be positive");
@@ -516,7 +545,9 @@ Scene parse(const json& root, const std::string& source) {
   scene.model.load_steps = std::max(scene.frames, 1);
 
   if (top.has("solver")) {
-    ObjectReader s(top.get("solver"), "solver", source);
+    ObjectReader s(top.get("solver"), "solver", source,
+                   {"backend", "rotation", "tolerance", "max_iterations", "armijo",
+                    "min_step_length", "assembly_threads", "ceres", "ipopt"});
     const std::string backend = s.string("backend", "newton");
     if (const auto parsed = parse_backend(backend)) {
       scene.solver.backend = *parsed;
@@ -542,7 +573,8 @@ Scene parse(const json& root, const std::string& source) {
     // Back-end options: accepted whichever back-end runs, so that `liedyn compare
     // --backends` can switch; their values are checked by SolverOptions::validate.
     if (s.has("ceres")) {
-      ObjectReader c(s.get("ceres"), "solver.ceres", source);
+      ObjectReader c(s.get("ceres"), "solver.ceres", source,
+                     {"linear_solver", "trust_region_strategy", "verbose"});
       CeresOptions& o = scene.solver.ceres;
       o.linear_solver = c.string("linear_solver", o.linear_solver);
       o.trust_region_strategy = c.string("trust_region_strategy", o.trust_region_strategy);
@@ -550,7 +582,10 @@ Scene parse(const json& root, const std::string& source) {
       c.finish();
     }
     if (s.has("ipopt")) {
-      ObjectReader i(s.get("ipopt"), "solver.ipopt", source);
+      // "output_file" is declared to be refused with its reason below.
+      ObjectReader i(s.get("ipopt"), "solver.ipopt", source,
+                     {"hessian_approximation", "print_level", "derivative_test", "output_file",
+                      "max_recentrings"});
       IpoptOptions& o = scene.solver.ipopt;
       o.hessian_approximation = i.string("hessian_approximation", o.hessian_approximation);
       if (i.has("print_level")) o.print_level = i.integer("print_level", 0, 12);
@@ -579,7 +614,9 @@ Scene parse(const json& root, const std::string& source) {
   const json& bodies = has_bodies ? top.array("bodies") : no_items;
   int contact_budget = kMaxContactSamples;
   for (std::size_t i = 0; i < bodies.size(); ++i) {
-    ObjectReader b(bodies[i], item_path("bodies", i), source);
+    ObjectReader b(bodies[i], item_path("bodies", i), source,
+                   {"name", "mass", "inertia", "position", "orientation", "linear_velocity",
+                    "angular_velocity", "contact"});
     RigidBody body;
     body.name = b.string("name");
     claim_name(b, body.name, b.field("name"), item_path("bodies", i), taken);
@@ -617,7 +654,8 @@ Scene parse(const json& root, const std::string& source) {
   if (top.has("springs")) {
     const json& springs = top.array("springs");
     for (std::size_t i = 0; i < springs.size(); ++i) {
-      ObjectReader s(springs[i], item_path("springs", i), source);
+      ObjectReader s(springs[i], item_path("springs", i), source,
+                     {"body_a", "point_a", "body_b", "point_b", "stiffness", "rest_length"});
       SpringSpec spec;
       spec.a.body = body_index(s, "body_a", names, rod_names, true);
       spec.a.point = s.vector<3>("point_a", Vector3::Zero());
@@ -642,7 +680,7 @@ Scene parse(const json& root, const std::string& source) {
   if (top.has("forces")) {
     const json& forces = top.array("forces");
     for (std::size_t i = 0; i < forces.size(); ++i) {
-      ObjectReader f(forces[i], item_path("forces", i), source);
+      ObjectReader f(forces[i], item_path("forces", i), source, {"body", "point", "force"});
       ForceSpec spec;
       spec.at.body = body_index(f, "body", names, rod_names, false);
       spec.at.point = f.vector<3>("point", Vector3::Zero());
@@ -654,7 +692,7 @@ Scene parse(const json& root, const std::string& source) {
   if (top.has("torques")) {
     const json& torques = top.array("torques");
     for (std::size_t i = 0; i < torques.size(); ++i) {
-      ObjectReader t(torques[i], item_path("torques", i), source);
+      ObjectReader t(torques[i], item_path("torques", i), source, {"body", "torque"});
       TorqueSpec spec;
       spec.body = body_index(t, "body", names, rod_names, false);
       spec.torque = t.vector<3>("torque");

@@ -129,7 +129,7 @@ struct TermForm {
 };
 
 // Translational inertia with the constant forces on its point (gravity, node forces) folded
-// in by completing the square (DESIGN.md §8).
+// in by completing the square (docs/design.md §9.3).
 struct FoldedInertiaForm {
   static constexpr int kBlocks = 1;
   static constexpr int kResiduals = TranslationalInertia::kResiduals;
@@ -349,7 +349,8 @@ class CeresStepSolver final : public StepSolver {
   }
   static constexpr double kStep = 1e-6;  // m or rad: FD truncation ~1e-12 relative
 
-  StepReport solve(State& q) override {
+ protected:
+  StepReport minimize(State& q) override {
     if (problem_ == nullptr) build(q);
     const Component& c = component();
     entry_.save(c, q);
@@ -410,6 +411,7 @@ class CeresStepSolver final : public StepSolver {
       const StepReport test = newton_->check(q);
       report.gradient_norm = test.gradient_norm;
       report.step_norm = test.step_norm;
+      report.psi = test.psi;
       report.factorizations += test.factorizations;
       report.assemblies += test.assemblies;
       report.assembly_seconds += test.assembly_seconds;
@@ -425,8 +427,9 @@ class CeresStepSolver final : public StepSolver {
       if (accepted == 0) {
         // No step was accepted: Ceres cannot tell a decrease from the round-off of its cost
         // (about 1e-16 Ψ; a step δ changes the cost by ~½δᵀHδ). More rounds would not help.
-        report.status = StepStatus::kMaxIterations;
-        report.message = "ceres: stalled (" + summary.message + ")";
+        report.status =
+            iterations >= options_.max_iterations ? StepStatus::kMaxIterations : StepStatus::kStalled;
+        report.message = "ceres: stalled, a round accepted no step (" + summary.message + ")";
         break;
       }
       stop_.threshold = std::max(0.1 * stop_.threshold, 1e-3 * step_scale * options_.tolerance);

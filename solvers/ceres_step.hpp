@@ -1,6 +1,6 @@
 #pragma once
 // The backward-Euler step as a manifold nonlinear least-squares problem for Ceres
-// (DESIGN.md §8): Ψ(q) = ½ Σ_t ‖r_t(q)‖² + const, minimised by Ceres's trust-region
+// (docs/design.md §9.3): Ψ(q) = ½ Σ_t ‖r_t(q)‖² + const, minimised by Ceres's trust-region
 // Gauss–Newton (Levenberg–Marquardt or dogleg).
 //
 // Residuals. Each term provides its least-squares form with a Lie Jacobian (lib/*.hpp,
@@ -18,7 +18,7 @@
 //   rotvec — the same chart with R₀ = I: global rotation vectors r = log R;
 //   quat   — UnitQuaternionRetraction (manifolds/ceres_manifolds.hpp): 4 doubles,
 //            Plus = normalize(q + Q(q) δ), the cost returns J_Lie · 4Q(q)ᵀ.
-// For lie, DESIGN.md §8 offers the chart or a 9-double "lift" manifold (R itself, Plus =
+// For lie, docs/design.md §9.3 gives the chart or a 9-double "lift" manifold (R itself, Plus =
 // exp(δ) R, J_amb = J_Lie · MinusJacobian). Both were built and measured side by side
 // (`liedyn bench --repeat 5`, Release, 2-vCPU Xeon VM, twice each, tolerance 1e-8): on the
 // butterfly bolt (1000 frames) the chart took 0.0235–0.0245 s and 2.04 iterations per frame,

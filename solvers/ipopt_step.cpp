@@ -195,7 +195,7 @@ class StepNlp final : public Ipopt::TNLP {
     return assembled_finite_;
   }
 
-  // Writes Ipopt's final point into q (lie: rotations re-orthonormalised, DESIGN.md §4);
+  // Writes Ipopt's final point into q (lie: rotations re-orthonormalised, docs/design.md §2.3);
   // false if Ipopt returned none.
   bool write_final() {
     if (!has_final_) return false;
@@ -446,7 +446,8 @@ class IpoptStepSolver final : public StepSolver {
 
   StepReport check(State& q) override { return newton_->check(q); }
 
-  StepReport solve(State& q) override {
+ protected:
+  StepReport minimize(State& q) override {
     StepReport report;
     const Component& c = newton_->component();
     entry_.save(c, q);
@@ -504,6 +505,7 @@ class IpoptStepSolver final : public StepSolver {
       report.factorizations += test.factorizations;
       report.gradient_norm = test.gradient_norm;
       report.step_norm = test.step_norm;
+      report.psi = test.psi;
       if (test.status == StepStatus::kNonFinite) {
         return finish(StepStatus::kNonFinite,
                       std::string("Ipopt: ") + ipopt_status_name(status) + " in " + which +
@@ -511,7 +513,10 @@ class IpoptStepSolver final : public StepSolver {
       }
       if (test.converged()) return finish(StepStatus::kConverged, "");
       if (solves > options_.ipopt.max_recentrings || report.iterations >= options_.max_iterations) {
-        return finish(StepStatus::kMaxIterations,
+        // With iterations left, Ipopt stopped on its own (a search direction too small, its
+        // tolerance met in a chart where ours is not) as often as it was re-centred: stalled.
+        return finish(report.iterations >= options_.max_iterations ? StepStatus::kMaxIterations
+                                                                   : StepStatus::kStalled,
                       std::string("Ipopt: ") + ipopt_status_name(status) + " in " + which + ", " +
                           std::to_string(report.iterations) +
                           " iterations in all; Newton step at the final state " +

@@ -120,8 +120,17 @@ bool Newton<System>::factorize(StepReport& report, bool& regularized) {
   return false;
 }
 
+namespace {
+
+// The stall test (newton.hpp): updates in a row without progress, and the relative
+// decrease of ‖g‖ or ‖δ‖∞ that counts as progress.
+constexpr int kStallIterations = 10;
+constexpr double kProgress = 0.01;
+
+}  // namespace
+
 template <class System>
-StepReport Newton<System>::solve(State& q, int max_iterations) {
+StepReport Newton<System>::iterate(State& q, int max_iterations) {
   StepReport report;
   // Keep the entry state so that a failed step leaves q untouched.
   entry_.save(component_, q);
@@ -134,6 +143,11 @@ StepReport Newton<System>::solve(State& q, int max_iterations) {
   enter_parameterization(q);
   const RotationVectorChart* chart =
       options_.rotation == RotationParameterization::kRotationVector ? &chart_ : nullptr;
+  // The stall test: the lowest Ψ and ‖g‖ at the last progress, and the updates since.
+  double lowest_psi = std::numeric_limits<double>::infinity();
+  double lowest_gradient_norm = std::numeric_limits<double>::infinity();
+  double lowest_step_norm = std::numeric_limits<double>::infinity();
+  int updates_without_progress = 0;
   for (;;) {
     using Clock = std::chrono::steady_clock;
     const auto t0 = options_.measure_time ? Clock::now() : Clock::time_point{};
@@ -143,6 +157,7 @@ StepReport Newton<System>::solve(State& q, int max_iterations) {
     const auto t1 = options_.measure_time ? Clock::now() : Clock::time_point{};
     const Vector& g = system_.gradient();
     report.gradient_norm = g.norm();
+    report.psi = psi;
     if (report.assemblies == 1) {
       report.first_gradient_norm = report.gradient_norm;
       if (options_.measure_condition) report.first_hessian_condition = hessian_condition();
@@ -172,13 +187,29 @@ StepReport Newton<System>::solve(State& q, int max_iterations) {
       report.status = StepStatus::kMaxIterations;
       return report;
     }
-
-    // Backtracking (Armijo) line search on Ψ. Near convergence the predicted decrease falls
-    // below the round-off of Ψ itself (estimated by assemble from the terms' values and
+    // Backtracking (Armijo) line search on Ψ, below. Near convergence the predicted decrease
+    // falls below the round-off of Ψ itself (estimated by assemble from the terms' values and
     // gradients, which can be large while they cancel); a change within a small multiple of
-    // that round-off is accepted, otherwise a tight tolerance stalls on noise.
-    const double slope = g.dot(delta_);  // < 0: H (or H + μI) is positive definite
+    // that round-off is accepted, otherwise a tight tolerance stalls on noise. The same
+    // multiple is what the stall test does not count as a decrease of Ψ.
     roundoff *= 16.0;
+    if (psi < lowest_psi - roundoff ||
+        report.gradient_norm < (1.0 - kProgress) * lowest_gradient_norm ||
+        report.step_norm < (1.0 - kProgress) * lowest_step_norm) {
+      updates_without_progress = 0;
+      lowest_psi = std::min(lowest_psi, psi);
+      lowest_gradient_norm = std::min(lowest_gradient_norm, report.gradient_norm);
+      lowest_step_norm = std::min(lowest_step_norm, report.step_norm);
+    } else if (++updates_without_progress >= kStallIterations) {
+      report.status = StepStatus::kStalled;
+      report.message = "newton: no decrease of Psi beyond its round-off (" +
+                       short_number(roundoff) + "), of |g| or of the Newton step in " +
+                       std::to_string(kStallIterations) + " iterations; Newton step " +
+                       short_number(report.step_norm) + " > tolerance";
+      return report;
+    }
+
+    const double slope = g.dot(delta_);  // < 0: H (or H + μI) is positive definite
     save(q);
     double alpha = 1.0;
     for (;;) {

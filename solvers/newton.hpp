@@ -2,9 +2,9 @@
 // Newton's method with backtracking line search on one component's incremental potential
 // (paper §4.3, eq. 11):
 //   H δ = −g   (Lie Hessian and Lie gradient),   x ← x + α δx,   R ← exp(α δθ) R.
-// Rotations are re-orthonormalised after every update (DESIGN.md §4).
+// Rotations are re-orthonormalised after every update (docs/design.md §2.3).
 //
-// Rotation parameterisations (SolverOptions::rotation; paper §3.3, DESIGN.md §7), same
+// Rotation parameterisations (SolverOptions::rotation; paper §3.3, docs/design.md §10), same
 // potential, same tolerances, same line search:
 //   * Lie (default): as above.
 //   * Rotation vectors: each rotation is R = exp(r) with r = log(R) at the start of the
@@ -20,6 +20,23 @@
 // quadratic model puts the minimiser within `tolerance` metres and radians. Unlike a
 // gradient threshold this does not depend on the scale of masses, stiffnesses or h.
 // The final gradient norm is reported beside it.
+//
+// Stall: a solve whose iterates stop improving ends early, unconverged, as
+// StepStatus::kStalled (state updated, like kMaxIterations): after kStallIterations (10)
+// consecutive updates after which none of Ψ, ‖g‖ and ‖δ‖∞ is lower than at the last
+// progress — Ψ by more than its round-off (the line search's allowance, 16× the estimate of
+// IncrementalPotential::assemble), ‖g‖ and ‖δ‖∞ by 1 % (newton.cpp). Why: near a minimum Ψ
+// cannot resolve the remaining decrease, the line search then accepts steps on noise, and
+// once ‖g‖ and δ have also reached their round-off floor (or a regularised step is too
+// short to move q: H + μI with μ ≫ the curvature), further iterations only shuffle
+// round-off. A tolerance below that floor (say 1e-300) could then never be met, and with a
+// large max_iterations (2³¹ − 1) the step would run for ever. Real progress, even slow,
+// lowers one of the three within a few iterations: quadratic convergence divides ‖g‖ by
+// orders of magnitude per update, linear convergence by a fixed factor; at the floor a new
+// lowest value of the noise becomes rarer with every iteration, so the count completes.
+// Ten rather than fewer: light DOFs beside heavy ones (a 1e-9 kg body between 1e9 N/m
+// springs and a 1e6 kg one) keep converging slowly while the heavy DOFs' noise sets all
+// three measures; docs/design.md §9.1 gives the measurement.
 //
 // Indefinite Hessians (compressed springs, large rotations against R̃): when the Cholesky
 // factorisation fails, H + μI is factorised with μ = 10⁻⁸·max|H_ii| growing tenfold until
@@ -58,15 +75,17 @@ class Newton final : public StepSolver {
   // Turns SolverOptions::measure_condition on or off for the next solves.
   void set_measure_condition(bool on) override { options_.measure_condition = on; }
 
-  // Minimises the component's potential, starting from (and writing into) q.
-  // On failure, q is restored to its value on entry.
-  StepReport solve(State& q) override { return solve(q, options_.max_iterations); }
   // The convergence test (step_solver.hpp) at q: one assembly, factorisation and solve.
-  StepReport check(State& q) override { return solve(q, 0); }
+  StepReport check(State& q) override { return iterate(q, 0); }
+
+ protected:
+  // StepSolver::solve: minimises the component's potential, starting from (and writing
+  // into) q. On failure, q is restored to its value on entry.
+  StepReport minimize(State& q) override { return iterate(q, options_.max_iterations); }
 
  private:
   // At most max_iterations updates (0: only the test at q, which is left unchanged).
-  StepReport solve(State& q, int max_iterations);
+  StepReport iterate(State& q, int max_iterations);
   // Factorises H, regularising if needed; false if even the regularised matrix fails.
   bool factorize(StepReport& report, bool& regularized);
   void save(const State& q);

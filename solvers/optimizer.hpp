@@ -125,6 +125,12 @@ struct OptimizerOptions {
   // ≥ 1. L-BFGS history m: NLopt vector_storage, Ceres max_lbfgs_rank, Ipopt
   // limited_memory_max_history.
   int lbfgs_memory = 10;
+  // x0 is where an earlier run of the same problem got to (`liedyn optimize --resume`: the
+  // checkpoint's best point), not a first guess. Only Ipopt uses it: its interior-point
+  // start is then tuned to continue rather than begin (monotone barrier from a small μ, x0
+  // kept where it is; optimizer.cpp gives the reason and the measurements). NLopt and Ceres
+  // start at x0 as given either way. false: today's start (Ipopt's adaptive barrier).
+  bool warm_start = false;
 
   // Throws ModelError (a std::invalid_argument) whose what() names the field as
   // "optimization.<field>", its value and the rule.
@@ -135,7 +141,8 @@ struct OptimizerOptions {
 //   nlopt-lbfgs — PLIS is a bound-constrained method (NLopt set_lower/upper_bounds): steps
 //                 stay in the box, and "converged" is a stationary point of the box problem.
 //   ipopt-lbfgs — the bounds enter the NLP: log-barrier terms keep iterates strictly inside
-//                 (a start on a bound is pushed in by bound_push), "converged" is the KKT
+//                 (a start on or near a bound is pushed in by bound_push, 1e-2
+//                 by default, 1e-9 with warm_start), "converged" is the KKT
 //                 point at tol.
 //   ceres-lbfgs — GradientProblemSolver is unconstrained: minimize rejects finite bounds.
 // x0 must lie within them.

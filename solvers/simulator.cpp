@@ -127,6 +127,15 @@ double Simulator::max_penetration() const {
   return deepest;
 }
 
+std::vector<FreeDirection> Simulator::free_directions() const {
+  std::vector<FreeDirection> out;
+  for (const auto& s : solvers_) {
+    const std::vector<FreeDirection> free = liedyn::free_directions(model_, s->component(), state_);
+    out.insert(out.end(), free.begin(), free.end());
+  }
+  return out;
+}
+
 Vector3 Simulator::angular_momentum() const {
   Vector3 L = Vector3::Zero();
   for_each_mass([&](int point, double mass, int rotation, const Matrix3& inertia) {

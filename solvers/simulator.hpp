@@ -1,19 +1,20 @@
 #pragma once
 // Forward simulation of a Model by backward Euler: each step minimises the incremental
-// potential of every independent component with the chosen back-end (step_solver.hpp) (§4);
+// potential of every independent component with the chosen back-end (step_solver.hpp) (paper §4);
 // in static mode each step is a load step without inertia (Model::static_equilibrium).
 // Clamped rod nodes and edges with a prescribed motion are moved before each step.
 //
 //   q_k = argmin Ψ(q; q_{k−1}, Δq_{k−1}),  starting from the extrapolation
 //   x = x_{k−1} + Δx_{k−1},  R = ΔR_{k−1} R_{k−1};  then Δx_k = x_k − x_{k−1}, ΔR_k = R_k R_{k−1}ᵀ.
 //
-// Reported quantities (DESIGN.md §3): v_k = Δx_k/h, ω_k = log(ΔR_k)/h (world frame);
+// Reported quantities (docs/design.md §2.2): v_k = Δx_k/h, ω_k = log(ΔR_k)/h (world frame);
 // kinetic energy Σ ½ m‖v‖² + ½ ωᵀ (R I_b Rᵀ) ω and angular momentum about the world origin
 // Σ m x × v + R I_b Rᵀ ω, over bodies and over rods' lumped node masses and edge inertias.
 
 #include <memory>
 #include <vector>
 
+#include "free_directions.hpp"
 #include "step_solver.hpp"
 
 namespace liedyn {
@@ -46,6 +47,9 @@ class Simulator {
   // Deepest penetration ρ − φ of a contact sample into a collider (lib/contact.hpp), m;
   // 0 when no sample touches (or the model has none).
   double max_penetration() const;
+  // Directions that nothing holds at the current state (free_directions.hpp), over every
+  // component: why a static step cannot meet the tolerance. One assembly per component.
+  std::vector<FreeDirection> free_directions() const;
 
  private:
   // Calls f(point, mass, rotation, body_inertia) for every lumped mass and rotational

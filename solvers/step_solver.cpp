@@ -7,6 +7,7 @@
 #include <initializer_list>
 #include <string>
 
+#include "../lib/so3.hpp"
 #include "ceres_step.hpp"
 #include "ipopt_step.hpp"
 #include "newton.hpp"
@@ -104,6 +105,7 @@ const char* to_string(StepStatus status) {
   switch (status) {
     case StepStatus::kConverged: return "converged";
     case StepStatus::kMaxIterations: return "max_iterations";
+    case StepStatus::kStalled: return "stalled";
     case StepStatus::kLineSearchFailed: return "line_search_failed";
     case StepStatus::kNonFinite: return "non_finite";
     case StepStatus::kSolverFailed: return "solver_failed";
@@ -126,6 +128,7 @@ void StepReport::merge(const StepReport& other) {
   first_gradient_norm = std::fmax(first_gradient_norm, other.first_gradient_norm);
   second_gradient_norm = std::fmax(second_gradient_norm, other.second_gradient_norm);
   first_hessian_condition = std::fmax(first_hessian_condition, other.first_hessian_condition);
+  psi += other.psi;
   if (!other.message.empty()) message += (message.empty() ? "" : "; ") + other.message;
 }
 
@@ -133,6 +136,81 @@ std::string short_number(double x) {
   char text[32];
   std::snprintf(text, sizeof text, "%.3g", x);
   return text;
+}
+
+StepReport StepSolver::solve(State& q) {
+  const Component& c = component();
+  if (!sized_) {
+    entry_ = ComponentSnapshot(c);
+    returned_ = ComponentSnapshot(c);
+    // The component's block of each inertia term (−1 if none: nothing to test).
+    const auto block_of = [](const std::vector<DofBlock>& blocks, int index) {
+      for (std::size_t i = 0; i < blocks.size(); ++i) {
+        if (blocks[i].index == index) return static_cast<int>(i);
+      }
+      return -1;
+    };
+    for (const TranslationalInertia& t : c.potential.translational_inertia) {
+      inertia_point_.push_back(block_of(c.points, t.point));
+    }
+    for (const RotationalInertia& t : c.potential.rotational_inertia) {
+      inertia_rotation_.push_back(block_of(c.rotations, t.rotation));
+    }
+    sized_ = true;
+  }
+  entry_.save(c, q);
+  StepReport report = minimize(q);
+  if (!report.state_updated()) return report;  // the back-end restored q
+  if (const char* what = non_finite_value(report, q)) {
+    entry_.restore(c, q);
+    std::string message = std::string("not finite at the end of the step: ") + what +
+                          " (the back-end reported " + to_string(report.status) + ")";
+    if (!report.message.empty()) message += "; " + report.message;
+    report.message = std::move(message);
+    report.status = StepStatus::kNonFinite;
+    return report;
+  }
+  returned_.save(c, q);
+  has_returned_ = true;
+  return report;
+}
+
+const char* StepSolver::non_finite_value(const StepReport& report, const State& q) const {
+  const Component& c = component();
+  // A NaN or Inf entry makes a sum non-finite (so does an overflow of the sum, whose
+  // entries are then too large to be of use); one sum per block is cheaper than a test of
+  // every entry.
+  for (const DofBlock& b : c.points) {
+    if (!std::isfinite(q.points[b.index].sum())) return "position";
+  }
+  for (const DofBlock& b : c.rotations) {
+    if (!std::isfinite(q.rotations[b.index].sum())) return "rotation";
+  }
+  if (!std::isfinite(report.psi)) return "Psi (the incremental potential)";
+  if (!std::isfinite(report.gradient_norm)) return "gradient norm";
+  if (!std::isfinite(report.step_norm)) return "Newton step";
+  if (!has_returned_) return nullptr;
+  double kinetic = 0.0;
+  const IncrementalPotential& P = c.potential;
+  for (std::size_t t = 0; t < P.translational_inertia.size(); ++t) {
+    const int i = inertia_point_[t];
+    if (i < 0) continue;
+    const Vector3 dx = q.points[c.points[i].index] - returned_.point(i);
+    kinetic += 0.5 * P.translational_inertia[t].mass_over_h2 * dx.squaredNorm();
+  }
+  for (std::size_t t = 0; t < P.rotational_inertia.size(); ++t) {
+    const int i = inertia_rotation_[t];
+    if (i < 0) continue;
+    const Matrix3& R = q.rotations[c.rotations[i].index];
+    // Body-frame rotation of the step: θ_b = log(Rₚᵀ R), and I_b/h² = ½ tr(J/h²) 1 − J/h²
+    // from J = ½ tr(I_b) 1 − I_b (lib/inertia.hpp).
+    const Vector3 theta = so3::log(returned_.rotation(i).transpose() * R);
+    const Matrix3& J = P.rotational_inertia[t].J_over_h2;
+    const Matrix3 I = 0.5 * J.trace() * Matrix3::Identity() - J;
+    kinetic += 0.5 * theta.dot(I * theta);
+  }
+  if (!std::isfinite(kinetic)) return "kinetic energy of the step";
+  return nullptr;
 }
 
 std::unique_ptr<StepSolver> make_step_solver(Component component, const SolverOptions& options) {

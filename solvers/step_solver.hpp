@@ -109,11 +109,17 @@ struct SolverOptions {
   void validate() const;
 };
 
+// StepReport::merge keeps the worst (last listed) status of a step's components.
 enum class StepStatus {
   kConverged,         // tolerance met; state updated
   kMaxIterations,     // iterations used up without meeting the tolerance; state updated
+  kStalled,           // stopped short of the tolerance with iterations left, because the
+                      // iterates stopped improving (Newton: see newton.hpp; Ceres: a round
+                      // accepted no step; Ipopt: its search direction became too small);
+                      // state updated
   kLineSearchFailed,  // Newton: no decrease along the Newton direction; state NOT updated
-  kNonFinite,         // NaN/Inf in Ψ, g, H or δ; state NOT updated
+  kNonFinite,         // NaN/Inf in Ψ, g, H or δ, or in the new state, its Ψ, ‖g‖ or the
+                      // kinetic energy of the step (StepSolver::solve); state NOT updated
   kSolverFailed,      // Ceres or Ipopt reported an error (StepReport::message); NOT updated
 };
 
@@ -140,11 +146,17 @@ struct StepReport {
   double first_gradient_norm = std::numeric_limits<double>::quiet_NaN();
   double second_gradient_norm = std::numeric_limits<double>::quiet_NaN();
   double first_hessian_condition = std::numeric_limits<double>::quiet_NaN();
-  // Ceres/Ipopt: what the back-end said when the step did not converge (else empty).
+  // Ψ at the final state (from the last assembly there; NaN if the step failed before one).
+  // Merged over components: the sum.
+  double psi = std::numeric_limits<double>::quiet_NaN();
+  // Why the step did not converge, when there is more to say than the status: the
+  // back-end's own termination (Ceres, Ipopt), what stalled, what was not finite (else
+  // empty).
   std::string message;
 
   bool state_updated() const {
-    return status == StepStatus::kConverged || status == StepStatus::kMaxIterations;
+    return status == StepStatus::kConverged || status == StepStatus::kMaxIterations ||
+           status == StepStatus::kStalled;
   }
   bool converged() const { return status == StepStatus::kConverged; }
   // Merges the report of another component of the same time step.
@@ -171,6 +183,9 @@ class ComponentSnapshot {
       q.rotations[c.rotations[i].index] = rotations_[i];
     }
   }
+  // The saved value of the component's i-th point block and rotation block.
+  const Vector3& point(std::size_t i) const { return points_[i]; }
+  const Matrix3& rotation(std::size_t i) const { return rotations_[i]; }
 
  private:
   std::vector<Vector3> points_;
@@ -196,14 +211,42 @@ class StepSolver {
 
   // Minimises the component's potential, starting from (and writing into) q. On failure
   // (state_updated() false), q is restored to its value on entry.
-  virtual StepReport solve(State& q) = 0;
+  //
+  // Every back-end's result passes one test here, so that no back-end can report a
+  // non-finite outcome as a step: a step the back-end reports as done (state_updated()) is
+  // turned into kNonFinite, with q restored and StepReport::message naming the value, when
+  // any coordinate of the component's new positions or rotations, Ψ there
+  // (StepReport::psi), ‖g‖ (gradient_norm: an overflow of ‖g‖₂ counts, the gradient is then
+  // beyond what the reports can hold) or step_norm is not finite, or when the kinetic
+  // energy of the move from the state this solver last returned to the new one is not
+  // (translational ½ (m/h²)‖Δx‖² and rotational ½ θᵀ (I/h²) θ of the inertia terms,
+  // θ = log(R Rₚᵀ) in the body frame; the simulator's q_{k−1}, so this is the kinetic
+  // energy the simulator reports; not tested at the first solve, which has no such state).
+  // Ψ being finite covers the potential energy: its terms are among Ψ's.
+  StepReport solve(State& q);
 
   // The convergence test above at q, without moving q: status kConverged or kMaxIterations
-  // (kNonFinite if Ψ, g or H is not finite), gradient_norm and step_norm set.
+  // (kNonFinite if Ψ, g or H is not finite), gradient_norm, step_norm and psi set.
   virtual StepReport check(State& q) = 0;
 
   // SolverOptions::measure_condition for the next solves (Newton only; others ignore it).
   virtual void set_measure_condition(bool) {}
+
+ protected:
+  // The back-end's minimisation behind solve() (same contract, before the test).
+  virtual StepReport minimize(State& q) = 0;
+
+ private:
+  // The name of the first non-finite value of the test in solve(), or nullptr.
+  const char* non_finite_value(const StepReport& report, const State& q) const;
+
+  // Sized at the first solve (solve allocates nothing after it).
+  bool sized_ = false;
+  ComponentSnapshot entry_;     // q on entry, restored when the test rejects a step
+  ComponentSnapshot returned_;  // the component's blocks as the last successful solve left them
+  bool has_returned_ = false;
+  std::vector<int> inertia_point_;     // per translational inertia term: its point's block
+  std::vector<int> inertia_rotation_;  // per rotational inertia term: its rotation's block
 };
 
 // The step solver for `component` that `options` choose (options validated by the caller):

@@ -637,9 +637,149 @@ TEST_F(Cli, FailedStepExits4AndKeepsEarlierFrames) {
   EXPECT_NE(r.out.find("FAILED"), std::string::npos) << r.out;
   const std::size_t status = frames.column("status");
   for (std::size_t k = 1; k < frames.rows.size(); ++k) {
-    EXPECT_TRUE(frames.rows[k][status] == "converged" || frames.rows[k][status] == "max_iterations")
+    EXPECT_TRUE(frames.rows[k][status] == "converged" || frames.rows[k][status] == "max_iterations" ||
+                frames.rows[k][status] == "stalled")
         << frames.rows[k][status];
   }
+}
+
+// ---- Physics that must not lie -------------------------------------------------------------
+
+// Every row of frames.csv holds finite numbers (a failed step writes no row).
+void expect_finite_rows(const Csv& frames) {
+  for (const auto& row : frames.rows) {
+    for (const char* name : {"gradient_norm", "kinetic_energy", "potential_energy"}) {
+      EXPECT_TRUE(std::isfinite(std::stod(row[frames.column(name)]))) << name << " in frame " << row[0];
+    }
+  }
+}
+
+// A pendulum spring of stiffness 1e300 used to write rows marked converged with
+// gradient_norm inf (‖g‖₂ overflows while every entry of g is finite). Such a step is a
+// failed step: exit 4, no row of it written.
+TEST_F(Cli, OverflowingGradientIsAFailedStep) {
+  std::string scene = liedyn::test::read_file(fs::path(LIEDYN_SOURCE_DIR) / "problems/scenes/pendulum.json");
+  scene = replace_once(scene, "\"stiffness\": 1e6", "\"stiffness\": 1e300");
+  scene = replace_once(scene, "\"frames\": 2500", "\"frames\": 20");
+  const Result r = simulate(scene, "out");
+  ASSERT_EQ(r.exit_code, 4) << r.out << r.err;
+  EXPECT_NE(r.err.find("non_finite"), std::string::npos) << r.err;
+  const Csv frames = read_csv(dir_ / "out/frames.csv");
+  ASSERT_LT(frames.rows.size(), 21u);
+  expect_finite_rows(frames);
+}
+
+// A body thrown at 1e306 m/s used to exit 0 with kinetic energy inf in every row: its energy
+// is beyond a double, which is bad input (exit 2, naming the field).
+TEST_F(Cli, VelocityWhoseEnergyOverflowsIsRefused) {
+  const Result r = simulate(R"({ "time_step": 0.01, "frames": 3,
+    "bodies": [ { "name": "b", "mass": 1, "inertia": [1, 1, 1], "linear_velocity": [1e306, 0, 0] } ] })",
+                            "out");
+  EXPECT_EQ(r.exit_code, 2) << r.out << r.err;
+  EXPECT_NE(r.err.find("bodies[0].linear_velocity: the kinetic energy ½ m |v|² overflows a double"),
+            std::string::npos)
+      << r.err;
+  EXPECT_FALSE(fs::exists(dir_ / "out"));
+  // 1e150 m/s is representable, and its energy is reported finite in every row.
+  const Result fast = simulate(R"({ "time_step": 0.01, "frames": 3,
+    "bodies": [ { "name": "b", "mass": 1, "inertia": [1, 1, 1], "linear_velocity": [1e150, 0, 0] } ] })",
+                               "fast", {"--allow-unconverged"});
+  EXPECT_EQ(fast.exit_code, 0) << fast.out << fast.err;
+  expect_finite_rows(read_csv(dir_ / "fast/frames.csv"));
+}
+
+// max_iterations 2³¹ − 1 with tolerance 1e-300 used to run for ever on one body: a step
+// whose iterates stop improving ends as "stalled" (unconverged, exit 3) after a few
+// iterations, and the summary says so. (A step may still meet 1e-300: a Newton step of
+// exactly 0.)
+TEST_F(Cli, UnreachableToleranceStallsInsteadOfRunningForEver) {
+  std::string scene = liedyn::test::read_file(fs::path(LIEDYN_SOURCE_DIR) / "problems/scenes/free_body.json");
+  scene = replace_once(scene, "\"frames\": 2000", "\"frames\": 5");
+  scene = replace_once(scene, "\"tolerance\": 1e-9", "\"tolerance\": 1e-300");
+  scene = replace_once(scene, "\"max_iterations\": 50", "\"max_iterations\": 2147483647");
+  const Result r = simulate(scene, "out");
+  ASSERT_EQ(r.exit_code, 3) << r.out << r.err;
+  const Csv frames = read_csv(dir_ / "out/frames.csv");
+  ASSERT_EQ(frames.rows.size(), 6u);
+  int stalled = 0;
+  for (std::size_t k = 1; k < frames.rows.size(); ++k) {
+    const std::string& status = frames.rows[k][frames.column("status")];
+    EXPECT_TRUE(status == "stalled" || status == "converged") << status;
+    EXPECT_EQ(frames.rows[k][frames.column("converged")], status == "converged" ? "1" : "0");
+    EXPECT_LT(std::stoi(frames.rows[k][frames.column("newton_iterations")]), 30);
+    stalled += status == "stalled";
+  }
+  EXPECT_GT(stalled, 0);
+  const std::string n = std::to_string(stalled);
+  EXPECT_NE(r.out.find("unconverged  " + n + " steps did not meet the tolerance (0 used up "
+                       "max_iterations, " + n + " stalled with iterations left)"),
+            std::string::npos)
+      << r.out;
+}
+
+// Ceres stalls were labelled max_iterations although the step stopped after a few of its
+// iterations: every back-end's status names its real termination. A row says max_iterations
+// only when the iterations were used up, and stalled only when some were left.
+TEST_F(Cli, EveryBackEndReportsItsRealTermination) {
+  for (const char* backend : {"newton", "ceres", "ipopt"}) {
+    std::string scene = liedyn::test::read_file(fs::path(LIEDYN_SOURCE_DIR) / "problems/scenes/free_body.json");
+    scene = replace_once(scene, "\"frames\": 2000", "\"frames\": 5");
+    scene = replace_once(scene, "\"backend\": \"newton\"", std::string("\"backend\": \"") + backend + "\"");
+    scene = replace_once(scene, "\"tolerance\": 1e-9", "\"tolerance\": 1e-300");
+    scene = replace_once(scene, "\"max_iterations\": 50", "\"max_iterations\": 40");
+    const std::string out = std::string("out_") + backend;
+    const Result r = simulate(scene, out);
+    ASSERT_EQ(r.exit_code, 3) << backend << r.out << r.err;
+    const Csv frames = read_csv(dir_ / out / "frames.csv");
+    ASSERT_EQ(frames.rows.size(), 6u) << backend;
+    for (std::size_t k = 1; k < frames.rows.size(); ++k) {
+      const std::string& status = frames.rows[k][frames.column("status")];
+      const int iterations = std::stoi(frames.rows[k][frames.column("newton_iterations")]);
+      if (status == "max_iterations") {
+        EXPECT_GE(iterations, 40) << backend << " frame " << k;
+      } else if (status != "converged") {
+        EXPECT_EQ(status, "stalled") << backend << " frame " << k;
+        EXPECT_LT(iterations, 40) << backend << " frame " << k;
+      }
+    }
+  }
+}
+
+// A static chain of bodies hung by springs attached on one vertical line used to fail with
+// "5 steps did not meet the tolerance" and no reason, although its equilibrium is exact: each
+// body spins freely about that line. The run still does not converge (exit 3), and now says
+// why, naming every body and the axis.
+TEST_F(Cli, StaticChainNamesItsFreeRotations) {
+  const Result r = simulate(R"({
+    "mode": "static", "time_step": 0.01, "frames": 5, "gravity": [0, 0, -9.81],
+    "solver": { "tolerance": 1e-10, "max_iterations": 50 },
+    "bodies": [
+      { "name": "a", "mass": 1, "inertia": [0.1, 0.1, 0.02], "position": [0, 0, -1] },
+      { "name": "b", "mass": 1, "inertia": [0.1, 0.1, 0.02], "position": [0, 0, -2] } ],
+    "springs": [
+      { "body_a": "world", "point_a": [0, 0, 0], "body_b": "a", "point_b": [0, 0, 0.5], "stiffness": 1e4, "rest_length": 0.5 },
+      { "body_a": "a", "point_a": [0, 0, -0.5], "body_b": "b", "point_b": [0, 0, 0.5], "stiffness": 1e4, "rest_length": 0 } ]
+  })",
+                            "out");
+  ASSERT_EQ(r.exit_code, 3) << r.out << r.err;
+  EXPECT_NE(r.err.find("the equilibrium is not unique: free rotation of bodies[0] about (0, 0, 1): "
+                       "no stiffness holds it (and 1 more, listed above)"),
+            std::string::npos)
+      << r.err;
+  EXPECT_NE(r.out.find("cause        free rotation of bodies[1] about (0, 0, 1)"), std::string::npos)
+      << r.out;
+  // Attached off the line, the spin is held: no cause named (the run converges).
+  const Result held = simulate(R"({
+    "mode": "static", "time_step": 0.01, "frames": 5, "gravity": [0, 0, -9.81],
+    "solver": { "tolerance": 1e-10, "max_iterations": 50 },
+    "bodies": [ { "name": "a", "mass": 1, "inertia": [0.1, 0.1, 0.02], "position": [0, 0, -1] } ],
+    "springs": [
+      { "body_a": "world", "point_a": [0.2, 0, 0], "body_b": "a", "point_b": [0.2, 0, 0.5], "stiffness": 1e4, "rest_length": 0.5 },
+      { "body_a": "world", "point_a": [-0.2, 0.1, 0], "body_b": "a", "point_b": [-0.2, 0.1, 0.5], "stiffness": 1e4, "rest_length": 0.5 } ]
+  })",
+                               "held");
+  EXPECT_EQ(held.exit_code, 0) << held.out << held.err;
+  EXPECT_EQ(held.out.find("cause"), std::string::npos) << held.out;
 }
 
 }  // namespace

@@ -507,7 +507,7 @@ double cord_stretch(const Model& model, const State& q) {
 // DOFs. The cord alone converges on no step: its stretch forces carry round-off
 // k_s·eps ≈ 2e-7 N against a transverse curvature m_node/h² ≈ 1e-3 N/m, i.e. Newton-step
 // noise ~1e-4 m, far above 1e-9 m (at 1 kg, below: next test). Such steps must be flagged
-// (max_iterations) — no step may fail or produce a non-finite state — and the physics must
+// (max_iterations or stalled) — no step may fail or produce a non-finite state — and the physics must
 // hold regardless:
 //   * the feather rides on its 1e9 spring: the length stays at rest within the forces on it
 //     (≤ 1e-2 N from the weak spring, 1e-8 N weight)/1e9 plus solver slack: 1e-8 m;
