@@ -193,27 +193,22 @@ class ObjectReader {
     return v;
   }
 
-  void finish() const {
-    for (const auto& item : value_.items()) {
-      if (!known_.count(item.key())) {
-        std::string allowed;
-        for (const std::string& k : known_) allowed += (allowed.empty() ? "" : ", ") + k;
-        fail(field(item.key()), "unknown key (allowed here: " + allowed + ")");
-      }
-    }
-  }
+  void finish() const { reject_keys_outside(known_); }
 
   static std::string type_of(const json& v) {
     return v.is_null() ? "null" : std::string(v.type_name());
   }
 
  private:
-  // The first key (in the object's order) not allowed, with the same message as finish().
-  void check_keys() const {
+  void check_keys() const { reject_keys_outside(allowed_); }
+
+  // Fails on the first key of the object (in its order) not in `keys`, listing them.
+  template <class Set>
+  void reject_keys_outside(const Set& keys) const {
     for (const auto& item : value_.items()) {
-      if (!allowed_.count(item.key())) {
+      if (!keys.count(item.key())) {
         std::string allowed;
-        for (const std::string& k : allowed_) allowed += (allowed.empty() ? "" : ", ") + k;
+        for (const std::string& k : keys) allowed += (allowed.empty() ? "" : ", ") + k;
         fail(field(item.key()), "unknown key (allowed here: " + allowed + ")");
       }
     }

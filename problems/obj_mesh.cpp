@@ -6,8 +6,6 @@
 #include <cmath>
 #include <cstddef>
 #include <cstdlib>
-#include <fstream>
-#include <iterator>
 #include <sstream>
 #include <stdexcept>
 #include <string>
@@ -15,6 +13,8 @@
 #include <system_error>
 #include <type_traits>
 #include <vector>
+
+#include "input_file.hpp"
 
 // Coordinates are parsed in double precision: build against the tinyobjloader_double library
 // (CMake target tinyobjloader::tinyobjloader_double, which defines TINYOBJLOADER_USE_DOUBLE).
@@ -142,14 +142,12 @@ TriangleMesh load_obj_mesh(const std::filesystem::path& file, double scale) {
     s << "load_obj_mesh: scale must be finite and > 0, got " << scale;
     throw std::invalid_argument(s.str());
   }
-  std::error_code ec;
-  const auto status = std::filesystem::status(file, ec);
-  if (!std::filesystem::exists(status)) fail(file, "no such file");
-  if (std::filesystem::is_directory(status)) fail(file, "is a directory, not an OBJ file");
-  std::ifstream in(file, std::ios::binary);
-  if (!in) fail(file, "cannot be opened for reading");
-  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  if (in.bad()) fail(file, "read error");
+  std::string text;
+  try {
+    text = read_input_file(file, kMaxMeshFileBytes, "mesh file");
+  } catch (const InputFileError& e) {
+    fail(file, e.what());
+  }
   if (!double_library_linked()) {
     fail(file,
          "tinyobjloader does not parse in double precision: link libtinyobjloader_double "

@@ -10,15 +10,20 @@
 // Positions are multiplied by `scale`. Lines and points (`l`, `p`) are ignored.
 // Topology (closed, oriented, non-degenerate) is checked by GridSdf, not here.
 
+#include <cstdint>
 #include <filesystem>
 
 #include "lib/mesh_sdf.hpp"
 
 namespace liedyn {
 
+// Mesh files above this size are refused unread (a 327680-triangle OBJ is ~25 MB).
+inline constexpr std::uintmax_t kMaxMeshFileBytes = 512u << 20;
+
 // Reads `file`. Throws std::runtime_error whose message names the file and the reason (and
-// the 1-based line, for a NUL byte or a vertex): it does not exist or cannot be read, it holds
-// a NUL byte (not a text file), a vertex line has fewer than three coordinates or one that is
+// the 1-based line, for a NUL byte or a vertex): it does not exist or cannot be read, is not
+// a regular file (a FIFO, socket or device) or is larger than kMaxMeshFileBytes, it holds a
+// NUL byte (not a text file), a vertex line has fewer than three coordinates or one that is
 // not a finite decimal number ("abc", "nan", "inf", "1e999", "0x10", "1.5.3": tinyobjloader
 // itself would read most of these as 0 without an error), a coordinate times scale is not
 // finite, tinyobjloader reports a parse error (e.g. a face index 0 or a non-numeric face

@@ -549,6 +549,18 @@ Checkpoint read_checkpoint(const std::filesystem::path& file, const json& proble
 
 }  // namespace
 
+ObjectiveFunction objective_of(const DifferentiableSimulation& sim) {
+  return [&sim](const Eigen::VectorXd& gamma, Eigen::VectorXd& gradient) {
+    try {
+      return sim.evaluate(gamma, &gradient).loss;
+    } catch (const SimulationFailed& e) {
+      throw InfeasiblePoint(e.what());
+    } catch (const ModelError& e) {
+      throw InfeasiblePoint(e.what());
+    }
+  };
+}
+
 int run_optimize(const Scene& scene, const OptimizeOptions& options, std::ostream& out) {
   const DifferentiableSimulation sim = make_differentiable_simulation(scene);
   OptimizerOptions optimizer = scene.optimization->optimizer;
@@ -611,18 +623,7 @@ int run_optimize(const Scene& scene, const OptimizeOptions& options, std::ostrea
       checkpoint.history.empty() ? 0 : checkpoint.history.back().iteration + 1;
   const double earlier_seconds = checkpoint.seconds;
 
-  // A parameter vector whose simulation is not defined (a forward step that does not
-  // converge, an angular velocity beyond π per step) is an infeasible trial point: Ceres and
-  // Ipopt shorten their step (solvers/optimizer.hpp).
-  const ObjectiveFunction f = [&](const Eigen::VectorXd& gamma, Eigen::VectorXd& gradient) {
-    try {
-      return sim.evaluate(gamma, &gradient).loss;
-    } catch (const SimulationFailed& e) {
-      throw InfeasiblePoint(e.what());
-    } catch (const ModelError& e) {
-      throw InfeasiblePoint(e.what());
-    }
-  };
+  const ObjectiveFunction f = objective_of(sim);
   auto last_progress = std::chrono::steady_clock::now();
   bool progress_shown = false;
   const EvaluationCallback record = [&](const Evaluation& e, const Eigen::VectorXd& gamma,

@@ -10,6 +10,7 @@
 
 #include "../solvers/adjoint.hpp"
 #include "../solvers/gradient_check.hpp"
+#include "../solvers/optimizer.hpp"
 #include "scene.hpp"
 
 namespace liedyn {
@@ -21,6 +22,12 @@ OptimizationSpec parse_optimization(const nlohmann::json& value, const Scene& sc
 // The differentiable simulation a scene with an "optimization" block describes (SceneError
 // if it has none).
 DifferentiableSimulation make_differentiable_simulation(const Scene& scene);
+
+// The loss and gradient `liedyn optimize` minimises, over `sim` (kept by reference): a
+// parameter vector whose simulation is not defined (a forward step that does not converge, an
+// angular velocity beyond π per step) is an infeasible trial point, at which Ceres and Ipopt
+// shorten their step (solvers/optimizer.hpp).
+ObjectiveFunction objective_of(const DifferentiableSimulation& sim);
 
 // `liedyn gradcheck`: checks the gradient at γ₀, or at the γ of `parameters_file` when it is
 // not empty (a parameters.csv of `liedyn optimize`, e.g. the point where an optimisation

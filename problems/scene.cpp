@@ -5,7 +5,6 @@
 #include <cstdint>
 #include <cstdio>
 #include <filesystem>
-#include <fstream>
 #include <functional>
 #include <limits>
 #include <map>
@@ -17,6 +16,7 @@
 
 #include "../lib/so3.hpp"
 #include "analytic.hpp"
+#include "input_file.hpp"
 #include "json_reader.hpp"
 #include "obj_mesh.hpp"
 #include "optimization.hpp"
@@ -835,27 +835,11 @@ Scene parse_scene(const std::string& json_text, const std::string& source) {
 }
 
 std::string read_scene_file(const std::filesystem::path& file) {
-  // Only regular files, and not huge ones: a FIFO would block forever and /dev/zero would
-  // be read until memory runs out.
-  std::error_code ec;
-  const auto status = std::filesystem::status(file, ec);
-  if (std::filesystem::is_directory(status)) {
-    throw SceneError(file.string(), "", "is a directory, not a scene file");
+  try {
+    return read_input_file(file, kMaxSceneFileBytes, "scene file");
+  } catch (const InputFileError& e) {
+    throw SceneError(file.string(), "", e.what());
   }
-  if (std::filesystem::exists(status) && !std::filesystem::is_regular_file(status)) {
-    throw SceneError(file.string(), "", "is not a regular file (a FIFO, socket or device)");
-  }
-  std::ifstream in(file, std::ios::binary);
-  if (!in) throw SceneError(file.string(), "", "cannot open the file for reading");
-  const auto size = std::filesystem::file_size(file, ec);
-  if (!ec && size > kMaxSceneFileBytes) {
-    throw SceneError(file.string(), "",
-                     "is " + std::to_string(size) + " bytes, more than a scene file may be (" +
-                         std::to_string(kMaxSceneFileBytes) + ")");
-  }
-  std::ostringstream text;
-  text << in.rdbuf();
-  return text.str();
 }
 
 Scene load_scene(const std::filesystem::path& file) {

@@ -25,6 +25,7 @@
 // box planes, so the set of clamped axes does not change within ±ε.
 
 #include <gtest/gtest.h>
+#include <sys/stat.h>  // mkfifo
 
 #include <Eigen/Geometry>  // cross
 #include <algorithm>
@@ -51,6 +52,7 @@
 #include "lib/mesh_sdf.hpp"
 #include "lib/sdf.hpp"
 #include "problems/obj_mesh.hpp"
+#include "problems/scene.hpp"
 
 namespace liedyn {
 namespace {
@@ -958,6 +960,223 @@ TEST(GridSdf, ErrorsNameTheReason) {
   expect(grid_error(flat), "the mesh encloses no volume (signed volume 0)");
   // Every message starts with the class.
   EXPECT_EQ(grid_error(flat).rfind("GridSdf: ", 0), 0u);
+}
+
+// ---------------------------------------------------------------------------------------
+// The work budget of GridSdf (lib/mesh_sdf.hpp, "Work budget"): the build's point-triangle
+// distances are estimated before the build, a grid beyond max_build_work is refused at once
+// (GridSdfTooCostly, naming the estimate and what to change), and in a scene that refusal is a
+// SceneError on the collider's cell_size.
+
+// The axis-aligned box [0, a] (12 triangles, outward).
+TriangleMesh box(const Vector3& a) {
+  TriangleMesh m;
+  for (int i = 0; i < 8; ++i) {
+    m.vertices.emplace_back((i & 1) ? a.x() : 0.0, (i & 2) ? a.y() : 0.0, (i & 4) ? a.z() : 0.0);
+  }
+  m.triangles = {{0, 2, 1}, {1, 2, 3}, {4, 5, 6}, {5, 7, 6}, {0, 1, 4}, {1, 5, 4},
+                 {2, 6, 3}, {3, 6, 7}, {0, 4, 2}, {2, 4, 6}, {1, 3, 5}, {3, 7, 5}};
+  return m;
+}
+
+std::string what_of(const TriangleMesh& mesh, double h, double padding, double max_work) {
+  try {
+    GridSdf g(mesh, h, padding, 20000000, max_work);
+  } catch (const GridSdfTooCostly& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(GridSdfBudget, TheEstimateIsCloseToTheWorkDone) {
+  struct Case {
+    const char* name;
+    TriangleMesh mesh;
+    double h, budget;  // a budget below 3 N T, so that the work is estimated
+  };
+  const Case cases[] = {
+      {"icosphere 5120, 64^3", icosphere(4, 1.0), 2.06 / 63.0, kDefaultMaxBuildWork},
+      {"icosphere 20480, 35^3", icosphere(5, 1.0), 0.065, kDefaultMaxBuildWork},
+      {"box 12, 203 x 103 x 53", box(Vector3(2.0, 1.0, 0.5)), 0.01, 2e7},
+  };
+  for (const Case& c : cases) {
+    const GridSdf g(c.mesh, c.h, 0.03, 20000000, c.budget);
+    ASSERT_GT(g.estimated_build_work(), 0.0) << c.name << ": 3 N T is within the budget";
+    EXPECT_NEAR(g.estimated_build_work() / g.build_work(), 1.0, 0.25)
+        << c.name << ": estimated " << g.estimated_build_work() << ", done " << g.build_work();
+    EXPECT_LE(g.build_work(), c.budget) << c.name;
+  }
+  // Where 3 N T is within the budget nothing is estimated.
+  const GridSdf small(box(Vector3::Ones()), 0.1, 0.1);
+  EXPECT_EQ(small.estimated_build_work(), 0.0);
+  EXPECT_GT(small.build_work(), 0.0);
+  EXPECT_LE(small.build_work(), 3.0 * 13 * 13 * 13 * 12);
+}
+
+TEST(GridSdfBudget, BeyondTheBudgetTheGridIsRefusedWithWhatToChange) {
+  const TriangleMesh sphere = icosphere(4, 1.0);  // ~3e7 distances at 64³ nodes
+  const double h = 2.06 / 63.0;
+  const std::string msg = what_of(sphere, h, 0.03, 1e7);
+  EXPECT_NE(msg.find("GridSdf: building the grid of 64 x 64 x 64 nodes for 5120 triangles "
+                     "needs about "),
+            std::string::npos)
+      << msg;
+  EXPECT_NE(msg.find("point-triangle distances (estimated from"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("more than max_build_work = 1e+07"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("increase cell_size = "), std::string::npos) << msg;
+  EXPECT_NE(msg.find("or use a mesh with fewer triangles"), std::string::npos) << msg;
+  // The same grid within a budget builds.
+  EXPECT_EQ(what_of(sphere, h, 0.03, 1e8), "");
+  // A budget below 1 is bad input, not a too costly grid.
+  try {
+    GridSdf g(sphere, 0.1, 0.1, 20000000, 0.5);
+    ADD_FAILURE() << "no error";
+  } catch (const GridSdfTooCostly& e) {
+    ADD_FAILURE() << e.what();
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("max_build_work must be >= 1"), std::string::npos);
+  }
+  // The cell cap is a GridSdfTooCostly too.
+  EXPECT_NE(what_of(sphere, 0.0012, 0.1, 1e9).find("more than max_cells"), std::string::npos);
+}
+
+// A 327680-triangle mesh (once seen to take minutes to load): 327680 triangles on a sphere of radius 0.1 m, 0.8 mm cells (255³ nodes,
+// ~2e10 distances, minutes to build). In a scene, refused at once naming cell_size.
+TEST(GridSdfBudget, AFineGridOfALargeMeshInASceneIsRefusedNamingCellSize) {
+  TempDir temp;
+  const fs::path& dir = temp.path();
+  {
+    const TriangleMesh m = icosphere(7, 0.1);
+    ASSERT_EQ(m.triangles.size(), 327680u);
+    std::ofstream obj(dir / "sphere.obj");
+    obj.precision(12);
+    for (const Vector3& x : m.vertices) obj << "v " << x.x() << ' ' << x.y() << ' ' << x.z() << '\n';
+    for (const auto& t : m.triangles) obj << "f " << t[0] + 1 << ' ' << t[1] + 1 << ' ' << t[2] + 1 << '\n';
+  }
+  const std::string text = R"({"time_step": 0.01, "frames": 5, "colliders": [
+      {"type": "mesh", "file": "sphere.obj", "cell_size": 0.0008}],
+      "bodies": [{"name": "a", "mass": 2, "inertia": [1, 2, 2.5]}]})";
+  const std::string source = (dir / "scene.json").string();
+  try {
+    parse_scene(text, source);
+    ADD_FAILURE() << "no error";
+  } catch (const SceneError& e) {
+    EXPECT_EQ(e.file(), source);
+    EXPECT_EQ(e.field(), "colliders[0].cell_size");
+    EXPECT_NE(e.reason().find("255 x 255 x 255 nodes for 327680 triangles needs about"),
+              std::string::npos)
+        << e.reason();
+    EXPECT_NE(e.reason().find("increase cell_size = 0.0008 to about"), std::string::npos)
+        << e.reason();
+  }
+}
+
+// ---------------------------------------------------------------------------------------
+// Bad numbers and bytes in OBJ files: a vertex coordinate that is not a finite decimal number,
+// a missing coordinate and a NUL byte are refused naming the file and the line (tinyobjloader
+// alone reads "nan" and "abc" as 0), and in a scene the refusal is a SceneError on the
+// collider's "file".
+
+// A closed tetrahedron (outward faces) with its first vertex line replaced by `first`, and
+// `before` in front: the bad line is line 1 + (lines in `before`).
+std::string tetrahedron(const std::string& first, const std::string& before = "") {
+  return before + first + "\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n";
+}
+
+// "'<file>': <rest>", as the loader's messages name a file. (Appended, not by operator+ on a
+// literal: GCC 12 warns falsely, -Wrestrict, about the inlined copies of the latter.)
+std::string in_file(const fs::path& file, const std::string& rest) {
+  std::string s = "'";
+  s += file.string();
+  s += "': ";
+  s += rest;
+  return s;
+}
+
+// A FIFO would block the loader for ever and /dev/zero would be read until memory runs out:
+// only regular files are read.
+TEST(ObjMeshFiles, DevicesAndFifosAreNotRead) {
+  TempDir dir;
+  const fs::path fifo = dir.path() / "pipe.obj";
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+  for (const fs::path& file : {fifo, fs::path("/dev/zero")}) {
+    const std::string msg = loader_error(file);
+    EXPECT_NE(msg.find(in_file(file, "is not a regular file (a FIFO, socket or device)")),
+              std::string::npos)
+        << msg;
+  }
+}
+
+TEST(ObjMeshNumbers, TheTetrahedronLoads) {
+  TempDir dir;
+  const TriangleMesh m = load_obj_mesh(dir.write("ok.obj", tetrahedron("v 0 0 0")));
+  EXPECT_EQ(m.vertices.size(), 4u);
+  EXPECT_EQ(m.triangles.size(), 4u);
+  // Forms tinyobjloader and from_chars both read: signs, leading or trailing points,
+  // exponents, a w, vertex colours, tabs, CRLF, an underflowing tiny number.
+  const TriangleMesh n = load_obj_mesh(dir.write(
+      "forms.obj", "v\t+0.0 -0. .0 1.0\r\nv 1e0 0 0 0.5 0.5 0.5\nv 0 1 0 # comment\nv 0 1e-400 1\n"
+                   "f 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n"));
+  EXPECT_EQ(n.vertices[1].x(), 1.0);
+  EXPECT_EQ(n.vertices[3], Vector3(0, 0, 1));
+}
+
+TEST(ObjMeshNumbers, NonNumbersAndNonFiniteCoordinatesNameTheFileAndLine) {
+  TempDir dir;
+  struct Case {
+    const char* name;
+    std::string text;
+    std::string expected;  // in the message, after the file name
+  };
+  const Case cases[] = {
+      {"nan.obj", tetrahedron("v nan 0 0"), "line 1: vertex 1 (1-based): x = 'nan' is not finite"},
+      {"abc.obj", tetrahedron("v 0 abc 0", "# a comment\n\n"),
+       "line 3: vertex 1 (1-based): y = 'abc' is not a number"},
+      {"inf.obj", tetrahedron("v 0 0 -inf"), "line 1: vertex 1 (1-based): z = '-inf' is not finite"},
+      {"huge.obj", tetrahedron("v 1e999 0 0"), "line 1: vertex 1 (1-based): x = '1e999' is not finite"},
+      {"hex.obj", tetrahedron("v 0x10 0 0"), "line 1: vertex 1 (1-based): x = '0x10' is not a number"},
+      {"dots.obj", tetrahedron("v 1.5.3 0 0"), "line 1: vertex 1 (1-based): x = '1.5.3' is not a number"},
+      {"signs.obj", tetrahedron("v +-1 0 0"), "line 1: vertex 1 (1-based): x = '+-1' is not a number"},
+      {"missing.obj", tetrahedron("v 0 0"), "line 1: vertex 1 (1-based): has 2 coordinates"},
+      // The second vertex, on line 2 (CR line ends count as tinyobjloader counts them).
+      {"second.obj", "v 0 0 0\rv 1 NaN 0\rv 0 1 0\rv 0 0 1\rf 1 3 2\rf 1 2 4\rf 1 4 3\rf 2 3 4\r",
+       "line 2: vertex 2 (1-based): y = 'NaN' is not finite"},
+  };
+  for (const Case& c : cases) {
+    const fs::path file = dir.write(c.name, c.text);
+    const std::string msg = loader_error(file);
+    EXPECT_NE(msg.find(in_file(file, c.expected)), std::string::npos)
+        << c.name << ": " << msg;
+  }
+}
+
+TEST(ObjMeshNumbers, NulBytesAreRefused) {
+  TempDir dir;
+  // After the vertices (tinyobjloader would stop reading the line there), and inside a number.
+  const fs::path after = dir.write("nul.obj", tetrahedron("v 0 0 0") + std::string("f 1 2\0 3\n", 9));
+  std::string msg = loader_error(after);
+  EXPECT_NE(msg.find(in_file(after, "line 9: a NUL byte")), std::string::npos) << msg;
+  const fs::path inside = dir.write("nul2.obj", tetrahedron(std::string("v 0 0 1\0", 8) + "5"));
+  msg = loader_error(inside);
+  EXPECT_NE(msg.find("line 1: a NUL byte (byte 8 of the file)"), std::string::npos) << msg;
+}
+
+TEST(ObjMeshNumbers, InASceneTheRefusalIsASceneErrorOnTheColliderFile) {
+  TempDir dir;
+  const fs::path file = dir.write("bad.obj", tetrahedron("v 0 0 0", "v 0 0 0\nv 0 0 abc\n"));
+  const std::string text = R"({"time_step": 0.01, "frames": 5, "colliders": [
+      {"type": "mesh", "file": ")" + file.string() + R"(", "cell_size": 0.1}],
+      "bodies": [{"name": "a", "mass": 2, "inertia": [1, 2, 2.5]}]})";
+  try {
+    parse_scene(text, "unit_scene.json");
+    ADD_FAILURE() << "no error";
+  } catch (const SceneError& e) {
+    EXPECT_EQ(e.file(), "unit_scene.json");
+    EXPECT_EQ(e.field(), "colliders[0].file");
+    EXPECT_NE(e.reason().find(in_file(file, "line 2: vertex 2 (1-based): z = 'abc'")),
+              std::string::npos)
+        << e.reason();
+  }
 }
 
 }  // namespace

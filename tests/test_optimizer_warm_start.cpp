@@ -1,7 +1,7 @@
 // OptimizerOptions::warm_start (solvers/optimizer.hpp): a run continued from an earlier run's
 // best point (`liedyn optimize --resume`) with Ipopt costs about what the uninterrupted run
 // had left, on the bounded cable problem where Ipopt's default start took 6377 evaluations
-// (6048 infeasible trial points) after 8 iterations and missed the target (issue 17, item 5);
+// (6048 infeasible trial points) after 8 iterations and missed the target;
 // and the warm start begins at x0 itself, not at a point pushed into the box.
 
 #include <gtest/gtest.h>
@@ -21,20 +21,6 @@ namespace liedyn {
 namespace {
 
 using Eigen::VectorXd;
-
-// The objective `liedyn optimize` minimises (problems/optimization.cpp): a simulation that
-// fails is an infeasible trial point.
-ObjectiveFunction objective_of(const DifferentiableSimulation& sim) {
-  return [&sim](const VectorXd& gamma, VectorXd& gradient) {
-    try {
-      return sim.evaluate(gamma, &gradient).loss;
-    } catch (const SimulationFailed& e) {
-      throw InfeasiblePoint(e.what());
-    } catch (const ModelError& e) {
-      throw InfeasiblePoint(e.what());
-    }
-  };
-}
 
 TEST(OptimizerWarmStart, IpoptResumeOnTheCableCostsAtMostTwiceWhatWasLeft) {
   const Scene scene =

@@ -1,4 +1,4 @@
-// A plane collider's "normal" (problems/scene.cpp, parse_collider; issue 17, item 10): any
+// A plane collider's "normal" (problems/scene.cpp, parse_collider): any
 // finite non-zero vector gives its direction. ‖n‖² overflows from components ~1.4e154 and
 // underflows below ~1e-154; normalising through it made such a plane horizontal (n/∞ = 0:
 // the identity frame) or refused a non-zero normal as zero.

@@ -83,7 +83,7 @@ void expect_unknown_key(const json& scene, const std::string& field) {
   expect_error(scene, field, "unknown key (allowed here: ");
 }
 
-std::string field(const std::string& path, const std::string& key) {
+std::string dotted(const std::string& path, const std::string& key) {
   return path.empty() ? key : path + "." + key;
 }
 
@@ -97,6 +97,7 @@ struct Case {
 };
 
 std::vector<Case> cases() {
+  // Copied into the cases (which outlive this function).
   const auto rod = [](json& s) -> json& { return s["rods"][0]; };
   const auto opt = [](json& s) -> json& { return s["optimization"]; };
   return {
@@ -118,31 +119,31 @@ std::vector<Case> cases() {
       {[](json& s) -> json& { return s["forces"][0]; }, "forces[0]", "body", "nobody", "torque"},
       {[](json& s) -> json& { return s["torques"][0]; }, "torques[0]", "body", "nobody", "point"},
       {rod, "rods[0]", "mass", "heavy", "colour"},
-      {[&](json& s) -> json& { return rod(s)["shape"]; }, "rods[0].shape", "end",
+      {[=](json& s) -> json& { return rod(s)["shape"]; }, "rods[0].shape", "end",
        json::array({0, 0, 2}), "egdes"},
       // A helix's member in a line shape.
-      {[&](json& s) -> json& { return rod(s)["shape"]; }, "rods[0].shape", "end",
+      {[=](json& s) -> json& { return rod(s)["shape"]; }, "rods[0].shape", "end",
        json::array({0, 0, 2}), "pitch"},
-      {[&](json& s) -> json& { return rod(s)["node_forces"][0]; }, "rods[0].node_forces[0]",
+      {[=](json& s) -> json& { return rod(s)["node_forces"][0]; }, "rods[0].node_forces[0]",
        "node", 1.5, "point"},
-      {[&](json& s) -> json& { return rod(s)["cables"][0]; }, "rods[0].cables[0]", "edges",
+      {[=](json& s) -> json& { return rod(s)["cables"][0]; }, "rods[0].cables[0]", "edges",
        json::array({2, 0}), "angel"},
-      {[&](json& s) -> json& { return rod(s)["region_pushes"][0]; }, "rods[0].region_pushes[0]",
+      {[=](json& s) -> json& { return rod(s)["region_pushes"][0]; }, "rods[0].region_pushes[0]",
        "force", 1, "radious"},
       // A body's contact samples: a rod samples its nodes.
-      {[&](json& s) -> json& { return rod(s)["contact"]; }, "rods[0].contact", "stiffness", -1,
+      {[=](json& s) -> json& { return rod(s)["contact"]; }, "rods[0].contact", "stiffness", -1,
        "points"},
-      {[&](json& s) -> json& { return rod(s)["prescribed_motions"][0]; },
+      {[=](json& s) -> json& { return rod(s)["prescribed_motions"][0]; },
        "rods[0].prescribed_motions[0]", "keyframes", 1, "centre"},
-      {[&](json& s) -> json& { return rod(s)["prescribed_motions"][0]["keyframes"][0]; },
+      {[=](json& s) -> json& { return rod(s)["prescribed_motions"][0]["keyframes"][0]; },
        "rods[0].prescribed_motions[0].keyframes[0]", "time", "soon", "rotaton"},
       {opt, "optimization", "parameters", json::array(), "max_iteration"},
-      {[&](json& s) -> json& { return opt(s)["parameters"][0]; }, "optimization.parameters[0]",
+      {[=](json& s) -> json& { return opt(s)["parameters"][0]; }, "optimization.parameters[0]",
        "node_force", -1, "nodeforce"},
       // A body kind's member in a rod kind.
-      {[&](json& s) -> json& { return opt(s)["parameters"][0]; }, "optimization.parameters[0]",
+      {[=](json& s) -> json& { return opt(s)["parameters"][0]; }, "optimization.parameters[0]",
        "node_force", -1, "body"},
-      {[&](json& s) -> json& { return opt(s)["objective"][0]; }, "optimization.objective[0]",
+      {[=](json& s) -> json& { return opt(s)["objective"][0]; }, "optimization.objective[0]",
        "targets", json::array({json::array({0, 0, 0})}), "wieght"},
   };
 }
@@ -157,24 +158,24 @@ TEST(SceneUnknownKeys, BaseSceneLoads) {
 // Each error alone: the bad value is an error at its key, the unknown key an unknown key.
 TEST(SceneUnknownKeys, EachErrorAlone) {
   for (const Case& c : cases()) {
-    SCOPED_TRACE(field(c.path, c.unknown));
+    SCOPED_TRACE(dotted(c.path, c.unknown));
     json bad = base_scene();
     c.object(bad)[c.bad_key] = c.bad_value;
-    expect_error(bad, field(c.path, c.bad_key), "");
+    expect_error(bad, dotted(c.path, c.bad_key), "");
     json unknown = base_scene();
     c.object(unknown)[c.unknown] = 1;
-    expect_unknown_key(unknown, field(c.path, c.unknown));
+    expect_unknown_key(unknown, dotted(c.path, c.unknown));
   }
 }
 
 // Both together: the unknown key is reported, not the bad value (which is parsed first).
 TEST(SceneUnknownKeys, UnknownKeyBeforeOtherErrorsOfTheObject) {
   for (const Case& c : cases()) {
-    SCOPED_TRACE(field(c.path, c.unknown));
+    SCOPED_TRACE(dotted(c.path, c.unknown));
     json scene = base_scene();
     c.object(scene)[c.bad_key] = c.bad_value;
     c.object(scene)[c.unknown] = 1;
-    expect_unknown_key(scene, field(c.path, c.unknown));
+    expect_unknown_key(scene, dotted(c.path, c.unknown));
   }
 }
 
