@@ -46,4 +46,10 @@ void CableSegment::validate() const {
   }
 }
 
+void CableSegment::add_parameter_adjoint(const State& q, int frame, const LocalGradient<4>& z,
+                                         Eigen::VectorXd& dgamma) const {
+  const int slot = control.slot_at(frame);
+  if (slot >= 0) dgamma(slot) += tension_gradient(q).dot(z);
+}
+
 }  // namespace liedyn

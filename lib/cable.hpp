@@ -38,6 +38,7 @@ namespace liedyn {
 
 struct CableSegment {
   static constexpr int kBlocks = 4;
+  static constexpr const char* kName = "cable";
   std::array<int, kBlocks> offsets{-1, -1, -1, -1};  // x_a, θ_a, x_b, θ_b
   AttachedPoint a, b;                                // routing points, in cable order
   double tension = 0.0;  // T [N], ≥ 0: the cable's current tension (set per frame by the caller)
@@ -55,6 +56,9 @@ struct CableSegment {
   // the adjoint pass: (∂C/∂T)ᵀ z = tension_gradient(q) · z_local. evaluate()'s gradient is
   // exactly T times it when T is a power of two (up to round-off otherwise).
   LocalGradient<4> tension_gradient(const State& q) const;
+  // HasParameters (term.hpp): adds (∂C/∂γ)ᵀ z for step `frame`.
+  void add_parameter_adjoint(const State& q, int frame, const LocalGradient<kBlocks>& z,
+                             Eigen::VectorXd& dgamma) const;
 
   // Throws std::invalid_argument naming the field, its value and the rule unless the tension
   // is finite and ≥ 0.

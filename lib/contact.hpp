@@ -56,6 +56,8 @@ struct ContactSample {
 
 struct Contact : ContactSample {
   static constexpr int kBlocks = 2;
+  static constexpr const char* kName = "contact";
+  static constexpr bool kEnergyOfState = true;
 
   double evaluate(const State& q, LocalGradient<2>* g, LocalHessian<2>* H) const;
 

@@ -93,4 +93,14 @@ Eigen::Matrix<double, 6, 6> Friction::previous_jacobian(const State& q,
   return out;
 }
 
+void Friction::add_step_adjoint(const State& q, const State& previous, const Step&,
+                                const LocalGradient<2>& z, Eigen::VectorXd& a_previous,
+                                Eigen::VectorXd&) const {
+  if (normal_force == 0.0) return;
+  // Columns (x̂, θ̂) of the sample's frame: its point and, on a body, its rotation.
+  const Eigen::Matrix<double, 6, 1> w = previous_jacobian(q, previous).transpose() * z;
+  if (at.point >= 0) a_previous.segment<3>(tangent_point(at.point)) += w.head<3>();
+  if (at.rotation >= 0) a_previous.segment<3>(tangent_rotation(q, at.rotation)) += w.tail<3>();
+}
+
 }  // namespace liedyn

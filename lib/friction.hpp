@@ -38,6 +38,7 @@ namespace liedyn {
 
 struct Friction : ContactSample {
   static constexpr int kBlocks = 2;
+  static constexpr const char* kName = "friction";
   double coefficient = 0.0;  // μ
   double epsilon = 0.0;      // ε = ε_v h, m, > 0
 
@@ -58,6 +59,10 @@ struct Friction : ContactSample {
   // to the sample frame's previous point and rotation (columns x̂, θ̂; formulas at the top).
   // `previous` must be the state begin_step was given.
   Eigen::Matrix<double, 6, 6> previous_jacobian(const State& q, const State& previous) const;
+  // ReadsPreviousStep (term.hpp): adds (∂C/∂q_{k−1})ᵀ z and (∂C/∂Δq_{k−1})ᵀ z.
+  void add_step_adjoint(const State& q, const State& previous, const Step& previous_step,
+                        const LocalGradient<kBlocks>& z, Eigen::VectorXd& a_previous,
+                        Eigen::VectorXd& da_previous) const;
 
  private:
   struct Slip {

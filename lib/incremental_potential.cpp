@@ -9,24 +9,24 @@ namespace liedyn {
 
 void IncrementalPotential::begin_step(const State& previous, const Step& previous_step,
                                       int frame) {
-  for (auto& t : translational_inertia) t.begin_step(previous, previous_step);
-  for (auto& t : rotational_inertia) t.begin_step(previous, previous_step);
-  for (auto& t : torques) {
-    t.begin_step(previous, previous_step);
-    t.begin_frame(frame);
-  }
-  for (auto& t : forces) t.begin_frame(frame);
-  for (auto& t : rod_bend_twist) t.begin_frame(frame);
-  for (auto& t : cables) t.begin_frame(frame);
-  for (auto& t : friction) t.begin_step(previous, previous_step);
-  for (auto& t : region_forces) t.begin_step(previous, previous_step);
+  for_each_term_vector([&](auto& terms) {
+    using T = typename std::decay_t<decltype(terms)>::value_type;
+    if constexpr (BeginsStep<T>) {
+      for (T& t : terms) t.begin_step(previous, previous_step);
+    }
+    if constexpr (Scheduled<T>) {
+      for (T& t : terms) t.begin_frame(frame);
+    }
+  });
 }
 
 void IncrementalPotential::set_load_scale(double lambda) {
-  for (auto& t : gravity) t.scale = lambda;
-  for (auto& t : forces) t.scale = lambda;
-  for (auto& t : torques) t.scale = lambda;
-  for (auto& t : region_forces) t.scale = lambda;
+  for_each_term_vector([&](auto& terms) {
+    using T = typename std::decay_t<decltype(terms)>::value_type;
+    if constexpr (LoadScaled<T>) {
+      for (T& t : terms) t.scale = lambda;
+    }
+  });
 }
 
 double IncrementalPotential::value(const State& q) const {
@@ -39,13 +39,12 @@ double IncrementalPotential::value(const State& q) const {
 
 double IncrementalPotential::potential_energy(const State& q) const {
   double energy = 0.0;
-  for (const auto& t : gravity) energy += t.evaluate(q, nullptr, nullptr);
-  for (const auto& t : forces) energy += t.evaluate(q, nullptr, nullptr);
-  for (const auto& t : springs) energy += t.evaluate(q, nullptr, nullptr);
-  for (const auto& t : rod_stretch) energy += t.evaluate(q, nullptr, nullptr);
-  for (const auto& t : rod_shear) energy += t.evaluate(q, nullptr, nullptr);
-  for (const auto& t : rod_bend_twist) energy += t.evaluate(q, nullptr, nullptr);
-  for (const auto& t : contacts) energy += t.evaluate(q, nullptr, nullptr);
+  for_each_term_vector([&](const auto& terms) {
+    using T = typename std::decay_t<decltype(terms)>::value_type;
+    if constexpr (EnergyOfState<T>) {
+      for (const T& t : terms) energy += t.evaluate(q, nullptr, nullptr);
+    }
+  });
   return energy;
 }
 
@@ -66,13 +65,13 @@ void add_contact_terms(const Model& model,
   if (!material.enabled()) return;
   for (const auto& collider : colliders) {
     const ContactSample sample{offsets, at, collider, material.stiffness, material.radius};
-    p.contacts.push_back(Contact{sample});
+    p.add(Contact{sample});
     // Static equilibria have no step to slip over: friction is a dynamic term.
     if (material.friction > 0.0 && !model.static_equilibrium) {
       Friction friction{sample};
       friction.coefficient = material.friction;
       friction.epsilon = material.friction_velocity * model.time_step;
-      p.friction.push_back(friction);
+      p.add(friction);
     }
   }
 }
@@ -123,20 +122,20 @@ std::vector<Component> build_components(const Model& model) {
       ti.offsets = {point_offset[i]};
       ti.point = i;
       ti.mass_over_h2 = body.mass * inv_h2;
-      p.translational_inertia.push_back(ti);
+      p.add(ti);
       RotationalInertia ri;
       ri.offsets = {rotation_offset[i]};
       ri.rotation = i;
       ri.J_over_h2 = rotational_mass(body.inertia) * inv_h2;
       ri.sqrt_J_over_h = psd_sqrt(ri.J_over_h2);  // J^½/h, for the residual form
-      p.rotational_inertia.push_back(ri);
+      p.add(ri);
     }
     if (!model.gravity.isZero(0.0)) {
       Gravity g;
       g.offsets = {point_offset[i]};
       g.point = i;
       g.weight = body.mass * model.gravity;
-      p.gravity.push_back(g);
+      p.add(g);
     }
   }
 
@@ -158,7 +157,7 @@ std::vector<Component> build_components(const Model& model) {
     term.at = attach(f.at);
     term.force = f.force;
     term.control = f.control;
-    components[component_of[f.at.body]].potential.forces.push_back(term);
+    components[component_of[f.at.body]].potential.add(term);
   }
   for (const TorqueSpec& t : model.torques) {
     ConstantTorque term;
@@ -166,7 +165,7 @@ std::vector<Component> build_components(const Model& model) {
     term.rotation = t.body;
     term.torque = t.torque;
     term.control = t.control;
-    components[component_of[t.body]].potential.torques.push_back(term);
+    components[component_of[t.body]].potential.add(term);
   }
   for (const SpringSpec& s : model.springs) {
     Spring term;
@@ -178,7 +177,7 @@ std::vector<Component> build_components(const Model& model) {
     term.rest_length = s.rest_length;
     term.stiffness_slot = s.stiffness_slot;
     const int body = s.a.body >= 0 ? s.a.body : s.b.body;
-    components[component_of[body]].potential.springs.push_back(term);
+    components[component_of[body]].potential.add(term);
   }
   const std::vector<std::shared_ptr<const Collider>> colliders = shared_colliders(model);
   for (int i = 0; i < n; ++i) {
@@ -229,14 +228,14 @@ Component build_rod_component(const Model& model, int r) {
       ti.offsets = {node_offset[i]};
       ti.point = model.rod_point(r, i);
       ti.mass_over_h2 = d.node_mass[i] * inv_h2;
-      p.translational_inertia.push_back(ti);
+      p.add(ti);
     }
     if (!model.gravity.isZero(0.0)) {
       Gravity g;
       g.offsets = {node_offset[i]};
       g.point = model.rod_point(r, i);
       g.weight = d.node_mass[i] * model.gravity;
-      p.gravity.push_back(g);
+      p.add(g);
     }
   }
   for (int j = 0; j < edges; ++j) {
@@ -246,7 +245,7 @@ Component build_rod_component(const Model& model, int r) {
       ri.rotation = model.rod_rotation(r, j);
       ri.J_over_h2 = rotational_mass(d.edge_inertia[j]) * inv_h2;
       ri.sqrt_J_over_h = psd_sqrt(ri.J_over_h2);  // J^½/h (nearly singular for a thin rod: fine)
-      p.rotational_inertia.push_back(ri);
+      p.add(ri);
     }
     RodStretch stretch;
     stretch.offsets = {node_offset[j], node_offset[j + 1]};
@@ -255,7 +254,7 @@ Component build_rod_component(const Model& model, int r) {
     stretch.rest_length = d.rest_length[j];
     stretch.stiffness = rod.stretch_stiffness;
     stretch.stiffness_slot = rod.stretch_stiffness_slot;
-    p.rod_stretch.push_back(stretch);
+    p.add(stretch);
     RodShear shear;
     shear.offsets = {node_offset[j], node_offset[j + 1], edge_offset[j]};
     shear.node0 = stretch.node0;
@@ -264,7 +263,7 @@ Component build_rod_component(const Model& model, int r) {
     shear.rest_length = d.rest_length[j];
     shear.stiffness = rod.shear_stiffness;
     shear.stiffness_slot = rod.shear_stiffness_slot;
-    p.rod_shear.push_back(shear);
+    p.add(shear);
   }
   for (int i = 1; i + 1 < n; ++i) {
     RodBendTwist bend;
@@ -276,7 +275,7 @@ Component build_rod_component(const Model& model, int r) {
     bend.rest_darboux = d.rest_darboux[i - 1];
     if (!rod.rest_darboux_controls.empty()) bend.rest_control = rod.rest_darboux_controls[i - 1];
     bend.stiffness_slot = rod.bending_stiffness_slot;
-    p.rod_bend_twist.push_back(bend);
+    p.add(bend);
   }
   for (const CableSpec& cable : rod.cables) {
     for (std::size_t k = 0; k + 1 < cable.route.size(); ++k) {
@@ -289,7 +288,7 @@ Component build_rod_component(const Model& model, int r) {
       segment.b = {model.rod_point(r, b.edge), model.rod_rotation(r, b.edge), b.local};
       segment.tension = cable.tension;
       segment.control = cable.control;
-      p.cables.push_back(segment);
+      p.add(segment);
     }
   }
   const std::vector<std::shared_ptr<const Collider>> colliders = shared_colliders(model);
@@ -307,7 +306,7 @@ Component build_rod_component(const Model& model, int r) {
       term.force = push.force;
       term.center = push.center;
       term.radius = push.radius;
-      p.region_forces.push_back(term);
+      p.add(term);
     }
   }
   for (const NodeForce& f : rod.node_forces) {
@@ -317,7 +316,7 @@ Component build_rod_component(const Model& model, int r) {
     term.at.point = model.rod_point(r, f.node);
     term.force = f.force;
     term.control = f.control;
-    p.forces.push_back(term);
+    p.add(term);
   }
   return c;
 }

@@ -12,6 +12,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <tuple>
 #include <type_traits>
 #include <utility>
 #include <vector>
@@ -40,19 +41,36 @@ struct DenseHessianSink {
 
 class IncrementalPotential {
  public:
-  std::vector<TranslationalInertia> translational_inertia;
-  std::vector<RotationalInertia> rotational_inertia;
-  std::vector<Gravity> gravity;
-  std::vector<ConstantForce> forces;
-  std::vector<ConstantTorque> torques;
-  std::vector<RegionForce> region_forces;
-  std::vector<Spring> springs;
-  std::vector<RodStretch> rod_stretch;
-  std::vector<RodShear> rod_shear;
-  std::vector<RodBendTwist> rod_bend_twist;
-  std::vector<CableSegment> cables;
-  std::vector<Contact> contacts;
-  std::vector<Friction> friction;
+  // The one list of term types (term.hpp). Every consumer — assembly, begin_step, load
+  // scaling, energy, the adjoint, Ceres's residual blocks — iterates it and dispatches on the
+  // terms' capabilities; a new term type is added here and in the builder that creates it.
+  using TermTypes = std::tuple<TranslationalInertia, RotationalInertia, Gravity, ConstantForce,
+                               ConstantTorque, RegionForce, Spring, RodStretch, RodShear,
+                               RodBendTwist, CableSegment, Contact, Friction>;
+
+  // The terms of type T (one contiguous vector per type).
+  template <class T>
+  std::vector<T>& terms() {
+    return std::get<std::vector<T>>(terms_);
+  }
+  template <class T>
+  const std::vector<T>& terms() const {
+    return std::get<std::vector<T>>(terms_);
+  }
+  template <class T>
+  void add(T term) {
+    terms<T>().push_back(std::move(term));
+  }
+
+  // Calls f(terms<T>()) for every T of TermTypes, in that order.
+  template <class Function>
+  void for_each_term_vector(Function&& f) const {
+    std::apply([&](const auto&... vectors) { (f(vectors), ...); }, terms_);
+  }
+  template <class Function>
+  void for_each_term_vector(Function&& f) {
+    std::apply([&](auto&... vectors) { (f(vectors), ...); }, terms_);
+  }
 
   // Fixes the per-step data (x̃, R̃, R_{k−1}) from the previous state and step, and the
   // scheduled quantities (forces, torques, cable tensions, rest Darboux vectors; term.hpp) of
@@ -110,37 +128,30 @@ class IncrementalPotential {
   // up by begin_step(previous, previous_step, k). z is this component's adjoint vector
   // (component layout). Whole-state tangent vectors ("full" layout) hold 3 entries per point,
   // then 3 per rotation: point i at 3i, rotation j at 3(P + j), P = q.points.size().
-  //   a_previous  += (∂C/∂q_{k−1})ᵀ z,   da_previous += (∂C/∂Δq_{k−1})ᵀ z   (full layout);
-  // only the inertia, torque and friction terms read q_{k−1} or Δq_{k−1}.
+  //   a_previous  += (∂C/∂q_{k−1})ᵀ z,   da_previous += (∂C/∂Δq_{k−1})ᵀ z   (full layout),
+  // over the terms that read q_{k−1} or Δq_{k−1} (ReadsPreviousStep, term.hpp).
   void add_step_adjoint(const State& q, const State& previous, const Step& previous_step,
                         const Eigen::VectorXd& z, Eigen::VectorXd& a_previous,
                         Eigen::VectorXd& da_previous) const;
-  //   dgamma += (∂C/∂γ)ᵀ z  for the parameters of step k (the terms' slots, term.hpp).
+  //   dgamma += (∂C/∂γ)ᵀ z  for the parameters of step k, over the terms with parameters
+  //   (HasParameters, term.hpp).
   void add_parameter_adjoint(const State& q, int frame, const Eigen::VectorXd& z,
                              Eigen::VectorXd& dgamma) const;
 
-  // Potential energy (gravity, constant forces, springs, rod elasticity, contact penalties):
-  // what frames.csv reports. Inertia, torque, cable and friction terms are not energies of
-  // the state.
+  // Potential energy: the sum of the terms that are energies of the state (EnergyOfState,
+  // term.hpp: gravity, constant forces, springs, rod elasticity, contact penalties), what
+  // frames.csv reports.
   double potential_energy(const State& q) const;
 
  private:
-  template <class Function>
-  void for_each_term_vector(Function&& f) const {
-    f(translational_inertia);
-    f(rotational_inertia);
-    f(gravity);
-    f(forces);
-    f(torques);
-    f(region_forces);
-    f(springs);
-    f(rod_stretch);
-    f(rod_shear);
-    f(rod_bend_twist);
-    f(cables);
-    f(contacts);
-    f(friction);
-  }
+  template <class Tuple>
+  struct VectorsOf;
+  template <class... Ts>
+  struct VectorsOf<std::tuple<Ts...>> {
+    static_assert((Term<Ts> && ...), "every type of TermTypes is a Term (term.hpp)");
+    using type = std::tuple<std::vector<Ts>...>;
+  };
+  typename VectorsOf<TermTypes>::type terms_;
 };
 
 // A set of DOF blocks minimised together, with their place in the tangent vector.

@@ -119,4 +119,23 @@ void RotationalInertia::step_jacobians(const State& q, const Matrix3& R_previous
   }
 }
 
+void TranslationalInertia::add_step_adjoint(const State&, const State&, const Step&,
+                                            const LocalGradient<1>& z, Eigen::VectorXd& a_previous,
+                                            Eigen::VectorXd& da_previous) const {
+  const Vector3 w = step_jacobian() * z;  // the Jacobian is symmetric: w = Jᵀ z
+  a_previous.segment<3>(tangent_point(point)) += w;
+  da_previous.segment<3>(tangent_point(point)) += w;
+}
+
+void RotationalInertia::add_step_adjoint(const State& q, const State& previous,
+                                         const Step& previous_step, const LocalGradient<1>& z,
+                                         Eigen::VectorXd& a_previous,
+                                         Eigen::VectorXd& da_previous) const {
+  Matrix3 d_previous, d_step;
+  step_jacobians(q, previous.rotations[rotation], previous_step.rotations[rotation], d_previous,
+                 d_step);
+  a_previous.segment<3>(tangent_rotation(q, rotation)) += d_previous.transpose() * z;
+  da_previous.segment<3>(tangent_rotation(q, rotation)) += d_step.transpose() * z;
+}
+
 }  // namespace liedyn

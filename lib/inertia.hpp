@@ -40,6 +40,7 @@ Matrix3 psd_sqrt(const Matrix3& A);
 
 struct TranslationalInertia {
   static constexpr int kBlocks = 1;
+  static constexpr const char* kName = "translational_inertia";
   std::array<int, kBlocks> offsets{-1};
   int point = -1;
   double mass_over_h2 = 0.0;  // m/h²
@@ -51,6 +52,10 @@ struct TranslationalInertia {
   // For the adjoint: the gradient m/h² (x − x_{k−1} − Δx_{k−1}) has
   //   ∂C/∂x_{k−1} = ∂C/∂Δx_{k−1} = −(m/h²) I.
   double step_jacobian() const { return -mass_over_h2; }
+  // ReadsPreviousStep (term.hpp): adds (∂C/∂q_{k−1})ᵀ z and (∂C/∂Δq_{k−1})ᵀ z.
+  void add_step_adjoint(const State& q, const State& previous, const Step& previous_step,
+                        const LocalGradient<kBlocks>& z, Eigen::VectorXd& a_previous,
+                        Eigen::VectorXd& da_previous) const;
 
   static constexpr int kResiduals = 3;
   using Residual = LocalResidual<kResiduals>;
@@ -68,6 +73,7 @@ struct TranslationalInertia {
 
 struct RotationalInertia {
   static constexpr int kBlocks = 1;
+  static constexpr const char* kName = "rotational_inertia";
   std::array<int, kBlocks> offsets{-1};
   int rotation = -1;
   Matrix3 J_over_h2 = Matrix3::Zero();  // J/h²
@@ -88,6 +94,10 @@ struct RotationalInertia {
   // so column j of each Jacobian is −2 vee(B hat(e_j) X), X = 2I − ΔR or ΔR.
   void step_jacobians(const State& q, const Matrix3& R_previous, const Matrix3& dR_previous,
                       Matrix3& dC_dR_previous, Matrix3& dC_ddR_previous) const;
+  // ReadsPreviousStep (term.hpp): adds (∂C/∂q_{k−1})ᵀ z and (∂C/∂Δq_{k−1})ᵀ z.
+  void add_step_adjoint(const State& q, const State& previous, const Step& previous_step,
+                        const LocalGradient<kBlocks>& z, Eigen::VectorXd& a_previous,
+                        Eigen::VectorXd& da_previous) const;
 
   static constexpr int kResiduals = 9;
   using Residual = LocalResidual<kResiduals>;

@@ -62,4 +62,22 @@ double RegionForce::evaluate(const State& q, LocalGradient<1>* g, LocalHessian<1
   return -F.dot(q.points[point]);
 }
 
+void ConstantForce::add_parameter_adjoint(const State& q, int frame, const LocalGradient<2>& z,
+                                          Eigen::VectorXd& dgamma) const {
+  const int slot = control.slot_at(frame);
+  if (slot >= 0) dgamma.segment<3>(slot) += force_jacobian(q).transpose() * z;
+}
+
+void ConstantTorque::add_step_adjoint(const State& q, const State&, const Step&,
+                                      const LocalGradient<1>& z, Eigen::VectorXd& a_previous,
+                                      Eigen::VectorXd&) const {
+  a_previous.segment<3>(tangent_rotation(q, rotation)) += previous_jacobian(q).transpose() * z;
+}
+
+void ConstantTorque::add_parameter_adjoint(const State& q, int frame, const LocalGradient<1>& z,
+                                           Eigen::VectorXd& dgamma) const {
+  const int slot = control.slot_at(frame);
+  if (slot >= 0) dgamma.segment<3>(slot) += torque_jacobian(q).transpose() * z;
+}
+
 }  // namespace liedyn

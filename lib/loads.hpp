@@ -12,12 +12,20 @@ namespace liedyn {
 // Gravity on a point mass: V = −m g·x;  ∇V = −m g,  ∇²V = 0.
 struct Gravity {
   static constexpr int kBlocks = 1;
+  static constexpr const char* kName = "gravity";
+  static constexpr bool kEnergyOfState = true;
   std::array<int, kBlocks> offsets{-1};
   int point = -1;
   Vector3 weight = Vector3::Zero();  // m g
   double scale = 1.0;
 
   double evaluate(const State& q, LocalGradient<1>* g, LocalHessian<1>* H) const;
+  // PointLoad (term.hpp).
+  bool point_load(int& on, Vector3& force) const {
+    on = point;
+    force = scale * weight;
+    return true;
+  }
 };
 
 // A constant world force F applied at p = x + R p̄ (blocks: x, θ). V = −F·p, so with
@@ -25,6 +33,8 @@ struct Gravity {
 //   ∂V/∂x = −F,   DV/DR = r × f = −r × F (minus the torque),   D²V/DR² = ½(f rᵀ + r fᵀ) − (f·r) I.
 struct ConstantForce {
   static constexpr int kBlocks = 2;
+  static constexpr const char* kName = "force";
+  static constexpr bool kEnergyOfState = true;
   std::array<int, kBlocks> offsets{-1, -1};
   AttachedPoint at;
   Vector3 force = Vector3::Zero();
@@ -34,8 +44,17 @@ struct ConstantForce {
   // Step k's force from the schedule (kept constant without one).
   void begin_frame(int k) { force = control.at(k, force); }
   double evaluate(const State& q, LocalGradient<2>* g, LocalHessian<2>* H) const;
+  // PointLoad (term.hpp): only a force on a point without rotation (a rod node) has no lever.
+  bool point_load(int& on, Vector3& load) const {
+    on = at.point;
+    load = scale * force;
+    return at.rotation < 0 && at.point >= 0;
+  }
   // For the adjoint: ∂(Lie gradient)/∂F = −scale [I; hat(r)] (the gradient is linear in F).
   Eigen::Matrix<double, 6, 3> force_jacobian(const State& q) const;
+  // HasParameters (term.hpp): adds (∂C/∂γ)ᵀ z for step `frame`.
+  void add_parameter_adjoint(const State& q, int frame, const LocalGradient<kBlocks>& z,
+                             Eigen::VectorXd& dgamma) const;
 };
 
 // A constant world torque τ on a rotation. A constant world torque has no potential on
@@ -48,6 +67,7 @@ struct ConstantForce {
 // Derived by substituting exp(θ) ≈ I + hat(θ) + ½hat(θ)² (paper §3.2); FD-checked in tests.
 struct ConstantTorque {
   static constexpr int kBlocks = 1;
+  static constexpr const char* kName = "torque";
   std::array<int, kBlocks> offsets{-1};
   int rotation = -1;
   Vector3 torque = Vector3::Zero();
@@ -65,6 +85,13 @@ struct ConstantTorque {
   //   tr(P hat(φ)) = −2 vee(P)·φ,   ∂C/∂φ = −(τ vee(P)ᵀ + ½ hat(Pᵀτ))   (τ scaled).
   Matrix3 torque_jacobian(const State& q) const;
   Matrix3 previous_jacobian(const State& q) const;
+  // ReadsPreviousStep (term.hpp): adds (∂C/∂q_{k−1})ᵀ z and (∂C/∂Δq_{k−1})ᵀ z.
+  void add_step_adjoint(const State& q, const State& previous, const Step& previous_step,
+                        const LocalGradient<kBlocks>& z, Eigen::VectorXd& a_previous,
+                        Eigen::VectorXd& da_previous) const;
+  // HasParameters (term.hpp): adds (∂C/∂γ)ᵀ z for step `frame`.
+  void add_parameter_adjoint(const State& q, int frame, const LocalGradient<kBlocks>& z,
+                             Eigen::VectorXd& dgamma) const;
 };
 
 // A push on a point while it is inside a region (the endoscope of paper §7.2, driven by
@@ -75,6 +102,7 @@ struct ConstantTorque {
 // vanishes wherever it exists; a point exactly on the region's boundary is measure zero).
 struct RegionForce {
   static constexpr int kBlocks = 1;
+  static constexpr const char* kName = "region_force";
   std::array<int, kBlocks> offsets{-1};
   int point = -1;
   Vector3 force = Vector3::Zero();

@@ -1,7 +1,7 @@
 #pragma once
 // Potentials of the vector between two attached points, V(d) with d = p_b − p_a, mapped to
 // the four blocks (x_a, θ_a, x_b, θ_b) of the two points' frames (paper eqs. 22, 23;
-// conventions: so3.hpp). Shared by Spring (spring.hpp) and CableSegment (cable.hpp), which
+// conventions: so3.hpp). Shared by the spring (spring.hpp) and cable (cable.hpp) terms, which
 // differ only in V(d).
 //
 // With p = x + r, r = R p̄ (state.hpp, AttachedPoint), a left perturbation R ← exp(θ)R moves

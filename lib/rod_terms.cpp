@@ -209,4 +209,14 @@ void RodBendTwist::residual(const State& q, Residual& r, ResidualJacobian* J) co
   }
 }
 
+void RodBendTwist::add_parameter_adjoint(const State& q, int frame, const LocalGradient<2>& z,
+                                         Eigen::VectorXd& dgamma) const {
+  const int slot = rest_control.slot_at(frame);
+  if (slot < 0 && stiffness_slot < 0) return;
+  Eigen::Matrix<double, 6, 3> d_rest, d_stiffness;
+  parameter_jacobians(q, slot >= 0 ? &d_rest : nullptr, stiffness_slot >= 0 ? &d_stiffness : nullptr);
+  if (slot >= 0) dgamma.segment<3>(slot) += d_rest.transpose() * z;
+  if (stiffness_slot >= 0) dgamma.segment<3>(stiffness_slot) += d_stiffness.transpose() * z;
+}
+
 }  // namespace liedyn

@@ -82,6 +82,8 @@ Vector3 darboux_vector(const Matrix3& Ra, const Matrix3& Rb, double rest_length)
 
 struct RodStretch {
   static constexpr int kBlocks = 2;
+  static constexpr const char* kName = "rod_stretch";
+  static constexpr bool kEnergyOfState = true;
   std::array<int, kBlocks> offsets{-1, -1};  // x_i, x_{i+1}
   int node0 = -1;                            // i    (State::points)
   int node1 = -1;                            // i+1  (State::points)
@@ -90,6 +92,11 @@ struct RodStretch {
   int stiffness_slot = -1;                   // γ index of k_s, −1: not a parameter (Ψ ∝ k_s)
 
   double evaluate(const State& q, LocalGradient<2>* g, LocalHessian<2>* H) const;
+  // HasParameters (term.hpp): the value is proportional to the stiffness.
+  void add_parameter_adjoint(const State& q, int, const LocalGradient<kBlocks>& z,
+                             Eigen::VectorXd& dgamma) const {
+    add_stiffness_adjoint(*this, q, z, dgamma);
+  }
 
   static constexpr int kResiduals = 1;
   using Residual = LocalResidual<kResiduals>;
@@ -100,6 +107,8 @@ struct RodStretch {
 
 struct RodShear {
   static constexpr int kBlocks = 3;
+  static constexpr const char* kName = "rod_shear";
+  static constexpr bool kEnergyOfState = true;
   std::array<int, kBlocks> offsets{-1, -1, -1};  // x_i, x_{i+1}, θ_i
   int node0 = -1;                                // i    (State::points)
   int node1 = -1;                                // i+1  (State::points)
@@ -109,6 +118,11 @@ struct RodShear {
   int stiffness_slot = -1;                       // γ index of k_x, −1: not a parameter (Ψ ∝ k_x)
 
   double evaluate(const State& q, LocalGradient<3>* g, LocalHessian<3>* H) const;
+  // HasParameters (term.hpp): the value is proportional to the stiffness.
+  void add_parameter_adjoint(const State& q, int, const LocalGradient<kBlocks>& z,
+                             Eigen::VectorXd& dgamma) const {
+    add_stiffness_adjoint(*this, q, z, dgamma);
+  }
 
   static constexpr int kResiduals = 3;
   using Residual = LocalResidual<kResiduals>;
@@ -119,6 +133,8 @@ struct RodShear {
 
 struct RodBendTwist {
   static constexpr int kBlocks = 2;
+  static constexpr const char* kName = "rod_bend_twist";
+  static constexpr bool kEnergyOfState = true;
   std::array<int, kBlocks> offsets{-1, -1};  // θ_{i−1}, θ_i
   int edge0 = -1;                            // i−1  (State::rotations), frame of ω
   int edge1 = -1;                            // i    (State::rotations)
@@ -134,6 +150,9 @@ struct RodBendTwist {
   //   ∂C/∂ω̄ = (W K, −W K),   ∂C/∂(K₁, K₂, K₃) = (−W diag(Δω), W diag(Δω)).
   void parameter_jacobians(const State& q, Eigen::Matrix<double, 6, 3>* d_rest_darboux,
                            Eigen::Matrix<double, 6, 3>* d_stiffness) const;
+  // HasParameters (term.hpp): adds (∂C/∂γ)ᵀ z for step `frame`.
+  void add_parameter_adjoint(const State& q, int frame, const LocalGradient<kBlocks>& z,
+                             Eigen::VectorXd& dgamma) const;
 
   static constexpr int kResiduals = 3;
   using Residual = LocalResidual<kResiduals>;

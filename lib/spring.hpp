@@ -66,6 +66,8 @@ inline LengthSpringDerivatives length_spring(const Vector3& d, double stiffness,
 
 struct Spring {
   static constexpr int kBlocks = 4;
+  static constexpr const char* kName = "spring";
+  static constexpr bool kEnergyOfState = true;
   std::array<int, kBlocks> offsets{-1, -1, -1, -1};  // x_a, θ_a, x_b, θ_b
   AttachedPoint a, b;
   double stiffness = 0.0;    // k  [N/m]
@@ -73,6 +75,11 @@ struct Spring {
   int stiffness_slot = -1;   // γ index of k, −1: not a parameter (V ∝ k)
 
   double evaluate(const State& q, LocalGradient<4>* g, LocalHessian<4>* H) const;
+  // HasParameters (term.hpp): the value is proportional to the stiffness.
+  void add_parameter_adjoint(const State& q, int, const LocalGradient<kBlocks>& z,
+                             Eigen::VectorXd& dgamma) const {
+    add_stiffness_adjoint(*this, q, z, dgamma);
+  }
 
   static constexpr int kResiduals = 3;
   using Residual = LocalResidual<kResiduals>;

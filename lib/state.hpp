@@ -46,4 +46,14 @@ struct AttachedPoint {
 //   D²Ψ/DR² ⊇ ½ (f rᵀ + r fᵀ) − (f·r) I   ( = D + Dᵀ, D = ½ hat(r) hat(f) ).
 Matrix3 rotated_point_curvature(const Vector3& r, const Vector3& f);
 
+// Index of point i and rotation j in a whole-state tangent vector (3 entries per point, then
+// 3 per rotation), the layout of the adjoint vectors a_k, Δa_k.
+inline int tangent_point(int i) { return 3 * i; }
+inline int tangent_rotation(const State& q, int j) {
+  return 3 * (static_cast<int>(q.points.size()) + j);
+}
+inline int tangent_size(const State& q) {
+  return 3 * static_cast<int>(q.points.size() + q.rotations.size());
+}
+
 }  // namespace liedyn

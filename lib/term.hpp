@@ -1,17 +1,51 @@
 #pragma once
-// What an energy term is, for the assembler (IPC-Toolkit style: each term owns its value,
-// Lie gradient and Lie Hessian in one place; "Lie" as defined in so3.hpp).
+// What an energy term is (IPC-Toolkit style: each term owns its value, Lie gradient and Lie
+// Hessian in one place; "Lie" as defined in so3.hpp), written as C++20 concepts: a required
+// core, `Term`, and optional capabilities that the consumers detect with
+// `if constexpr (Capability<T>)`. Terms are stored per type in contiguous vectors, one vector
+// per type of the one list of term types (IncrementalPotential::TermTypes): no virtual call
+// per element, and adding a term type means writing the type and adding it to that list and
+// to the builder that creates it from the model — no consumer names a term type.
 //
-// A term type T provides
+// Core (Term):
 //   static constexpr int kBlocks;             // 3-DOF blocks in its stencil (points, rotations)
+//   static constexpr const char* kName;       // for messages and Ceres's residual labels
 //   std::array<int, kBlocks> offsets;         // tangent offset of each block, −1 if not a DOF
 //   double evaluate(const State& q, LocalGradient<kBlocks>* g, LocalHessian<kBlocks>* H) const;
 // evaluate returns the value and, when the pointers are non-null, writes (not adds) the
 // local Lie gradient and Lie Hessian. Blocks whose offset is −1 are ignored by assembly.
-// Terms are stored per type in contiguous vectors: no virtual call per element.
 //
-// A term that is a sum of squares (inertia, springs, rod elasticity; not the linear loads)
-// also provides its least-squares form, for the Ceres back-end:
+// Capabilities:
+//   HasResidual       — a sum of squares, with its least-squares form for Ceres (below).
+//   BeginsStep        — fixes per-step data from q_{k−1}, Δq_{k−1} (inertia, lagged friction):
+//                         void begin_step(const State& previous, const Step& previous_step);
+//   Scheduled         — a quantity that changes per frame (ScheduledParameter below):
+//                         void begin_frame(int k);
+//   LoadScaled        — a load that static load stepping scales: member `double scale`,
+//                         which multiplies value, gradient and Hessian.
+//   EnergyOfState     — `static constexpr bool kEnergyOfState = true`: its value is a
+//                         potential energy of the state (what frames.csv reports), unlike the
+//                         inertia, torque, cable and friction terms.
+//   ReadsPreviousStep — C = ∇Ψ_t depends on q_{k−1} or Δq_{k−1}: the adjoint's mixed blocks
+//                         (paper §5, docs/design.md §8), with z the term's part of the
+//                         component's adjoint vector (zeros where a block is not a DOF):
+//                         void add_step_adjoint(const State& q, const State& previous,
+//                             const Step& previous_step, const LocalGradient<kBlocks>& z,
+//                             Eigen::VectorXd& a_previous, Eigen::VectorXd& da_previous) const;
+//                         adds (∂C/∂q_{k−1})ᵀ z and (∂C/∂Δq_{k−1})ᵀ z in the whole-state
+//                         layout (tangent_point / tangent_rotation, state.hpp).
+//   PointLoad         — a load V = −F·x on one point, with no lever arm (gravity, a force
+//                         on a rod node), whose current F (times `scale`) it gives:
+//                         bool point_load(int& point, Vector3& force) const;
+//                         (false when this instance has a lever arm). The Ceres back-end
+//                         folds such loads into the point's inertia residual.
+//   HasParameters     — C depends on optimisation parameters γ of step `frame`:
+//                         void add_parameter_adjoint(const State& q, int frame,
+//                             const LocalGradient<kBlocks>& z, Eigen::VectorXd& dgamma) const;
+//                         adds (∂C/∂γ)ᵀ z.
+//
+// Least-squares form (HasResidual; inertia, springs, rod elasticity, contact; not the
+// linear loads):
 //   static constexpr int kResiduals;          // R, the length of its residual r
 //   using Residual = LocalResidual<kResiduals>;
 //   using ResidualJacobian = LocalResidualJacobian<kResiduals, kBlocks>;
@@ -30,7 +64,10 @@
 
 #include <Eigen/Core>
 #include <array>
+#include <concepts>
 #include <vector>
+
+#include "state.hpp"
 
 namespace liedyn {
 
@@ -43,6 +80,66 @@ using LocalResidual = Eigen::Matrix<double, R, 1>;
 template <int R, int B>
 using LocalResidualJacobian = Eigen::Matrix<double, R, 3 * B>;
 
+template <class T>
+concept Term = requires(const T& t, const State& q, LocalGradient<T::kBlocks>* g,
+                        LocalHessian<T::kBlocks>* H) {
+  { T::kName } -> std::convertible_to<const char*>;
+  { t.offsets } -> std::convertible_to<std::array<int, T::kBlocks>>;
+  { t.evaluate(q, g, H) } -> std::same_as<double>;
+};
+
+template <class T>
+concept HasResidual = Term<T> && requires(const T& t, const State& q, typename T::Residual& r,
+                                          typename T::ResidualJacobian* J) {
+  { T::kResiduals } -> std::convertible_to<int>;
+  t.residual(q, r, J);
+};
+
+template <class T>
+concept BeginsStep = requires(T& t, const State& previous, const Step& previous_step) {
+  t.begin_step(previous, previous_step);
+};
+
+template <class T>
+concept Scheduled = requires(T& t, int frame) { t.begin_frame(frame); };
+
+template <class T>
+concept LoadScaled = requires(T& t) { { t.scale } -> std::same_as<double&>; };
+
+template <class T>
+concept EnergyOfState = requires { requires T::kEnergyOfState; };
+
+template <class T>
+concept ReadsPreviousStep =
+    requires(const T& t, const State& q, const State& previous, const Step& previous_step,
+             const LocalGradient<T::kBlocks>& z, Eigen::VectorXd& a, Eigen::VectorXd& da) {
+      t.add_step_adjoint(q, previous, previous_step, z, a, da);
+    };
+
+template <class T>
+concept PointLoad = requires(const T& t, int& point, Vector3& force) {
+  { t.point_load(point, force) } -> std::same_as<bool>;
+};
+
+template <class T>
+concept HasParameters = requires(const T& t, const State& q, int frame,
+                                 const LocalGradient<T::kBlocks>& z, Eigen::VectorXd& dgamma) {
+  t.add_parameter_adjoint(q, frame, z, dgamma);
+};
+
+// add_parameter_adjoint of a term whose value is proportional to its scalar `stiffness` k
+// (Ψ_t = k φ(q), so C = k ∇φ): ∂C/∂k = ∇φ, the term's gradient at k = 1. Adds nothing when
+// k is not a parameter (stiffness_slot < 0).
+template <class T>
+void add_stiffness_adjoint(const T& term, const State& q, const LocalGradient<T::kBlocks>& z,
+                           Eigen::VectorXd& dgamma) {
+  if (term.stiffness_slot < 0) return;
+  T unit = term;
+  unit.stiffness = 1.0;
+  LocalGradient<T::kBlocks> g;
+  unit.evaluate(q, &g, nullptr);
+  dgamma(term.stiffness_slot) += g.dot(z);
+}
 // A term's quantity that may change from frame to frame and may be an optimisation parameter
 // (a force, a torque, a cable tension, a rest Darboux vector; paper §5, docs/design.md §5.1, §8).
 //   * schedule: its value during step k (the step that produces q_k, k ≥ 1) is schedule[k−1];

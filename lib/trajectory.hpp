@@ -43,14 +43,4 @@ struct Trajectory {
   }
 };
 
-// Index of point i and rotation j in a whole-state tangent vector (3 entries per point, then
-// 3 per rotation), the layout of the adjoint vectors a_k, Δa_k.
-inline int tangent_point(int i) { return 3 * i; }
-inline int tangent_rotation(const State& q, int j) {
-  return 3 * (static_cast<int>(q.points.size()) + j);
-}
-inline int tangent_size(const State& q) {
-  return 3 * static_cast<int>(q.points.size() + q.rotations.size());
-}
-
 }  // namespace liedyn

@@ -12,6 +12,7 @@
 #include <limits>
 #include <mutex>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 #include "../lib/so3.hpp"
@@ -504,50 +505,44 @@ class CeresStepSolver final : public StepSolver {
     }
 
     // Loads on a point with translational inertia fold into its residual (dynamics); the
-    // others become offset-root residuals.
+    // other terms without a residual form (linear loads) become offset-root residuals.
+    const std::vector<TranslationalInertia>& inertia = P.terms<TranslationalInertia>();
     std::vector<int> inertia_of_point(q.points.size(), -1);
-    for (std::size_t t = 0; t < P.translational_inertia.size(); ++t) {
-      inertia_of_point[P.translational_inertia[t].point] = static_cast<int>(t);
+    for (std::size_t t = 0; t < inertia.size(); ++t) {
+      inertia_of_point[inertia[t].point] = static_cast<int>(t);
     }
-    loads_.assign(P.translational_inertia.size(), Vector3::Zero());
-    std::vector<const Gravity*> folded_gravity;
-    std::vector<const ConstantForce*> folded_forces;
-    for (const Gravity& g : P.gravity) {
-      if (g.offsets[0] >= 0 && inertia_of_point[g.point] >= 0) {
-        folded_gravity.push_back(&g);
-      } else {
-        add_offset_root(g, "gravity (offset root)");
-      }
-    }
-    for (const ConstantForce& f : P.forces) {
-      if (f.at.rotation < 0 && f.at.point >= 0 && f.offsets[0] >= 0 &&
-          inertia_of_point[f.at.point] >= 0) {
-        folded_forces.push_back(&f);
-      } else {
-        add_offset_root(f, "force (offset root)");
-      }
-    }
-    for (const ConstantTorque& t : P.torques) add_offset_root(t, "torque (offset root)");
-    for (const RegionForce& t : P.region_forces) add_offset_root(t, "region force (offset root)");
-    for (const CableSegment& c : P.cables) add_offset_root(c, "cable (offset root)");
-    refresh_.push_back([this, folded_gravity, folded_forces, inertia_of_point](const State&) {
+    loads_.assign(inertia.size(), Vector3::Zero());  // no reallocation below: forms keep &loads_[t]
+    refresh_.push_back([this](const State&) {
       for (Vector3& l : loads_) l.setZero();
-      for (const Gravity* g : folded_gravity) loads_[inertia_of_point[g->point]] += g->scale * g->weight;
-      for (const ConstantForce* f : folded_forces) {
-        loads_[inertia_of_point[f->at.point]] += f->scale * f->force;
+    });
+    P.for_each_term_vector([&](const auto& terms) {
+      using T = typename std::decay_t<decltype(terms)>::value_type;
+      if constexpr (std::is_same_v<T, TranslationalInertia>) {
+        for (std::size_t t = 0; t < terms.size(); ++t) {
+          add(FoldedInertiaForm{&terms[t], &loads_[t]}, T::kName);
+        }
+      } else if constexpr (HasResidual<T>) {
+        for (const T& t : terms) add(TermForm<T>{&t}, T::kName);
+      } else {
+        for (const T& t : terms) {
+          if constexpr (PointLoad<T>) {
+            int point = -1;
+            Vector3 force;
+            if (t.offsets[0] >= 0 && t.point_load(point, force) && inertia_of_point[point] >= 0) {
+              const int k = inertia_of_point[point];
+              refresh_.push_back([this, &t, k](const State&) {
+                int p = -1;
+                Vector3 f;
+                t.point_load(p, f);
+                loads_[k] += f;
+              });
+              continue;
+            }
+          }
+          add_offset_root(t);
+        }
       }
     });
-
-    for (std::size_t t = 0; t < P.translational_inertia.size(); ++t) {
-      add(FoldedInertiaForm{&P.translational_inertia[t], &loads_[t]}, "translational_inertia");
-    }
-    for (const auto& t : P.rotational_inertia) add(TermForm<RotationalInertia>{&t}, "rotational_inertia");
-    for (const auto& t : P.springs) add(TermForm<Spring>{&t}, "spring");
-    for (const auto& t : P.rod_stretch) add(TermForm<RodStretch>{&t}, "rod_stretch");
-    for (const auto& t : P.rod_shear) add(TermForm<RodShear>{&t}, "rod_shear");
-    for (const auto& t : P.rod_bend_twist) add(TermForm<RodBendTwist>{&t}, "rod_bend_twist");
-    for (const auto& t : P.contacts) add(TermForm<Contact>{&t}, "contact");
-    for (const auto& t : P.friction) add(TermForm<Friction>{&t}, "friction");
 
     ceres::Solver::Options& o = solver_options_;
     const bool dense = options_.ceres.linear_solver == "auto" ? c.dofs <= kDenseLimit
@@ -574,10 +569,11 @@ class CeresStepSolver final : public StepSolver {
   }
 
   template <class Term>
-  void add_offset_root(const Term& term, const char* label) {
+  void add_offset_root(const Term& term) {
+    static const std::string label = std::string(Term::kName) + " (offset root)";
     offset_roots_.push_back(0.0);
     double* c = &offset_roots_.back();
-    add(OffsetRootForm<Term>{&term, c}, label);
+    add(OffsetRootForm<Term>{&term, c}, label.c_str());
     refresh_.push_back([&term, c](const State& q) {
       LocalGradient<Term::kBlocks> g;
       const double v = term.evaluate(q, &g, nullptr);

@@ -120,7 +120,7 @@ double Simulator::potential_energy() const {
 double Simulator::max_penetration() const {
   double deepest = 0.0;
   for (const auto& s : solvers_) {
-    for (const Contact& c : s->component().potential.contacts) {
+    for (const Contact& c : s->component().potential.terms<Contact>()) {
       deepest = std::max(deepest, c.penetration(state_));
     }
   }

@@ -150,10 +150,10 @@ StepReport StepSolver::solve(State& q) {
       }
       return -1;
     };
-    for (const TranslationalInertia& t : c.potential.translational_inertia) {
+    for (const TranslationalInertia& t : c.potential.terms<TranslationalInertia>()) {
       inertia_point_.push_back(block_of(c.points, t.point));
     }
-    for (const RotationalInertia& t : c.potential.rotational_inertia) {
+    for (const RotationalInertia& t : c.potential.terms<RotationalInertia>()) {
       inertia_rotation_.push_back(block_of(c.rotations, t.rotation));
     }
     sized_ = true;
@@ -192,20 +192,22 @@ const char* StepSolver::non_finite_value(const StepReport& report, const State& 
   if (!has_returned_) return nullptr;
   double kinetic = 0.0;
   const IncrementalPotential& P = c.potential;
-  for (std::size_t t = 0; t < P.translational_inertia.size(); ++t) {
+  const auto& translational = P.terms<TranslationalInertia>();
+  const auto& rotational = P.terms<RotationalInertia>();
+  for (std::size_t t = 0; t < translational.size(); ++t) {
     const int i = inertia_point_[t];
     if (i < 0) continue;
     const Vector3 dx = q.points[c.points[i].index] - returned_.point(i);
-    kinetic += 0.5 * P.translational_inertia[t].mass_over_h2 * dx.squaredNorm();
+    kinetic += 0.5 * translational[t].mass_over_h2 * dx.squaredNorm();
   }
-  for (std::size_t t = 0; t < P.rotational_inertia.size(); ++t) {
+  for (std::size_t t = 0; t < rotational.size(); ++t) {
     const int i = inertia_rotation_[t];
     if (i < 0) continue;
     const Matrix3& R = q.rotations[c.rotations[i].index];
     // Body-frame rotation of the step: θ_b = log(Rₚᵀ R), and I_b/h² = ½ tr(J/h²) 1 − J/h²
     // from J = ½ tr(I_b) 1 − I_b (lib/inertia.hpp).
     const Vector3 theta = so3::log(returned_.rotation(i).transpose() * R);
-    const Matrix3& J = P.rotational_inertia[t].J_over_h2;
+    const Matrix3& J = rotational[t].J_over_h2;
     const Matrix3 I = 0.5 * J.trace() * Matrix3::Identity() - J;
     kinetic += 0.5 * theta.dot(I * theta);
   }

@@ -119,7 +119,7 @@ BENCHMARK_TEMPLATE(BM_Assemble, heavy_top)->Name("BM_Assemble_HeavyTop");
 // paper's 233 ns anchor refers to.
 void BM_RotationalInertiaTerm(benchmark::State& state) {
   OneBodyProblem p(butterfly_bolt());
-  const liedyn::RotationalInertia& term = p.component.potential.rotational_inertia.at(0);
+  const liedyn::RotationalInertia& term = p.component.potential.terms<liedyn::RotationalInertia>().at(0);
   liedyn::LocalGradient<1> g;
   liedyn::LocalHessian<1> H;
   for (auto _ : state) {

@@ -770,15 +770,15 @@ Eigen::VectorXd component_gradient(const IncrementalPotential& p, const State& q
 // torques s|τ|, and for every other term its local gradient.
 double gradient_scale(const IncrementalPotential& p, const State& q) {
   double s = 0.0;
-  for (const TranslationalInertia& t : p.translational_inertia) {
+  for (const TranslationalInertia& t : p.terms<TranslationalInertia>()) {
     s = std::max(s, t.mass_over_h2 * (q.points[static_cast<size_t>(t.point)].cwiseAbs().maxCoeff() +
                                       t.x_tilde.cwiseAbs().maxCoeff()));
   }
-  for (const RotationalInertia& t : p.rotational_inertia) {
+  for (const RotationalInertia& t : p.terms<RotationalInertia>()) {
     s = std::max(s, t.J_over_h2.norm() * std::max(1.0, t.R_tilde.norm()));
   }
-  for (const ConstantTorque& t : p.torques) s = std::max(s, 2.0 * std::abs(t.scale) * t.torque.norm());
-  for (const RodBendTwist& t : p.rod_bend_twist) {
+  for (const ConstantTorque& t : p.terms<ConstantTorque>()) s = std::max(s, 2.0 * std::abs(t.scale) * t.torque.norm());
+  for (const RodBendTwist& t : p.terms<RodBendTwist>()) {
     const Vector3 omega = darboux_vector(q.rotations[static_cast<size_t>(t.edge0)],
                                          q.rotations[static_cast<size_t>(t.edge1)], t.rest_length);
     s = std::max(s, 2.0 * t.stiffness.cwiseAbs().maxCoeff() * (omega.norm() + t.rest_darboux.norm()));
@@ -790,12 +790,12 @@ double gradient_scale(const IncrementalPotential& p, const State& q) {
       s = std::max(s, g.cwiseAbs().maxCoeff());
     }
   };
-  local(p.gravity);
-  local(p.forces);
-  local(p.springs);
-  local(p.rod_stretch);
-  local(p.rod_shear);
-  local(p.cables);
+  local(p.terms<Gravity>());
+  local(p.terms<ConstantForce>());
+  local(p.terms<Spring>());
+  local(p.terms<RodStretch>());
+  local(p.terms<RodShear>());
+  local(p.terms<CableSegment>());
   return s;
 }
 

@@ -223,7 +223,7 @@ TEST(Backends, CeresFailureSurfaces) {
   const std::unique_ptr<StepSolver> solver = make_step_solver(std::move(components[0]), options);
   State q = model.initial_state();
   solver->component().potential.begin_step(q, model.initial_step());
-  solver->component().potential.translational_inertia[0].x_tilde.x() = std::nan("");
+  solver->component().potential.terms<TranslationalInertia>()[0].x_tilde.x() = std::nan("");
   const State entry = q;
   const StepReport r = solver->solve(q);
   EXPECT_FALSE(r.state_updated()) << to_string(r.status);

@@ -274,7 +274,7 @@ TEST(IpoptStep, NonFinitePotentialFailsWithoutMovingTheState) {
     nan_load.offsets = {s.component.points.front().offset};
     nan_load.point = s.component.points.front().index;
     nan_load.weight = Vector3(std::numeric_limits<double>::quiet_NaN(), 0.0, 0.0);
-    s.component.potential.gravity.push_back(nan_load);
+    s.component.potential.terms<Gravity>().push_back(nan_load);
     const State entry = s.q;
     auto solver = make_ipopt_step_solver(std::move(s.component), ipopt_options(rotation));
     const StepReport report = solver->solve(s.q);
@@ -297,7 +297,7 @@ TEST(IpoptStep, IpoptErrorIsSolverFailedAndNamesTheStatus) {
     huge.offsets = {s.component.points.front().offset};
     huge.point = s.component.points.front().index;
     huge.weight = Vector3(1e300, 0.0, 0.0);
-    s.component.potential.gravity.push_back(huge);
+    s.component.potential.terms<Gravity>().push_back(huge);
     const State entry = s.q;
     auto solver = make_ipopt_step_solver(std::move(s.component), ipopt_options(rotation));
     const StepReport report = solver->solve(s.q);

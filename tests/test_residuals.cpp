@@ -484,7 +484,7 @@ TEST(PsdSqrtResidual, BuildComponentsSetsTheSquareRootBesideJOverH2) {
   ASSERT_NO_THROW(model.validate());
   int checked = 0;
   for (const Component& c : build_components(model)) {
-    for (const RotationalInertia& t : c.potential.rotational_inertia) {
+    for (const RotationalInertia& t : c.potential.terms<RotationalInertia>()) {
       EXPECT_EQ(t.sqrt_J_over_h, t.sqrt_J_over_h.transpose());
       EXPECT_LE((t.sqrt_J_over_h * t.sqrt_J_over_h - t.J_over_h2).norm(),
                 16 * kEps * t.J_over_h2.norm());

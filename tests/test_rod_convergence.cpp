@@ -272,12 +272,12 @@ TEST(RodConvergence, CantileverFirstBendingFrequency) {
     model.validate();
     const Component component = build_rod_component(model, 0);
     IncrementalPotential elastic = component.potential, inertia = component.potential;
-    elastic.translational_inertia.clear();
-    elastic.rotational_inertia.clear();
-    inertia.rod_stretch.clear();
-    inertia.rod_shear.clear();
-    inertia.rod_bend_twist.clear();
-    ASSERT_TRUE(inertia.forces.empty() && inertia.gravity.empty());
+    elastic.terms<TranslationalInertia>().clear();
+    elastic.terms<RotationalInertia>().clear();
+    inertia.terms<RodStretch>().clear();
+    inertia.terms<RodShear>().clear();
+    inertia.terms<RodBendTwist>().clear();
+    ASSERT_TRUE(inertia.terms<ConstantForce>().empty() && inertia.terms<Gravity>().empty());
     const State q = model.initial_state();
     inertia.begin_step(q, model.initial_step());
     Eigen::VectorXd g(component.dofs);

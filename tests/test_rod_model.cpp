@@ -101,9 +101,9 @@ TEST(RodModel, ClampedDofsAreNotInTheComponent) {
   const std::vector<Component> components = build_components(model);
   ASSERT_EQ(components.size(), 1u);
   EXPECT_EQ(components[0].dofs, 3 * (6 - 2) + 3 * (5 - 1));
-  EXPECT_EQ(components[0].potential.rod_stretch.size(), 5u);
-  EXPECT_EQ(components[0].potential.rod_bend_twist.size(), 4u);
-  EXPECT_EQ(components[0].potential.translational_inertia.size(), 4u);
+  EXPECT_EQ(components[0].potential.terms<RodStretch>().size(), 5u);
+  EXPECT_EQ(components[0].potential.terms<RodBendTwist>().size(), 4u);
+  EXPECT_EQ(components[0].potential.terms<TranslationalInertia>().size(), 4u);
 }
 
 // Simulates a clamped rod under a constant load until backward Euler's dissipation has

@@ -539,8 +539,8 @@ TEST(IncrementalPotential, AssembledDerivativesMatchFiniteDifferences) {
           ASSERT_EQ(components.size(), 1u);
           Component& c = components[0];
           ASSERT_EQ(c.dofs, 18);
-          ASSERT_EQ(c.potential.springs.size(), 4u);
-          ASSERT_EQ(c.potential.torques.size(), 2u);
+          ASSERT_EQ(c.potential.terms<Spring>().size(), 4u);
+          ASSERT_EQ(c.potential.terms<ConstantTorque>().size(), 2u);
 
           // Either R, or R_{k−1} and ΔR_{k−1} (hence R̃ and the torques' reference), take
           // every angle of the list across bodies and runs; the others are placed 0.3 rad
@@ -598,6 +598,52 @@ TEST(IncrementalPotential, SeparateComponentsEachMatchFiniteDifferences) {
     c.potential.begin_step(previous, step);
     EXPECT_TRUE(check_potential(c.potential, q, component_dofs(c)));
   }
+}
+
+// The capabilities of every term type (lib/term.hpp), as the consumers detect them: losing
+// one silently would drop a term from the reported energy, from Ceres's residuals, from load
+// stepping or from the adjoint.
+TEST(TermCapabilities, EveryTermTypeHasExactlyItsCapabilities) {
+  static_assert(HasResidual<TranslationalInertia> && HasResidual<RotationalInertia> &&
+                HasResidual<Spring> && HasResidual<RodStretch> && HasResidual<RodShear> &&
+                HasResidual<RodBendTwist> && HasResidual<Contact> && HasResidual<Friction>);
+  static_assert(!HasResidual<Gravity> && !HasResidual<ConstantForce> &&
+                !HasResidual<ConstantTorque> && !HasResidual<RegionForce> &&
+                !HasResidual<CableSegment>);
+  static_assert(EnergyOfState<Gravity> && EnergyOfState<ConstantForce> && EnergyOfState<Spring> &&
+                EnergyOfState<RodStretch> && EnergyOfState<RodShear> &&
+                EnergyOfState<RodBendTwist> && EnergyOfState<Contact>);
+  static_assert(!EnergyOfState<TranslationalInertia> && !EnergyOfState<RotationalInertia> &&
+                !EnergyOfState<ConstantTorque> && !EnergyOfState<RegionForce> &&
+                !EnergyOfState<CableSegment> && !EnergyOfState<Friction>);
+  static_assert(LoadScaled<Gravity> && LoadScaled<ConstantForce> && LoadScaled<ConstantTorque> &&
+                LoadScaled<RegionForce> && !LoadScaled<Spring> && !LoadScaled<CableSegment>);
+  static_assert(BeginsStep<TranslationalInertia> && BeginsStep<RotationalInertia> &&
+                BeginsStep<ConstantTorque> && BeginsStep<RegionForce> && BeginsStep<Friction> &&
+                !BeginsStep<Spring> && !BeginsStep<Contact>);
+  static_assert(Scheduled<ConstantForce> && Scheduled<ConstantTorque> &&
+                Scheduled<RodBendTwist> && Scheduled<CableSegment> && !Scheduled<Spring>);
+  static_assert(ReadsPreviousStep<TranslationalInertia> && ReadsPreviousStep<RotationalInertia> &&
+                ReadsPreviousStep<ConstantTorque> && ReadsPreviousStep<Friction> &&
+                !ReadsPreviousStep<RegionForce> && !ReadsPreviousStep<Contact>);
+  static_assert(HasParameters<ConstantForce> && HasParameters<ConstantTorque> &&
+                HasParameters<RodBendTwist> && HasParameters<CableSegment> &&
+                HasParameters<Spring> && HasParameters<RodStretch> && HasParameters<RodShear> &&
+                !HasParameters<Gravity> && !HasParameters<Contact> && !HasParameters<Friction>);
+  static_assert(PointLoad<Gravity> && PointLoad<ConstantForce> && !PointLoad<ConstantTorque>);
+  // A force with a lever arm is not a point load; one on a bare point is.
+  ConstantForce on_body;
+  on_body.at = {0, 0, Vector3(1, 0, 0)};
+  on_body.force = Vector3(0, 0, -2);
+  int point = -1;
+  Vector3 force;
+  EXPECT_FALSE(on_body.point_load(point, force));
+  ConstantForce on_node = on_body;
+  on_node.at.rotation = -1;
+  on_node.scale = 0.5;
+  EXPECT_TRUE(on_node.point_load(point, force));
+  EXPECT_EQ(point, 0);
+  EXPECT_EQ(force, Vector3(0, 0, -1));
 }
 
 }  // namespace
