@@ -88,10 +88,8 @@ std::vector<Component> build_components(const Model& model) {
   const int n = static_cast<int>(model.bodies.size());
   std::vector<int> parent(n);
   std::iota(parent.begin(), parent.end(), 0);
-  for (const SpringSpec& s : model.springs) {
-    if (s.a.body >= 0 && s.b.body >= 0) {
-      parent[find_root(parent, s.a.body)] = find_root(parent, s.b.body);
-    }
+  for (const auto& [a, b] : model.body_couplings()) {
+    if (a >= 0 && b >= 0) parent[find_root(parent, a)] = find_root(parent, b);
   }
 
   std::vector<Component> components;
@@ -178,6 +176,36 @@ std::vector<Component> build_components(const Model& model) {
     term.stiffness_slot = s.stiffness_slot;
     const int body = s.a.body >= 0 ? s.a.body : s.b.body;
     components[component_of[body]].potential.add(term);
+  }
+  for (const JointSpec& j : model.joints) {
+    IncrementalPotential& p = components[component_of[j.a.body]].potential;
+    const auto oa = offsets_of(j.a), ob = offsets_of(j.b);
+    Spring translation;  // ½‖p_b − p_a‖²/compliance: a zero-rest-length spring
+    translation.offsets = {oa[0], oa[1], ob[0], ob[1]};
+    translation.a = attach(j.a);
+    translation.b = attach(j.b);
+    translation.stiffness = 1.0 / j.compliance;
+    p.add(translation);
+    const int rotation_b = j.b.body;  // −1: the world
+    if (j.type == JointSpec::Type::kHinge) {
+      JointAlignment hinge;
+      hinge.offsets = {oa[1], ob[1]};
+      hinge.rotation_a = j.a.body;
+      hinge.rotation_b = rotation_b;
+      hinge.axis_a = j.axis_a;
+      hinge.axis_b = j.axis_b;
+      hinge.stiffness = 1.0 / j.compliance_rotation;
+      p.add(hinge);
+    } else if (j.type == JointSpec::Type::kWeld) {
+      JointWeld weld;
+      weld.offsets = {oa[1], ob[1]};
+      weld.rotation_a = j.a.body;
+      weld.rotation_b = rotation_b;
+      weld.frame_a = j.frame_a;
+      weld.frame_b = j.frame_b;
+      weld.stiffness = 1.0 / j.compliance_rotation;
+      p.add(weld);
+    }
   }
   const std::vector<std::shared_ptr<const Collider>> colliders = shared_colliders(model);
   for (int i = 0; i < n; ++i) {

@@ -21,6 +21,7 @@
 #include "contact.hpp"
 #include "friction.hpp"
 #include "inertia.hpp"
+#include "joint_terms.hpp"
 #include "loads.hpp"
 #include "model.hpp"
 #include "rod_terms.hpp"
@@ -46,7 +47,8 @@ class IncrementalPotential {
   // terms' capabilities; a new term type is added here and in the builder that creates it.
   using TermTypes = std::tuple<TranslationalInertia, RotationalInertia, Gravity, ConstantForce,
                                ConstantTorque, RegionForce, Spring, RodStretch, RodShear,
-                               RodBendTwist, CableSegment, Contact, Friction>;
+                               RodBendTwist, CableSegment, JointAlignment, JointWeld, Contact,
+                               Friction>;
 
   // The terms of type T (one contiguous vector per type).
   template <class T>

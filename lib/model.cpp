@@ -138,6 +138,38 @@ void Model::validate() const {
       throw ModelError(index_field("springs", i, "rest_length"), "must be finite and ≥ 0");
     }
   }
+  for (std::size_t i = 0; i < joints.size(); ++i) {
+    const JointSpec& j = joints[i];
+    const auto field = [&](const std::string& member) { return index_field("joints", i, member); };
+    require_body(j.a.body, bodies.size(), field("a.body"), false);
+    require_body(j.b.body, bodies.size(), field("b.body"), true);
+    if (j.a.body == j.b.body) {
+      throw ModelError(field("b.body"), "joins a body to itself (the joint would do nothing)");
+    }
+    require_finite(j.a.point, field("a.point"));
+    require_finite(j.b.point, field("b.point"));
+    // 1/compliance is the stiffness of the terms: it must be a finite positive number too.
+    for (const auto& [value, member] : {std::pair{j.compliance, "compliance"},
+                                        std::pair{j.compliance_rotation, "compliance_rotation"}}) {
+      if (!(std::isfinite(value) && value > 0.0 && std::isfinite(1.0 / value))) {
+        throw ModelError(field(member),
+                         "must be a finite number > 0 whose inverse is finite (exact joints, "
+                         "compliance 0, are not implemented yet)");
+      }
+    }
+    if (j.type == JointSpec::Type::kHinge) {
+      for (const auto& [axis, member] : {std::pair{j.axis_a, "a.axis"}, std::pair{j.axis_b, "b.axis"}}) {
+        if (!(std::abs(axis.norm() - 1.0) <= 1e-12)) throw ModelError(field(member), "must be a unit vector");
+      }
+    }
+    if (j.type == JointSpec::Type::kWeld) {
+      for (const auto& [frame, member] : {std::pair{j.frame_a, "a"}, std::pair{j.frame_b, "b"}}) {
+        if (!((frame.transpose() * frame - Matrix3::Identity()).norm() <= 1e-9 && frame.determinant() > 0.0)) {
+          throw ModelError(field(member), "the weld frame must be a rotation");
+        }
+      }
+    }
+  }
   for (std::size_t i = 0; i < forces.size(); ++i) {
     require_body(forces[i].at.body, bodies.size(), index_field("forces", i, "body"), false);
     require_finite(forces[i].at.point, index_field("forces", i, "point"));
@@ -185,6 +217,13 @@ void Model::validate_motion_speeds() const {
   }
 }
 
+std::vector<std::pair<int, int>> Model::body_couplings() const {
+  std::vector<std::pair<int, int>> out;
+  for (const SpringSpec& s : springs) out.emplace_back(s.a.body, s.b.body);
+  for (const JointSpec& j : joints) out.emplace_back(j.a.body, j.b.body);
+  return out;
+}
+
 void Model::validate_anchoring() const {
   if (load_steps < 1) throw ModelError("frames", "static mode needs at least one load step");
   for (std::size_t r = 0; r < rods.size(); ++r) {
@@ -201,17 +240,19 @@ void Model::validate_anchoring() const {
     while (parent[i] != i) i = parent[i] = parent[parent[i]];
     return i;
   };
-  for (const SpringSpec& s : springs) {
-    if (s.a.body >= 0 && s.b.body >= 0) parent[root(s.a.body)] = root(s.b.body);
+  const std::vector<std::pair<int, int>> couplings = body_couplings();
+  for (const auto& [a, b] : couplings) {
+    if (a >= 0 && b >= 0) parent[root(a)] = root(b);
   }
   std::vector<bool> anchored(bodies.size(), false);
-  for (const SpringSpec& s : springs) {
-    if (s.a.body < 0 || s.b.body < 0) anchored[root(std::max(s.a.body, s.b.body))] = true;
+  for (const auto& [a, b] : couplings) {
+    if (a < 0 || b < 0) anchored[root(std::max(a, b))] = true;
   }
   for (std::size_t i = 0; i < bodies.size(); ++i) {
     if (!anchored[root(static_cast<int>(i))]) {
       throw ModelError(index_field("bodies", i, ""),
-                       "static mode needs every body connected by springs to a world anchor");
+                       "static mode needs every body connected by springs or joints to a world "
+                       "anchor");
     }
   }
 }

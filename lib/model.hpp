@@ -6,6 +6,7 @@
 
 #include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "contact.hpp"
@@ -54,6 +55,24 @@ struct SpringSpec {
   int stiffness_slot = -1;    // index in an optimisation's parameter vector γ, or −1
 };
 
+// An elastic joint between a body and another body or the world (docs/scene-format.md#joints):
+//   translation  ½ ‖p_b − p_a‖² / compliance   (the two points p = x + R p̄ coincide at rest),
+//   rotation     hinge: the axes R_a â and R_b b̂ aligned, k (1 − cos θ), k = 1/compliance_rotation;
+//                weld: the initial relative orientation kept, ½ k ‖log(R_a A Bᵀ R_bᵀ)‖²;
+//                ball: none.
+// Terms: lib/spring.hpp (translation), lib/joint_terms.hpp (rotation).
+struct JointSpec {
+  enum class Type { kBall, kHinge, kWeld };
+  Type type = Type::kBall;
+  BodyPoint a, b;                             // body −1: the world (point in world coordinates)
+  Vector3 axis_a = Vector3::UnitZ();          // hinge: unit, in a's body (or world) coordinates
+  Vector3 axis_b = Vector3::UnitZ();          // hinge: unit, in b's body (or world) coordinates
+  Matrix3 frame_a = Matrix3::Identity();      // weld: joint frames in body coordinates
+  Matrix3 frame_b = Matrix3::Identity();
+  double compliance = 0.0;                    // m/N, > 0 (exact joints are not implemented)
+  double compliance_rotation = 0.0;           // rad/(N·m), > 0
+};
+
 struct ForceSpec {
   BodyPoint at;               // body ≥ 0 required
   Vector3 force = Vector3::Zero();  // world, N
@@ -71,6 +90,7 @@ struct Model {
   Vector3 gravity = Vector3::Zero();
   std::vector<RigidBody> bodies;
   std::vector<SpringSpec> springs;
+  std::vector<JointSpec> joints;
   std::vector<ForceSpec> forces;
   std::vector<TorqueSpec> torques;
   std::vector<RodSpec> rods;
@@ -84,6 +104,10 @@ struct Model {
   // node, a spring chain to a world anchor): free motion has no equilibrium.
   bool static_equilibrium = false;
   int load_steps = 1;
+
+  // The bodies that springs and joints couple, as (a, b) pairs (−1: the world): what ties
+  // bodies into one component, and what anchors them in static mode.
+  std::vector<std::pair<int, int>> body_couplings() const;
 
   // Index in State::points of a rod's node, and in State::rotations of a rod's edge (rod =
   // rods.size() with node or edge 0: one past the last).

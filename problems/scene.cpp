@@ -82,6 +82,100 @@ void claim_name(const ObjectReader& r, const std::string& name, const std::strin
   if (!inserted) r.fail(field, "repeats the name \"" + name + "\" of " + it->second);
 }
 
+// A unit vector from `key` (any finite non-zero length, scaled by its largest component first
+// so that huge or tiny components keep their direction).
+Vector3 unit_vector(ObjectReader& r, const std::string& key) {
+  const Vector3 v = r.vector<3>(key);
+  const double largest = v.cwiseAbs().maxCoeff();
+  if (!(largest > 0.0)) r.fail(r.field(key), "must be a non-zero vector");
+  return (v / largest).normalized();
+}
+
+// A joint (docs/scene-format.md#joints). Its end b defaults to the world at a's point, b's
+// point to where a's point is at the start, b's hinge axis to a's axis at the start, and a
+// weld keeps the initial relative orientation: the joint starts at rest.
+JointSpec parse_joint(const json& value, const std::string& path, const std::string& source,
+                      const Model& model, const std::map<std::string, int>& names,
+                      const std::set<std::string>& rod_names) {
+  ObjectReader j(value, path, source,
+                 {"name", "type", "a", "b", "compliance", "compliance_rotation", "limits", "motor"});
+  if (j.has("name")) check_printable_name(j, j.string("name"), j.field("name"));
+  JointSpec spec;
+  const std::string type = j.string("type");
+  if (type == "ball") {
+    spec.type = JointSpec::Type::kBall;
+  } else if (type == "hinge") {
+    spec.type = JointSpec::Type::kHinge;
+  } else if (type == "weld") {
+    spec.type = JointSpec::Type::kWeld;
+  } else if (type == "slider") {
+    j.fail(j.field("type"), "\"slider\" joints are not implemented yet (ball, hinge, weld are)");
+  } else {
+    j.fail(j.field("type"), "unknown joint type \"" + type + "\" (expected \"ball\", \"hinge\" or \"weld\")");
+  }
+  for (const char* key : {"limits", "motor"}) {
+    if (j.has(key)) j.fail(j.field(key), "joint limits and motors are not implemented yet");
+  }
+  spec.compliance = j.number("compliance");
+  spec.compliance_rotation = j.number("compliance_rotation", spec.compliance);
+  if (spec.compliance == 0.0) {
+    j.fail(j.field("compliance"), "exact joints (compliance 0) are not implemented yet: give an "
+                                  "elastic joint's compliance > 0 (m/N)");
+  }
+  const auto rotation_of = [&](int body) -> Matrix3 {
+    return body < 0 ? Matrix3::Identity() : model.bodies[body].orientation;
+  };
+  const auto world_point = [&](const BodyPoint& p) -> Vector3 {
+    if (p.body < 0) return p.point;
+    return model.bodies[p.body].position + model.bodies[p.body].orientation * p.point;
+  };
+  const bool hinge = spec.type == JointSpec::Type::kHinge;
+  // An end: {"body": name, "point", "axis"} or {"world": point, "axis"}; rods: not yet.
+  const auto parse_end = [&](const char* key, bool is_b) {
+    ObjectReader e(j.get(key), j.field(key), source, {"body", "point", "axis", "world", "rod", "node", "edge"});
+    if (e.has("rod")) e.fail(e.field("rod"), "joints to rods are not implemented yet (bodies and the world only)");
+    BodyPoint end;
+    if (e.has("world")) {
+      if (!is_b) e.fail(e.field("world"), "end a must be a body (put the world at end b)");
+      if (e.has("body")) e.fail(e.field("world"), "give \"body\" or \"world\", not both");
+      end.point = e.vector<3>("world");
+    } else {
+      end.body = body_index(e, "body", names, rod_names, false);
+      if (e.has("point")) {
+        end.point = e.vector<3>("point");
+      } else if (is_b) {  // where a's point is at the start, in b's coordinates
+        end.point = rotation_of(end.body).transpose() *
+                    (world_point(spec.a) - model.bodies[end.body].position);
+      }
+    }
+    if (hinge) {
+      if (e.has("axis")) {
+        (is_b ? spec.axis_b : spec.axis_a) = unit_vector(e, "axis");
+      } else if (!is_b) {
+        e.fail(e.field("axis"), "a hinge needs its axis on end a (body coordinates)");
+      } else {  // a's axis at the start, in b's coordinates
+        spec.axis_b = rotation_of(end.body).transpose() * rotation_of(spec.a.body) * spec.axis_a;
+      }
+    } else if (e.has("axis")) {
+      e.fail(e.field("axis"), "only a hinge has an axis");
+    }
+    e.finish();
+    return end;
+  };
+  spec.a = parse_end("a", false);
+  if (j.has("b")) {
+    spec.b = parse_end("b", true);
+  } else {
+    spec.b.point = world_point(spec.a);  // the world, where a's point is at the start
+    if (hinge) spec.axis_b = rotation_of(spec.a.body) * spec.axis_a;
+  }
+  // Weld: F_a = R_a, F_b = R_b R_b0ᵀ R_a0, so that E = F_a F_bᵀ = I at the start.
+  spec.frame_b = rotation_of(spec.b.body).transpose() * rotation_of(spec.a.body);
+  j.finish();
+  return spec;
+}
+
+
 // Most edges a rod shape generator may produce (a typo such as 1e9 edges would otherwise
 // exhaust memory before any check).
 constexpr int kMaxGeneratedEdges = 1000000;
@@ -530,7 +624,7 @@ Scene parse(const json& root, const std::string& source) {
   scene.source = source;
   ObjectReader top(root, "", source,
                    {"description", "time_step", "frames", "gravity", "mode", "solver", "bodies",
-                    "rods", "colliders", "springs", "forces", "torques", "optimization",
+                    "rods", "colliders", "springs", "joints", "forces", "torques", "optimization",
                     "analytic"});
   scene.description = top.string("description", "");
   scene.model.time_step = top.number("time_step");
@@ -675,6 +769,13 @@ Scene parse(const json& root, const std::string& source) {
       }
       s.finish();
       scene.model.springs.push_back(spec);
+    }
+  }
+  if (top.has("joints")) {
+    const json& joints = top.array("joints");
+    for (std::size_t i = 0; i < joints.size(); ++i) {
+      scene.model.joints.push_back(
+          parse_joint(joints[i], item_path("joints", i), source, scene.model, names, rod_names));
     }
   }
   if (top.has("forces")) {

@@ -1,0 +1,98 @@
+#include "joint_terms.hpp"
+
+#include <cmath>
+
+#include "so3.hpp"
+
+namespace liedyn {
+
+namespace {
+
+// R of an end: the state's rotation, or the identity for the world.
+const Matrix3& end_rotation(const State& q, int rotation) {
+  static const Matrix3 kIdentity = Matrix3::Identity();
+  return rotation < 0 ? kIdentity : q.rotations[rotation];
+}
+
+// c(t) of H_φ = I + c hat(φ)² (header), with its series below t = 1e-3, where the closed form
+// loses digits to cancellation (1/t² against cot(t/2)/(2t)).
+double weld_curvature_coefficient(double t) {
+  if (t < 1e-3) return 1.0 / 12.0 + t * t / 720.0;
+  return 1.0 / (t * t) - 1.0 / (2.0 * t * std::tan(0.5 * t));
+}
+
+}  // namespace
+
+double JointAlignment::evaluate(const State& q, LocalGradient<2>* g, LocalHessian<2>* H) const {
+  const Vector3 a = end_rotation(q, rotation_a) * axis_a;
+  const Vector3 b = end_rotation(q, rotation_b) * axis_b;
+  const double ab = a.dot(b);
+  if (g != nullptr) {
+    const Vector3 axb = a.cross(b);
+    g->segment<3>(0) = -stiffness * axb;
+    g->segment<3>(3) = stiffness * axb;
+  }
+  if (H != nullptr) {
+    const Matrix3 diagonal = -stiffness * (0.5 * (a * b.transpose() + b * a.transpose()) -
+                                           ab * Matrix3::Identity());
+    const Matrix3 mixed = stiffness * so3::hat(a) * so3::hat(b);
+    H->block<3, 3>(0, 0) = diagonal;
+    H->block<3, 3>(3, 3) = diagonal;
+    H->block<3, 3>(0, 3) = mixed;
+    H->block<3, 3>(3, 0) = mixed.transpose();
+  }
+  // ½ k ‖a − b‖² rather than k (1 − a·b): no cancellation for nearly aligned axes.
+  return 0.5 * stiffness * (a - b).squaredNorm();
+}
+
+void JointAlignment::residual(const State& q, Residual& r, ResidualJacobian* J) const {
+  const Vector3 a = end_rotation(q, rotation_a) * axis_a;
+  const Vector3 b = end_rotation(q, rotation_b) * axis_b;
+  const double s = std::sqrt(stiffness);
+  r = s * (a - b);
+  if (J != nullptr) {
+    J->block<3, 3>(0, 0) = -s * so3::hat(a);
+    J->block<3, 3>(0, 3) = s * so3::hat(b);
+  }
+}
+
+Vector3 JointWeld::relative_rotation(const State& q, Matrix3* E) const {
+  const Matrix3 relative = end_rotation(q, rotation_a) * frame_a *
+                           (end_rotation(q, rotation_b) * frame_b).transpose();
+  if (E != nullptr) *E = relative;
+  return so3::log(relative);
+}
+
+double JointWeld::evaluate(const State& q, LocalGradient<2>* g, LocalHessian<2>* H) const {
+  Matrix3 E;
+  const Vector3 phi = relative_rotation(q, &E);
+  if (g != nullptr) {
+    g->segment<3>(0) = stiffness * phi;
+    g->segment<3>(3) = -stiffness * phi;
+  }
+  if (H != nullptr) {
+    const Matrix3 hat_phi = so3::hat(phi);
+    const Matrix3 H_phi =
+        Matrix3::Identity() + weld_curvature_coefficient(phi.norm()) * hat_phi * hat_phi;
+    const Matrix3 mixed = stiffness * (-H_phi * E + 0.5 * hat_phi * E);
+    H->block<3, 3>(0, 0) = stiffness * H_phi;
+    H->block<3, 3>(3, 3) = stiffness * H_phi;
+    H->block<3, 3>(0, 3) = mixed;
+    H->block<3, 3>(3, 0) = mixed.transpose();
+  }
+  return 0.5 * stiffness * phi.squaredNorm();
+}
+
+void JointWeld::residual(const State& q, Residual& r, ResidualJacobian* J) const {
+  Matrix3 E;
+  const Vector3 phi = relative_rotation(q, &E);
+  const double s = std::sqrt(stiffness);
+  r = s * phi;
+  if (J != nullptr) {
+    const Matrix3 J_inverse = so3::left_jacobian_inverse(phi);
+    J->block<3, 3>(0, 0) = s * J_inverse;
+    J->block<3, 3>(0, 3) = -s * J_inverse * E;
+  }
+}
+
+}  // namespace liedyn
