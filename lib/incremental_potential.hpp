@@ -169,10 +169,10 @@ struct Component {
   IncrementalPotential potential;
 };
 
-// Splits a validated model into independent components (bodies joined by springs share
-// one; each rod is one) and builds each component's terms with their scatter offsets. Body
-// order is kept; within a component each body contributes [x, θ] in that order. A rod whose
-// nodes and edges are all clamped has no DOFs and no component.
+// Splits a validated model into independent components (bodies joined by springs or joints
+// share one; each rod is one) and builds each component's terms with their scatter offsets.
+// Body order is kept; within a component each body contributes [x, θ] in that order. A rod
+// whose nodes and edges are all clamped has no DOFs and no component.
 std::vector<Component> build_components(const Model& model);
 
 // The component of rod r: lumped inertia, gravity, stretch, shear, bend–twist and node
