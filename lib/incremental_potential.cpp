@@ -76,7 +76,78 @@ void add_contact_terms(const Model& model,
   }
 }
 
-// Union–find over bodies, joined by springs between two bodies.
+// Appends `from` to `into`: its DOF blocks after into's, every term's offsets shifted by
+// into.dofs (generic over the term list: each term has its `offsets`).
+void append_component(Component& into, Component from) {
+  const int base = into.dofs;
+  for (DofBlock b : from.points) into.points.push_back({b.index, b.offset + base});
+  for (DofBlock b : from.rotations) into.rotations.push_back({b.index, b.offset + base});
+  from.potential.for_each_term_vector([&](auto& terms) {
+    for (auto& term : terms) {
+      for (int& o : term.offsets) {
+        if (o >= 0) o += base;
+      }
+      into.potential.add(std::move(term));
+    }
+  });
+  into.dofs += from.dofs;
+}
+
+// The joints' terms (JointSpec), added to the component of end a once every body and rod has
+// its place: where a point or rotation of the state is, as (component, offset), −1 if it is
+// not a DOF.
+void add_joint_terms(const Model& model, std::vector<Component>& components) {
+  if (model.joints.empty()) return;
+  std::vector<std::array<int, 2>> point_dof(model.point_count(), {-1, -1});
+  std::vector<std::array<int, 2>> rotation_dof(model.rod_rotation(static_cast<int>(model.rods.size()), 0),
+                                               {-1, -1});
+  for (int c = 0; c < static_cast<int>(components.size()); ++c) {
+    for (const DofBlock& b : components[c].points) point_dof[b.index] = {c, b.offset};
+    for (const DofBlock& b : components[c].rotations) rotation_dof[b.index] = {c, b.offset};
+  }
+  const auto body_end = [&](const BodyPoint& bp, AttachedPoint& at) -> std::array<int, 2> {
+    at = {bp.body, bp.body, bp.point};  // body −1: a world anchor
+    if (bp.body < 0) return {-1, -1};
+    return {point_dof[bp.body][1], rotation_dof[bp.body][1]};
+  };
+  for (const JointSpec& j : model.joints) {
+    IncrementalPotential& p = components[point_dof[j.a.body][0]].potential;
+    Spring translation;  // ½‖p_b − p_a‖²/compliance: a zero-rest-length spring
+    const auto oa = body_end(j.a, translation.a);
+    std::array<int, 2> ob{-1, -1};
+    if (j.rod_b >= 0) {  // a rod node: a translating point without rotation
+      const int node = model.rod_point(j.rod_b, j.node_b);
+      translation.b = {node, -1, Vector3::Zero()};
+      ob = {point_dof[node][1], -1};
+    } else {
+      ob = body_end(j.b, translation.b);
+    }
+    translation.offsets = {oa[0], oa[1], ob[0], ob[1]};
+    translation.stiffness = 1.0 / j.compliance;
+    p.add(translation);
+    if (j.type == JointSpec::Type::kHinge) {
+      JointAlignment hinge;
+      hinge.offsets = {oa[1], ob[1]};
+      hinge.rotation_a = j.a.body;
+      hinge.rotation_b = j.b.body;  // −1: the world
+      hinge.axis_a = j.axis_a;
+      hinge.axis_b = j.axis_b;
+      hinge.stiffness = 1.0 / j.compliance_rotation;
+      p.add(hinge);
+    } else if (j.type == JointSpec::Type::kWeld) {
+      JointWeld weld;
+      weld.offsets = {oa[1], ob[1]};
+      weld.rotation_a = j.a.body;
+      weld.rotation_b = j.b.body;
+      weld.frame_a = j.frame_a;
+      weld.frame_b = j.frame_b;
+      weld.stiffness = 1.0 / j.compliance_rotation;
+      p.add(weld);
+    }
+  }
+}
+
+// Union–find: the representative of object i.
 int find_root(std::vector<int>& parent, int i) {
   while (parent[i] != i) i = parent[i] = parent[parent[i]];
   return i;
@@ -85,17 +156,22 @@ int find_root(std::vector<int>& parent, int i) {
 }  // namespace
 
 std::vector<Component> build_components(const Model& model) {
+  // Union–find over objects: bodies 0 … n − 1, then rod r as n + r.
   const int n = static_cast<int>(model.bodies.size());
-  std::vector<int> parent(n);
+  const int objects = n + static_cast<int>(model.rods.size());
+  std::vector<int> parent(objects);
   std::iota(parent.begin(), parent.end(), 0);
   for (const auto& [a, b] : model.body_couplings()) {
     if (a >= 0 && b >= 0) parent[find_root(parent, a)] = find_root(parent, b);
+  }
+  for (const JointSpec& j : model.joints) {
+    if (j.rod_b >= 0) parent[find_root(parent, j.a.body)] = find_root(parent, n + j.rod_b);
   }
 
   std::vector<Component> components;
   std::vector<int> component_of(n, -1);
   std::vector<int> point_offset(n, -1), rotation_offset(n, -1);
-  std::vector<int> component_of_root(n, -1);
+  std::vector<int> component_of_root(objects, -1);
   for (int i = 0; i < n; ++i) {
     const int root = find_root(parent, i);
     if (component_of_root[root] < 0) {
@@ -177,36 +253,6 @@ std::vector<Component> build_components(const Model& model) {
     const int body = s.a.body >= 0 ? s.a.body : s.b.body;
     components[component_of[body]].potential.add(term);
   }
-  for (const JointSpec& j : model.joints) {
-    IncrementalPotential& p = components[component_of[j.a.body]].potential;
-    const auto oa = offsets_of(j.a), ob = offsets_of(j.b);
-    Spring translation;  // ½‖p_b − p_a‖²/compliance: a zero-rest-length spring
-    translation.offsets = {oa[0], oa[1], ob[0], ob[1]};
-    translation.a = attach(j.a);
-    translation.b = attach(j.b);
-    translation.stiffness = 1.0 / j.compliance;
-    p.add(translation);
-    const int rotation_b = j.b.body;  // −1: the world
-    if (j.type == JointSpec::Type::kHinge) {
-      JointAlignment hinge;
-      hinge.offsets = {oa[1], ob[1]};
-      hinge.rotation_a = j.a.body;
-      hinge.rotation_b = rotation_b;
-      hinge.axis_a = j.axis_a;
-      hinge.axis_b = j.axis_b;
-      hinge.stiffness = 1.0 / j.compliance_rotation;
-      p.add(hinge);
-    } else if (j.type == JointSpec::Type::kWeld) {
-      JointWeld weld;
-      weld.offsets = {oa[1], ob[1]};
-      weld.rotation_a = j.a.body;
-      weld.rotation_b = rotation_b;
-      weld.frame_a = j.frame_a;
-      weld.frame_b = j.frame_b;
-      weld.stiffness = 1.0 / j.compliance_rotation;
-      p.add(weld);
-    }
-  }
   const std::vector<std::shared_ptr<const Collider>> colliders = shared_colliders(model);
   for (int i = 0; i < n; ++i) {
     const RigidBody& body = model.bodies[i];
@@ -216,10 +262,18 @@ std::vector<Component> build_components(const Model& model) {
                         components[component_of[i]].potential);
     }
   }
+  // Rods: a component of their own, or appended to the component of what they are joined to.
   for (int r = 0; r < static_cast<int>(model.rods.size()); ++r) {
     Component c = build_rod_component(model, r);
-    if (c.dofs > 0) components.push_back(std::move(c));
+    int& into = component_of_root[find_root(parent, n + r)];
+    if (into >= 0) {
+      append_component(components[into], std::move(c));
+    } else if (c.dofs > 0) {
+      into = static_cast<int>(components.size());
+      components.push_back(std::move(c));
+    }
   }
+  add_joint_terms(model, components);
   return components;
 }
 

@@ -143,7 +143,20 @@ void Model::validate() const {
     const auto field = [&](const std::string& member) { return index_field("joints", i, member); };
     require_body(j.a.body, bodies.size(), field("a.body"), false);
     require_body(j.b.body, bodies.size(), field("b.body"), true);
-    if (j.a.body == j.b.body) {
+    if (j.rod_b >= 0) {
+      if (j.rod_b >= static_cast<int>(rods.size())) {
+        throw ModelError(field("b.rod"), "refers to rod " + std::to_string(j.rod_b) + ", but there are " +
+                                             std::to_string(rods.size()));
+      }
+      if (j.node_b < 0 || j.node_b >= rods[j.rod_b].node_count()) {
+        throw ModelError(field("b.node"), "refers to node " + std::to_string(j.node_b) +
+                                              ", but the rod has " +
+                                              std::to_string(rods[j.rod_b].node_count()));
+      }
+      if (j.type != JointSpec::Type::kBall) {
+        throw ModelError(field("type"), "a rod node has a position only: only a ball joint can hold it");
+      }
+    } else if (j.a.body == j.b.body) {
       throw ModelError(field("b.body"), "joins a body to itself (the joint would do nothing)");
     }
     require_finite(j.a.point, field("a.point"));

@@ -60,11 +60,13 @@ struct SpringSpec {
 //   rotation     hinge: the axes R_a â and R_b b̂ aligned, k (1 − cos θ), k = 1/compliance_rotation;
 //                weld: the initial relative orientation kept, ½ k ‖log(R_a A Bᵀ R_bᵀ)‖²;
 //                ball: none.
+// End a is a body; end b a body, the world or a rod node (position only: ball joints).
 // Terms: lib/spring.hpp (translation), lib/joint_terms.hpp (rotation).
 struct JointSpec {
   enum class Type { kBall, kHinge, kWeld };
   Type type = Type::kBall;
   BodyPoint a, b;                             // body −1: the world (point in world coordinates)
+  int rod_b = -1, node_b = -1;                // end b a rod node instead (ball joints only)
   Vector3 axis_a = Vector3::UnitZ();          // hinge: unit, in a's body (or world) coordinates
   Vector3 axis_b = Vector3::UnitZ();          // hinge: unit, in b's body (or world) coordinates
   Matrix3 frame_a = Matrix3::Identity();      // weld: joint frames in body coordinates
@@ -105,8 +107,9 @@ struct Model {
   bool static_equilibrium = false;
   int load_steps = 1;
 
-  // The bodies that springs and joints couple, as (a, b) pairs (−1: the world): what ties
-  // bodies into one component, and what anchors them in static mode.
+  // The bodies that springs and joints couple, as (a, b) pairs (−1: the world, or a rod
+  // node, which in static mode is anchored too: every rod there has a clamped node): what
+  // ties bodies into one component, and what anchors them in static mode.
   std::vector<std::pair<int, int>> body_couplings() const;
 
   // Index in State::points of a rod's node, and in State::rotations of a rod's edge (rod =

@@ -133,8 +133,24 @@ JointSpec parse_joint(const json& value, const std::string& path, const std::str
   // An end: {"body": name, "point", "axis"} or {"world": point, "axis"}; rods: not yet.
   const auto parse_end = [&](const char* key, bool is_b) {
     ObjectReader e(j.get(key), j.field(key), source, {"body", "point", "axis", "world", "rod", "node", "edge"});
-    if (e.has("rod")) e.fail(e.field("rod"), "joints to rods are not implemented yet (bodies and the world only)");
     BodyPoint end;
+    if (e.has("edge")) {
+      e.fail(e.field("edge"), "joints to rod edges are not implemented yet (a rod node can be held by a ball joint)");
+    }
+    if (e.has("rod")) {
+      if (!is_b) e.fail(e.field("rod"), "end a must be a body (put the rod at end b)");
+      const std::string rod = e.string("rod");
+      const auto& rods = model.rods;
+      const auto it = std::find_if(rods.begin(), rods.end(), [&](const RodSpec& r) { return r.name == rod; });
+      if (it == rods.end()) e.fail(e.field("rod"), "names no rod \"" + rod + "\"");
+      spec.rod_b = static_cast<int>(it - rods.begin());
+      spec.node_b = e.to_integer(e.get("node"), e.field("node"), 0);
+      if (e.has("point") || e.has("axis")) {
+        e.fail(e.field(e.has("point") ? "point" : "axis"), "a rod node end has no point or axis of its own");
+      }
+      e.finish();
+      return end;
+    }
     if (e.has("world")) {
       if (!is_b) e.fail(e.field("world"), "end a must be a body (put the world at end b)");
       if (e.has("body")) e.fail(e.field("world"), "give \"body\" or \"world\", not both");
