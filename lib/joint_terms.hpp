@@ -29,6 +29,10 @@
 // At t = π the log map's sign is arbitrary (the cut locus): V is continuous there, its
 // gradient flips from k φ to −k φ, so V has a ridge, not a derivative (a welded body turned
 // half a turn is pushed back either way).
+// With one end the world the Hessian k H_φ has eigenvalues k {1, τ, τ}, τ = (t/2) cot(t/2) ≥ 0
+// up to π. With both ends free the 6×6 Hessian is indefinite for every t > 0: its eigenvalues
+// are k {0, 2, τ ± √(τ² + t²/4) (twice each)} — ½ dist(F_a, F_b)² is not jointly convex on
+// SO(3) × SO(3), which is curved — so Newton regularises away from rest (solvers/newton.hpp).
 // Residual form: r = √k φ, J = √k [J_l⁻¹(φ), −J_l⁻¹(φ) E] (Jᵀ r = k [φ, −φ]).
 
 #include "state.hpp"
