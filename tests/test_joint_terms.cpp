@@ -45,7 +45,7 @@ using fd::trace;
 constexpr double kPi = std::numbers::pi;
 constexpr double kEps = std::numeric_limits<double>::epsilon();
 
-// Relative angles of the brief: the weld's angle of E, the hinge's angle between the axes.
+// The relative angles tested: the weld's angle of E, the hinge's angle between the axes.
 const std::vector<double> kRelativeAngles = {0.0, 1e-9, 1e-4, 0.5, 2.0, kPi - 1e-6};
 const std::vector<double> kStiffnesses = {1e-6, 1.0, 1e9};
 
@@ -190,6 +190,15 @@ template <class Term>
 // ========================================================================================
 // Hinge axis alignment  V = ½k‖a − b‖²,  a = R_a â,  b = R_b b̂.
 
+// Absolute round-off floors of both joint terms (their round-off is absolute, ~eps·k, not
+// relative to entries that may vanish), set after the FD steps: the Hessian's floor scales
+// with 1/step. At angle 0 the gradient is round-off itself.
+void set_joint_floors(fd::TermCheckOptions& opt, double angle, double k) {
+  opt.gradient.abs_floor = 64 * kEps * k;
+  opt.hessian.abs_floor = 64 * kEps * k / opt.hessian.step;
+  if (angle == 0.0) opt.gradient.require_nonzero = fd::NonZero::kNone;
+}
+
 // FD options at a relative angle. Near opposite axes (π − 1e-6) the gradient k·a×b is only
 // ~1e-6·k while V ≈ 2k: at ε = 1e-6 the value's round-off, 16 eps·2k/ε ≈ 7e-9·k, would leave
 // the gradient only ~80 times above it, less than the 100 fd demands. V is smooth there
@@ -199,9 +208,7 @@ template <class Term>
 fd::TermCheckOptions alignment_options(double angle, double k) {
   fd::TermCheckOptions opt;
   if (angle > 3.0) opt.gradient.step = 1e-5;
-  opt.gradient.abs_floor = 64 * kEps * k;
-  opt.hessian.abs_floor = 64 * kEps * k / opt.hessian.step;
-  if (angle == 0.0) opt.gradient.require_nonzero = fd::NonZero::kNone;  // g = round-off
+  set_joint_floors(opt, angle, k);
   return opt;
 }
 
@@ -362,9 +369,7 @@ fd::TermCheckOptions weld_options(double angle, double k, bool* value_hessian) {
   fd::TermCheckOptions opt;
   *value_hessian = angle < 3.0;
   if (!*value_hessian) opt.gradient.step = opt.hessian.step = 2.5e-7;
-  opt.gradient.abs_floor = 64 * kEps * k;
-  opt.hessian.abs_floor = 64 * kEps * k / opt.hessian.step;
-  if (angle == 0.0) opt.gradient.require_nonzero = fd::NonZero::kNone;  // g = round-off
+  set_joint_floors(opt, angle, k);
   return opt;
 }
 
