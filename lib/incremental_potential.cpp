@@ -76,6 +76,9 @@ void add_contact_terms(const Model& model,
   }
 }
 
+// A body point as an attached point: x + R p̄ of the body, or a world anchor (body −1).
+AttachedPoint attach(const BodyPoint& bp) { return {bp.body, bp.body, bp.point}; }
+
 // Appends `from` to `into`: its DOF blocks after into's, every term's offsets shifted by
 // into.dofs (generic over the term list: each term has its `offsets`).
 void append_component(Component& into, Component from) {
@@ -106,7 +109,7 @@ void add_joint_terms(const Model& model, std::vector<Component>& components) {
     for (const DofBlock& b : components[c].rotations) rotation_dof[b.index] = {c, b.offset};
   }
   const auto body_end = [&](const BodyPoint& bp, AttachedPoint& at) -> std::array<int, 2> {
-    at = {bp.body, bp.body, bp.point};  // body −1: a world anchor
+    at = attach(bp);
     if (bp.body < 0) return {-1, -1};
     return {point_dof[bp.body][1], rotation_dof[bp.body][1]};
   };
@@ -213,13 +216,6 @@ std::vector<Component> build_components(const Model& model) {
     }
   }
 
-  auto attach = [](const BodyPoint& bp) {
-    AttachedPoint ap;
-    ap.point = bp.body;
-    ap.rotation = bp.body;
-    ap.local = bp.point;
-    return ap;
-  };
   auto offsets_of = [&](const BodyPoint& bp) -> std::array<int, 2> {
     if (bp.body < 0) return {-1, -1};
     return {point_offset[bp.body], rotation_offset[bp.body]};

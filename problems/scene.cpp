@@ -82,8 +82,15 @@ void claim_name(const ObjectReader& r, const std::string& name, const std::strin
   if (!inserted) r.fail(field, "repeats the name \"" + name + "\" of " + it->second);
 }
 
-// A unit vector from `key` (any finite non-zero length, scaled by its largest component first
-// so that huge or tiny components keep their direction).
+// World position of a body point at the start (or the world point itself).
+Vector3 initial_world_point(const Model& model, const BodyPoint& p) {
+  if (p.body < 0) return p.point;
+  return model.bodies[p.body].position + model.bodies[p.body].orientation * p.point;
+}
+
+// A unit vector from `key` (any finite non-zero length), scaled by its largest |component|
+// before normalising: ‖v‖² of a finite v overflows from ~1.4e154 (v/‖v‖ = 0: a plane normal
+// would turn horizontal) and underflows below ~1e-154.
 Vector3 unit_vector(ObjectReader& r, const std::string& key) {
   const Vector3 v = r.vector<3>(key);
   const double largest = v.cwiseAbs().maxCoeff();
@@ -125,10 +132,6 @@ JointSpec parse_joint(const json& value, const std::string& path, const std::str
   const auto rotation_of = [&](int body) -> Matrix3 {
     return body < 0 ? Matrix3::Identity() : model.bodies[body].orientation;
   };
-  const auto world_point = [&](const BodyPoint& p) -> Vector3 {
-    if (p.body < 0) return p.point;
-    return model.bodies[p.body].position + model.bodies[p.body].orientation * p.point;
-  };
   const bool hinge = spec.type == JointSpec::Type::kHinge;
   // An end: {"body": name, "point", "axis"} or {"world": point, "axis"}; rods: not yet.
   const auto parse_end = [&](const char* key, bool is_b) {
@@ -161,7 +164,7 @@ JointSpec parse_joint(const json& value, const std::string& path, const std::str
         end.point = e.vector<3>("point");
       } else if (is_b) {  // where a's point is at the start, in b's coordinates
         end.point = rotation_of(end.body).transpose() *
-                    (world_point(spec.a) - model.bodies[end.body].position);
+                    (initial_world_point(model, spec.a) - model.bodies[end.body].position);
       }
     }
     if (hinge) {
@@ -182,7 +185,7 @@ JointSpec parse_joint(const json& value, const std::string& path, const std::str
   if (j.has("b")) {
     spec.b = parse_end("b", true);
   } else {
-    spec.b.point = world_point(spec.a);  // the world, where a's point is at the start
+    spec.b.point = initial_world_point(model, spec.a);  // the world, where a's point is at the start
     if (hinge) spec.axis_b = rotation_of(spec.a.body) * spec.axis_a;
   }
   // Weld: F_a = R_a, F_b = R_b R_b0ᵀ R_a0, so that E = F_a F_bᵀ = I at the start.
@@ -367,12 +370,7 @@ Collider parse_collider(const json& value, const std::string& path, const std::s
   if (type == "plane") {
     if (c.has("normal")) {
       if (c.has("orientation")) c.fail(c.field("normal"), "give \"normal\" or \"orientation\", not both");
-      // Scaled by its largest |component| before normalising: ‖n‖² of a finite n overflows
-      // from ~1.4e154 (n/‖n‖ = 0: a horizontal plane) and underflows below ~1e-154.
-      const Vector3 n = c.vector<3>("normal");
-      const double largest = n.cwiseAbs().maxCoeff();
-      if (!(largest > 0.0)) c.fail(c.field("normal"), "must be a non-zero vector");
-      collider.orientation = minimal_rotation(Vector3::UnitZ(), (n / largest).normalized());
+      collider.orientation = minimal_rotation(Vector3::UnitZ(), unit_vector(c, "normal"));
     }
     collider.shape = PlaneShape{};
   } else if (type == "sphere") {
@@ -776,12 +774,9 @@ Scene parse(const json& root, const std::string& source) {
         spec.rest_length = s.number("rest_length");
       } else {
         // Default: the initial distance between the two points.
-        const auto world = [&](const BodyPoint& p) -> Vector3 {
-          if (p.body < 0) return p.point;
-          const RigidBody& body = scene.model.bodies[p.body];
-          return body.position + body.orientation * p.point;
-        };
-        spec.rest_length = (world(spec.b) - world(spec.a)).norm();
+        spec.rest_length = (initial_world_point(scene.model, spec.b) -
+                            initial_world_point(scene.model, spec.a))
+                               .norm();
       }
       s.finish();
       scene.model.springs.push_back(spec);
