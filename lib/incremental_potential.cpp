@@ -42,10 +42,54 @@ double IncrementalPotential::potential_energy(const State& q) const {
   for_each_term_vector([&](const auto& terms) {
     using T = typename std::decay_t<decltype(terms)>::value_type;
     if constexpr (EnergyOfState<T>) {
-      for (const T& t : terms) energy += t.evaluate(q, nullptr, nullptr);
+      for (const T& t : terms) {
+        if constexpr (Constraint<T>) {
+          if (t.exact) continue;
+        }
+        energy += t.evaluate(q, nullptr, nullptr);
+      }
     }
   });
   return energy;
+}
+
+namespace {
+
+// Calls f(t) for every exact constraint term t of p (term.hpp, Constraint).
+template <class Potential, class Function>
+void for_each_exact_constraint(Potential& p, Function&& f) {
+  p.for_each_term_vector([&](auto& terms) {
+    using T = typename std::decay_t<decltype(terms)>::value_type;
+    if constexpr (Constraint<T>) {
+      for (auto& t : terms) {
+        if (t.exact) f(t);
+      }
+    }
+  });
+}
+
+}  // namespace
+
+int IncrementalPotential::exact_constraints() const {
+  int count = 0;
+  for_each_exact_constraint(*this, [&](const auto&) { ++count; });
+  return count;
+}
+
+double IncrementalPotential::constraint_violation(const State& q) const {
+  double violation = 0.0;
+  for_each_exact_constraint(*this, [&](const auto& t) {
+    violation = std::max(violation, t.violation(q));
+  });
+  return violation;
+}
+
+void IncrementalPotential::update_multipliers(const State& q) {
+  for_each_exact_constraint(*this, [&](auto& t) { t.update_multiplier(q); });
+}
+
+void IncrementalPotential::scale_penalties(double factor) {
+  for_each_exact_constraint(*this, [&](auto& t) { t.stiffness *= factor; });
 }
 
 namespace {
@@ -96,6 +140,13 @@ void append_component(Component& into, Component from) {
   into.dofs += from.dofs;
 }
 
+// The initial penalty ρ of an exact joint part: kExactPenalty times the inertia it holds,
+// m/h² (translation) or λ_max(J)/h² (rotation) of its ends together, so that each
+// multiplier update of the augmented Lagrangian divides the violation by about
+// 1 + ρ/(m/h²) ≈ 10⁴ where inertia dominates, while H stays within 10⁴ of its inertia's
+// conditioning. Where other stiffnesses dominate, StepSolver::solve raises ρ.
+constexpr double kExactPenalty = 1e4;
+
 // The joints' terms (JointSpec), added to the component of end a once every body and rod has
 // its place: where a point or rotation of the state is, as (component, offset), −1 if it is
 // not a DOF.
@@ -113,21 +164,36 @@ void add_joint_terms(const Model& model, std::vector<Component>& components) {
     if (bp.body < 0) return {-1, -1};
     return {point_dof[bp.body][1], rotation_dof[bp.body][1]};
   };
+  const double inv_h2 = 1.0 / (model.time_step * model.time_step);
+  // The ends' masses and largest rotational inertias (0 for the world).
+  const auto body_mass = [&](int body) { return body < 0 ? 0.0 : model.bodies[body].mass; };
+  const auto body_inertia = [&](int body) {
+    return body < 0 ? 0.0 : rotational_mass(model.bodies[body].inertia).diagonal().maxCoeff();
+  };
+  // k = 1/compliance, or the initial penalty for compliance 0 (exact).
+  const auto set_stiffness = [&](auto& term, double compliance, double inertia) {
+    term.exact = compliance == 0.0;
+    term.stiffness = term.exact ? kExactPenalty * inertia * inv_h2 : 1.0 / compliance;
+  };
   for (const JointSpec& j : model.joints) {
     IncrementalPotential& p = components[point_dof[j.a.body][0]].potential;
-    Spring translation;  // ½‖p_b − p_a‖²/compliance: a zero-rest-length spring
+    JointPoint translation;
     const auto oa = body_end(j.a, translation.a);
     std::array<int, 2> ob{-1, -1};
+    double mass = body_mass(j.a.body);
     if (j.rod_b >= 0) {  // a rod node: a translating point without rotation
       const int node = model.rod_point(j.rod_b, j.node_b);
       translation.b = {node, -1, Vector3::Zero()};
       ob = {point_dof[node][1], -1};
+      mass += discretize(model.rods[j.rod_b]).node_mass[j.node_b];
     } else {
       ob = body_end(j.b, translation.b);
+      mass += body_mass(j.b.body);
     }
     translation.offsets = {oa[0], oa[1], ob[0], ob[1]};
-    translation.stiffness = 1.0 / j.compliance;
+    set_stiffness(translation, j.compliance, mass);
     p.add(translation);
+    const double inertia = body_inertia(j.a.body) + body_inertia(j.b.body);
     if (j.type == JointSpec::Type::kHinge) {
       JointAlignment hinge;
       hinge.offsets = {oa[1], ob[1]};
@@ -135,7 +201,7 @@ void add_joint_terms(const Model& model, std::vector<Component>& components) {
       hinge.rotation_b = j.b.body;  // −1: the world
       hinge.axis_a = j.axis_a;
       hinge.axis_b = j.axis_b;
-      hinge.stiffness = 1.0 / j.compliance_rotation;
+      set_stiffness(hinge, j.compliance_rotation, inertia);
       p.add(hinge);
     } else if (j.type == JointSpec::Type::kWeld) {
       JointWeld weld;
@@ -144,7 +210,7 @@ void add_joint_terms(const Model& model, std::vector<Component>& components) {
       weld.rotation_b = j.b.body;
       weld.frame_a = j.frame_a;
       weld.frame_b = j.frame_b;
-      weld.stiffness = 1.0 / j.compliance_rotation;
+      set_stiffness(weld, j.compliance_rotation, inertia);
       p.add(weld);
     }
   }

@@ -47,7 +47,7 @@ class IncrementalPotential {
   // terms' capabilities; a new term type is added here and in the builder that creates it.
   using TermTypes = std::tuple<TranslationalInertia, RotationalInertia, Gravity, ConstantForce,
                                ConstantTorque, RegionForce, Spring, RodStretch, RodShear,
-                               RodBendTwist, CableSegment, JointAlignment, JointWeld, Contact,
+                               RodBendTwist, CableSegment, JointPoint, JointAlignment, JointWeld, Contact,
                                Friction>;
 
   // The terms of type T (one contiguous vector per type).
@@ -141,9 +141,18 @@ class IncrementalPotential {
                              Eigen::VectorXd& dgamma) const;
 
   // Potential energy: the sum of the terms that are energies of the state (EnergyOfState,
-  // term.hpp: gravity, constant forces, springs, rod elasticity, contact penalties), what
-  // frames.csv reports.
+  // term.hpp: gravity, constant forces, springs, rod elasticity, contact penalties, elastic
+  // joints; not exact joints), what frames.csv reports.
   double potential_energy(const State& q) const;
+
+  // ---- Exact constraints (term.hpp, Constraint; the augmented Lagrangian of
+  // StepSolver::solve) ------------------------------------------------------------------
+  // The number of exact constraint terms, their largest violation ‖c(q)‖∞ (0 without any),
+  // the multiplier update s ← s + c(q) of each, and ρ ← factor·ρ for each.
+  int exact_constraints() const;
+  double constraint_violation(const State& q) const;
+  void update_multipliers(const State& q);
+  void scale_penalties(double factor);
 
  private:
   template <class Tuple>

@@ -2,6 +2,7 @@
 
 #include <cmath>
 
+#include "point_pair.hpp"
 #include "so3.hpp"
 
 namespace liedyn {
@@ -21,10 +22,50 @@ double weld_curvature_coefficient(double t) {
   return 1.0 / (t * t) - 1.0 / (2.0 * t * std::tan(0.5 * t));
 }
 
+// R_aᵀ v: a world vector in the body coordinates of end a (v itself without a rotation).
+Vector3 in_body_a(const State& q, int rotation_a, const Vector3& v) {
+  return rotation_a < 0 ? v : Vector3(q.rotations[rotation_a].transpose() * v);
+}
+
 }  // namespace
 
+AttachedPoint JointPoint::shifted_a() const {
+  AttachedPoint shifted = a;
+  shifted.local -= shift;
+  return shifted;
+}
+
+double JointPoint::evaluate(const State& q, LocalGradient<4>* g, LocalHessian<4>* H) const {
+  const AttachedPoint a_s = shifted_a();
+  const Vector3 d = b.position(q) - a_s.position(q);
+  if (g != nullptr || H != nullptr) {
+    // V = ½ k ‖d‖²: ∂V/∂d = k d, ∂²V/∂d² = k I (point_pair.hpp maps them to the blocks).
+    point_pair_derivatives(a_s.lever(q), b.lever(q), stiffness * d,
+                           stiffness * Matrix3::Identity(), g, H);
+  }
+  return 0.5 * stiffness * d.squaredNorm();
+}
+
+void JointPoint::residual(const State& q, Residual& r, ResidualJacobian* J) const {
+  const AttachedPoint a_s = shifted_a();
+  const double s = std::sqrt(stiffness);
+  r = s * (b.position(q) - a_s.position(q));
+  if (J != nullptr) {
+    *J << -s * Matrix3::Identity(), s * so3::hat(a_s.lever(q)), s * Matrix3::Identity(),
+        -s * so3::hat(b.lever(q));
+  }
+}
+
+double JointPoint::violation(const State& q) const {
+  return (b.position(q) - a.position(q)).lpNorm<Eigen::Infinity>();
+}
+
+void JointPoint::update_multiplier(const State& q) {
+  shift += in_body_a(q, a.rotation, b.position(q) - a.position(q));
+}
+
 double JointAlignment::evaluate(const State& q, LocalGradient<2>* g, LocalHessian<2>* H) const {
-  const Vector3 a = end_rotation(q, rotation_a) * axis_a;
+  const Vector3 a = end_rotation(q, rotation_a) * (axis_a + shift);
   const Vector3 b = end_rotation(q, rotation_b) * axis_b;
   const double ab = a.dot(b);
   if (g != nullptr) {
@@ -46,7 +87,7 @@ double JointAlignment::evaluate(const State& q, LocalGradient<2>* g, LocalHessia
 }
 
 void JointAlignment::residual(const State& q, Residual& r, ResidualJacobian* J) const {
-  const Vector3 a = end_rotation(q, rotation_a) * axis_a;
+  const Vector3 a = end_rotation(q, rotation_a) * (axis_a + shift);
   const Vector3 b = end_rotation(q, rotation_b) * axis_b;
   const double s = std::sqrt(stiffness);
   r = s * (a - b);
@@ -56,11 +97,33 @@ void JointAlignment::residual(const State& q, Residual& r, ResidualJacobian* J) 
   }
 }
 
+double JointAlignment::violation(const State& q) const {
+  return (end_rotation(q, rotation_a) * axis_a - end_rotation(q, rotation_b) * axis_b)
+      .lpNorm<Eigen::Infinity>();
+}
+
+void JointAlignment::update_multiplier(const State& q) {
+  shift += in_body_a(q, rotation_a,
+                     end_rotation(q, rotation_a) * axis_a - end_rotation(q, rotation_b) * axis_b);
+}
+
 Vector3 JointWeld::relative_rotation(const State& q, Matrix3* E) const {
-  const Matrix3 relative = end_rotation(q, rotation_a) * frame_a *
+  const Matrix3 relative = end_rotation(q, rotation_a) * frame_a * shift *
                            (end_rotation(q, rotation_b) * frame_b).transpose();
   if (E != nullptr) *E = relative;
   return so3::log(relative);
+}
+
+double JointWeld::violation(const State& q) const {
+  const Matrix3 F_a = end_rotation(q, rotation_a) * frame_a;
+  const Matrix3 F_b = end_rotation(q, rotation_b) * frame_b;
+  return so3::log(F_a * F_b.transpose()).lpNorm<Eigen::Infinity>();
+}
+
+void JointWeld::update_multiplier(const State& q) {
+  const Matrix3 F_a = end_rotation(q, rotation_a) * frame_a;
+  const Matrix3 F_b = end_rotation(q, rotation_b) * frame_b;
+  shift = so3::orthonormalize(F_b.transpose() * F_a * shift);
 }
 
 double JointWeld::evaluate(const State& q, LocalGradient<2>* g, LocalHessian<2>* H) const {

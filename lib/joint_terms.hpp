@@ -1,9 +1,19 @@
 #pragma once
-// The rotational parts of elastic joints between two frames (bodies, or a body and the
-// world). A joint's translational part, ½‖p_b − p_a‖²/compliance, is a zero-rest-length
-// spring (spring.hpp) of stiffness 1/compliance; these terms hold the orientations.
+// The parts of a joint between two frames (bodies, rod nodes, or a body and the world): its
+// translation (JointPoint) and, for hinges and welds, its rotation (JointAlignment,
+// JointWeld). Each part is a constraint c(q) = 0 (term.hpp, Constraint) held either
+// elastically, V = ½ k ‖c‖² with k = 1/compliance, or exactly (compliance 0) by the augmented
+// Lagrangian of StepSolver::solve: V = ½ ρ ‖c + s‖², ρ the penalty (`stiffness`) and s the
+// multiplier shift, updated s ← s + c between solves until ‖c‖∞ ≤ tolerance. Every shift is
+// stored in end a's body coordinates (world coordinates for a point without rotation), so it
+// turns with the body, and enters the term as a change of end a's geometry: its point, axis
+// or frame. The derivatives below therefore hold for the shifted term unchanged.
 // Conventions: so3.hpp (left perturbations R ← exp(θ) R, Lie gradient and symmetric Lie
-// Hessian). Blocks (θ_a, θ_b); a world end has offset −1 and a constant frame.
+// Hessian). A world end has offset −1 and a constant frame.
+//
+// Translation (JointPoint). c = p_b − p_a with p = x + R p̄ (AttachedPoint); shift s:
+//   V = ½ k ‖p_b − (p_a − R_a s)‖²,   s ← s + R_aᵀ c,
+// a zero-rest-length spring (spring.hpp, point_pair.hpp) whose point a is p̄_a − s.
 //
 // Hinge alignment. With the axes a = R_a â and b = R_b b̂ (unit; â, b̂ in body coordinates),
 //   V = k (1 − a·b) = ½ k ‖a − b‖²,
@@ -14,6 +24,9 @@
 //   D²V/Dθ_a² = −k [½ (a bᵀ + b aᵀ) − (a·b) I],   D²V/Dθ_b² = the same,
 //   D²V/Dθ_a Dθ_b = k hat(a) hat(b)        ((θ_a × a)·(θ_b × b) = θ_aᵀ hat(a)ᵀ hat(b) θ_b).
 // Residual form: r = √k (a − b), J = √k [−hat(a), hat(b)] (∂(exp(θ)a)/∂θ = −hat(a)).
+// The formulas use only a·b (‖a‖, ‖b‖ are invariant), so they hold for the shifted axis
+// a = R_a (â + s), c = R_a â − b, s ← s + R_aᵀ c, which is not a unit vector. c is 3 numbers
+// for a 2-dimensional constraint: its part along a, 1 − a·b ≈ θ²/2, is second order.
 //
 // Weld. With the joint frames F_a = R_a A and F_b = R_b B (A, B constant, in body
 // coordinates) and their relative rotation E = F_a F_bᵀ, φ = log E (‖φ‖ ≤ π),
@@ -34,11 +47,40 @@
 // are k {0, 2, τ ± √(τ² + t²/4) (twice each)} — ½ dist(F_a, F_b)² is not jointly convex on
 // SO(3) × SO(3), which is curved — so Newton regularises away from rest (solvers/newton.hpp).
 // Residual form: r = √k φ, J = √k [J_l⁻¹(φ), −J_l⁻¹(φ) E] (Jᵀ r = k [φ, −φ]).
+// Exact: the shift is a rotation S of frame a, E = R_a A S Bᵀ R_bᵀ (A S in place of A), and
+// c = log(F_a F_bᵀ) with the joint's own A. The update S ← (F_bᵀ F_a) S is s ← s + c to first
+// order: once the joint holds (F_a = F_b = F) the shifted E becomes F S' Fᵀ, which keeps the
+// current F_a S F_bᵀ — the torque ρ log E — when S' = F_bᵀ F_a S.
 
 #include "state.hpp"
 #include "term.hpp"
 
 namespace liedyn {
+
+struct JointPoint {
+  static constexpr int kBlocks = 4;
+  static constexpr const char* kName = "joint_point";
+  static constexpr bool kEnergyOfState = true;
+  std::array<int, kBlocks> offsets{-1, -1, -1, -1};  // x_a, θ_a, x_b, θ_b
+  AttachedPoint a, b;                                // a: not a world anchor
+  double stiffness = 0.0;                            // k = 1/compliance (N/m), or ρ if exact
+  bool exact = false;
+  Vector3 shift = Vector3::Zero();                   // s, in a's body coordinates
+
+  double evaluate(const State& q, LocalGradient<4>* g, LocalHessian<4>* H) const;
+
+  static constexpr int kResiduals = 3;
+  using Residual = LocalResidual<kResiduals>;
+  using ResidualJacobian = LocalResidualJacobian<kResiduals, kBlocks>;
+  void residual(const State& q, Residual& r, ResidualJacobian* J) const;
+
+  // Constraint (term.hpp): c = p_b − p_a with the joint's own point a.
+  double violation(const State& q) const;
+  void update_multiplier(const State& q);
+
+ private:
+  AttachedPoint shifted_a() const;
+};
 
 struct JointAlignment {
   static constexpr int kBlocks = 2;
@@ -48,7 +90,9 @@ struct JointAlignment {
   int rotation_a = -1, rotation_b = -1;      // State::rotations, −1: the world (identity)
   Vector3 axis_a = Vector3::UnitZ();         // â, b̂: unit, in each end's body coordinates
   Vector3 axis_b = Vector3::UnitZ();
-  double stiffness = 0.0;                    // k = 1/compliance_rot, N·m/rad
+  double stiffness = 0.0;                    // k = 1/compliance_rot (N·m/rad), or ρ if exact
+  bool exact = false;
+  Vector3 shift = Vector3::Zero();           // s, in a's body coordinates
 
   double evaluate(const State& q, LocalGradient<2>* g, LocalHessian<2>* H) const;
 
@@ -56,6 +100,10 @@ struct JointAlignment {
   using Residual = LocalResidual<kResiduals>;
   using ResidualJacobian = LocalResidualJacobian<kResiduals, kBlocks>;
   void residual(const State& q, Residual& r, ResidualJacobian* J) const;
+
+  // Constraint (term.hpp): c = R_a â − R_b b̂.
+  double violation(const State& q) const;
+  void update_multiplier(const State& q);
 };
 
 struct JointWeld {
@@ -66,7 +114,9 @@ struct JointWeld {
   int rotation_a = -1, rotation_b = -1;      // State::rotations, −1: the world (identity)
   Matrix3 frame_a = Matrix3::Identity();     // A, B: joint frames in body coordinates
   Matrix3 frame_b = Matrix3::Identity();
-  double stiffness = 0.0;                    // k = 1/compliance_rot, N·m/rad
+  double stiffness = 0.0;                    // k = 1/compliance_rot (N·m/rad), or ρ if exact
+  bool exact = false;
+  Matrix3 shift = Matrix3::Identity();       // S, a rotation in frame a's coordinates
 
   double evaluate(const State& q, LocalGradient<2>* g, LocalHessian<2>* H) const;
 
@@ -75,8 +125,12 @@ struct JointWeld {
   using ResidualJacobian = LocalResidualJacobian<kResiduals, kBlocks>;
   void residual(const State& q, Residual& r, ResidualJacobian* J) const;
 
-  // φ = log(R_a A Bᵀ R_bᵀ) and E, for the tests and the residual.
+  // φ = log(R_a A S Bᵀ R_bᵀ) and E, the term's (shifted) relative rotation.
   Vector3 relative_rotation(const State& q, Matrix3* E = nullptr) const;
+
+  // Constraint (term.hpp): c = log(R_a A Bᵀ R_bᵀ), without the shift.
+  double violation(const State& q) const;
+  void update_multiplier(const State& q);
 };
 
 }  // namespace liedyn

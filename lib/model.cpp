@@ -161,13 +161,13 @@ void Model::validate() const {
     }
     require_finite(j.a.point, field("a.point"));
     require_finite(j.b.point, field("b.point"));
-    // 1/compliance is the stiffness of the terms: it must be a finite positive number too.
+    // 0: exact; else 1/compliance is the stiffness of the terms: it must be finite too.
     for (const auto& [value, member] : {std::pair{j.compliance, "compliance"},
                                         std::pair{j.compliance_rotation, "compliance_rotation"}}) {
-      if (!(std::isfinite(value) && value > 0.0 && std::isfinite(1.0 / value))) {
+      if (!(value == 0.0 || (std::isfinite(value) && value > 0.0 && std::isfinite(1.0 / value)))) {
         throw ModelError(field(member),
-                         "must be a finite number > 0 whose inverse is finite (exact joints, "
-                         "compliance 0, are not implemented yet)");
+                         "must be 0 (an exact joint) or a finite number > 0 whose inverse is "
+                         "finite (an elastic joint)");
       }
     }
     if (j.type == JointSpec::Type::kHinge) {
@@ -228,6 +228,17 @@ void Model::validate_motion_speeds() const {
       }
     }
   }
+}
+
+std::string Model::first_exact_joint() const {
+  for (std::size_t i = 0; i < joints.size(); ++i) {
+    const JointSpec& j = joints[i];
+    if (j.compliance == 0.0) return index_field("joints", i, "compliance");
+    if (j.type != JointSpec::Type::kBall && j.compliance_rotation == 0.0) {
+      return index_field("joints", i, "compliance_rotation");
+    }
+  }
+  return "";
 }
 
 std::vector<std::pair<int, int>> Model::body_couplings() const {

@@ -55,13 +55,14 @@ struct SpringSpec {
   int stiffness_slot = -1;    // index in an optimisation's parameter vector γ, or −1
 };
 
-// An elastic joint between a body and another body or the world (docs/scene-format.md#joints):
-//   translation  ½ ‖p_b − p_a‖² / compliance   (the two points p = x + R p̄ coincide at rest),
-//   rotation     hinge: the axes R_a â and R_b b̂ aligned, k (1 − cos θ), k = 1/compliance_rotation;
-//                weld: the initial relative orientation kept, ½ k ‖log(R_a A Bᵀ R_bᵀ)‖²;
-//                ball: none.
+// A joint between a body and another body or the world (docs/scene-format.md#joints):
+//   translation  p_b = p_a   (the two points p = x + R p̄),
+//   rotation     hinge: the axes R_a â and R_b b̂ aligned; weld: the initial relative
+//                orientation kept, log(R_a A Bᵀ R_bᵀ) = 0; ball: none.
+// Each part is elastic, ½ ‖c‖²/compliance (translation) and ½ ‖c‖²/compliance_rotation, or
+// exact where its compliance is 0 (the augmented Lagrangian of StepSolver::solve).
 // End a is a body; end b a body, the world or a rod node (position only: ball joints).
-// Terms: lib/spring.hpp (translation), lib/joint_terms.hpp (rotation).
+// Terms: lib/joint_terms.hpp.
 struct JointSpec {
   enum class Type { kBall, kHinge, kWeld };
   Type type = Type::kBall;
@@ -71,8 +72,8 @@ struct JointSpec {
   Vector3 axis_b = Vector3::UnitZ();          // hinge: unit, in b's body (or world) coordinates
   Matrix3 frame_a = Matrix3::Identity();      // weld: joint frames in body coordinates
   Matrix3 frame_b = Matrix3::Identity();
-  double compliance = 0.0;                    // m/N, > 0 (exact joints are not implemented)
-  double compliance_rotation = 0.0;           // rad/(N·m), > 0
+  double compliance = 0.0;                    // m/N, ≥ 0 (0: exact)
+  double compliance_rotation = 0.0;           // rad/(N·m), ≥ 0 (0: exact)
 };
 
 struct ForceSpec {
@@ -111,6 +112,10 @@ struct Model {
   // node, which in static mode is anchored too: every rod there has a clamped node): what
   // ties bodies into one component, and what anchors them in static mode.
   std::vector<std::pair<int, int>> body_couplings() const;
+
+  // The field of the first exact joint part ("joints[i].compliance", or
+  // "joints[i].compliance_rotation" of a hinge or weld), or "" without any.
+  std::string first_exact_joint() const;
 
   // Index in State::points of a rod's node, and in State::rotations of a rod's edge (rod =
   // rods.size() with node or edge 0: one past the last).

@@ -43,6 +43,16 @@
 //                         void add_parameter_adjoint(const State& q, int frame,
 //                             const LocalGradient<kBlocks>& z, Eigen::VectorXd& dgamma) const;
 //                         adds (∂C/∂γ)ᵀ z.
+//   Constraint        — a joint part c(q) = 0 (joint_terms.hpp) that is elastic, value
+//                         ½ k ‖c‖², or, with `exact` set, enforced to the step tolerance by
+//                         the augmented Lagrangian of StepSolver::solve: the term is then
+//                         ½ ρ ‖c + s‖² with ρ its `stiffness` and s its multiplier shift
+//                         (λ = ρ s, the joint's force or torque):
+//                           bool exact;  double stiffness;
+//                           double violation(const State& q) const;   ‖c(q)‖∞ (m or rad)
+//                           void update_multiplier(const State& q);   s ← s + c(q)
+//                         An exact term is not an energy of the state (EnergyOfState is then
+//                         ignored): a constraint does no work.
 //
 // Least-squares form (HasResidual; inertia, springs, rod elasticity, contact; not the
 // linear loads):
@@ -125,6 +135,14 @@ template <class T>
 concept HasParameters = requires(const T& t, const State& q, int frame,
                                  const LocalGradient<T::kBlocks>& z, Eigen::VectorXd& dgamma) {
   t.add_parameter_adjoint(q, frame, z, dgamma);
+};
+
+template <class T>
+concept Constraint = requires(T& t, const T& ct, const State& q) {
+  { t.exact } -> std::same_as<bool&>;
+  { t.stiffness } -> std::same_as<double&>;
+  { ct.violation(q) } -> std::same_as<double>;
+  t.update_multiplier(q);
 };
 
 // add_parameter_adjoint of a term whose value is proportional to its scalar `stiffness` k

@@ -54,7 +54,9 @@ void write_frame_row(std::ostream& out, const Simulator& sim, const StepReport* 
   out << sim.kinetic_energy() << ',' << sim.potential_energy() << ',' << L.x() << ',' << L.y()
       << ',' << L.z() << ',' << (report ? report->step_norm : 0.0) << ','
       << (report ? report->regularized_iterations : 0) << ','
-      << (report ? to_string(report->status) : "initial") << ',' << sim.max_penetration() << '\n';
+      << (report ? to_string(report->status) : "initial") << ',' << sim.max_penetration() << ','
+      << (report ? report->constraint_violation : sim.constraint_violation()) << ','
+      << (report ? report->multiplier_updates : 0) << '\n';
 }
 
 }  // namespace
@@ -66,7 +68,8 @@ SimulationSummary simulate_into(const Scene& scene, OutputFolder& out, std::ostr
   trajectory << "frame,time,object,kind,index,x,y,z,qw,qx,qy,qz\n";
   frames << "frame,time,newton_iterations,gradient_norm,converged,kinetic_energy,"
             "potential_energy,angular_momentum_x,angular_momentum_y,angular_momentum_z,"
-            "step_norm,regularized_iterations,status,max_penetration\n";
+            "step_norm,regularized_iterations,status,max_penetration,constraint_violation,"
+            "multiplier_updates\n";
 
   Simulator sim(scene.model, scene.solver);
   SimulationSummary summary;

@@ -123,12 +123,8 @@ JointSpec parse_joint(const json& value, const std::string& path, const std::str
   for (const char* key : {"limits", "motor"}) {
     if (j.has(key)) j.fail(j.field(key), "joint limits and motors are not implemented yet");
   }
-  spec.compliance = j.number("compliance");
+  spec.compliance = j.number("compliance", 0.0);
   spec.compliance_rotation = j.number("compliance_rotation", spec.compliance);
-  if (spec.compliance == 0.0) {
-    j.fail(j.field("compliance"), "exact joints (compliance 0) are not implemented yet: give an "
-                                  "elastic joint's compliance > 0 (m/N)");
-  }
   const auto rotation_of = [&](int body) -> Matrix3 {
     return body < 0 ? Matrix3::Identity() : model.bodies[body].orientation;
   };

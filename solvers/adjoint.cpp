@@ -61,6 +61,13 @@ DifferentiableSimulation::DifferentiableSimulation(Model base, ParameterSet para
       options_(options) {
   options_.validate();
   parameters_.apply(base_, initial_parameters()).validate();
+  // The forward steps would hold exact joints, but the backward solve has no multiplier
+  // equations yet: it would differentiate a penalty, not the constrained step.
+  if (const std::string field = base_.first_exact_joint(); !field.empty()) {
+    throw ModelError(field, "0 (an exact joint): gradients through exact joints are not "
+                            "implemented yet; give the joint a compliance > 0 to differentiate "
+                            "through it");
+  }
 }
 
 Trajectory DifferentiableSimulation::simulate(const Model& model, Result& result) const {

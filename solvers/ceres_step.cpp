@@ -264,7 +264,8 @@ class StopOnSmallStep final : public ceres::IterationCallback {
 
 class CeresStepSolver final : public StepSolver {
  public:
-  CeresStepSolver(Component component, const SolverOptions& options) : options_(options) {
+  CeresStepSolver(Component component, const SolverOptions& options)
+      : StepSolver(options), options_(options) {
     SolverOptions lie = options;
     lie.rotation = RotationParameterization::kLie;
     lie.measure_condition = false;  // the check needs no eigendecomposition

@@ -393,7 +393,8 @@ bool usable(Ipopt::ApplicationReturnStatus status) {
 class IpoptStepSolver final : public StepSolver {
  public:
   IpoptStepSolver(Component component, const SolverOptions& options)
-      : options_(options),
+      : StepSolver(options),
+        options_(options),
         entry_(component) {
     if (options.rotation == RotationParameterization::kQuaternion) {
       throw ModelError("solver.rotation",

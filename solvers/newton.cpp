@@ -27,7 +27,8 @@ System make_system(const Component& component, const SolverOptions& options) {
 
 template <class System>
 Newton<System>::Newton(Component component, const SolverOptions& options)
-    : component_(std::move(component)),
+    : StepSolver(options),
+      component_(std::move(component)),
       options_(options),
       system_(make_system<System>(component_, options)),
       delta_(component_.dofs),

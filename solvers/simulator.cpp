@@ -127,6 +127,14 @@ double Simulator::max_penetration() const {
   return deepest;
 }
 
+double Simulator::constraint_violation() const {
+  double violation = 0.0;
+  for (const auto& s : solvers_) {
+    violation = std::max(violation, s->component().potential.constraint_violation(state_));
+  }
+  return violation;
+}
+
 std::vector<FreeDirection> Simulator::free_directions() const {
   std::vector<FreeDirection> out;
   for (const auto& s : solvers_) {

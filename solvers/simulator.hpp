@@ -47,6 +47,9 @@ class Simulator {
   // Deepest penetration ρ − φ of a contact sample into a collider (lib/contact.hpp), m;
   // 0 when no sample touches (or the model has none).
   double max_penetration() const;
+  // Largest violation ‖c‖∞ of an exact joint (m or rad; IncrementalPotential::
+  // constraint_violation) at the current state, 0 without exact joints.
+  double constraint_violation() const;
   // Directions that nothing holds at the current state (free_directions.hpp), over every
   // component: why a static step cannot meet the tolerance. One assembly per component.
   std::vector<FreeDirection> free_directions() const;

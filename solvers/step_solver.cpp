@@ -129,6 +129,8 @@ void StepReport::merge(const StepReport& other) {
   second_gradient_norm = std::fmax(second_gradient_norm, other.second_gradient_norm);
   first_hessian_condition = std::fmax(first_hessian_condition, other.first_hessian_condition);
   psi += other.psi;
+  constraint_violation = std::max(constraint_violation, other.constraint_violation);
+  multiplier_updates = std::max(multiplier_updates, other.multiplier_updates);
   if (!other.message.empty()) message += (message.empty() ? "" : "; ") + other.message;
 }
 
@@ -160,7 +162,11 @@ StepReport StepSolver::solve(State& q) {
   }
   entry_.save(c, q);
   StepReport report = minimize(q);
-  if (!report.state_updated()) return report;  // the back-end restored q
+  if (report.state_updated() && c.potential.exact_constraints() > 0) {
+    enforce_exact_constraints(q, report);
+    if (!report.state_updated()) entry_.restore(c, q);
+  }
+  if (!report.state_updated()) return report;  // q restored
   if (const char* what = non_finite_value(report, q)) {
     entry_.restore(c, q);
     std::string message = std::string("not finite at the end of the step: ") + what +
@@ -173,6 +179,44 @@ StepReport StepSolver::solve(State& q) {
   returned_.save(c, q);
   has_returned_ = true;
   return report;
+}
+
+void StepSolver::enforce_exact_constraints(State& q, StepReport& report) {
+  IncrementalPotential& P = component().potential;
+  double violation = P.constraint_violation(q);
+  double previous = std::numeric_limits<double>::infinity();
+  while (violation > tolerance_ && report.multiplier_updates < kMaxMultiplierUpdates) {
+    if (!(violation <= 0.1 * previous) && penalty_growth_ < kMaxPenaltyGrowth) {
+      P.scale_penalties(10.0);
+      penalty_growth_ *= 10.0;
+    }
+    previous = violation;
+    P.update_multipliers(q);
+    const StepReport next = minimize(q);
+    // The step's totals, and the last solve's final values.
+    StepReport total = next;
+    total.iterations += report.iterations;
+    total.regularized_iterations += report.regularized_iterations;
+    total.factorizations += report.factorizations;
+    total.assemblies += report.assemblies;
+    total.assembly_seconds += report.assembly_seconds;
+    total.solve_seconds += report.solve_seconds;
+    total.first_gradient_norm = report.first_gradient_norm;
+    total.second_gradient_norm = report.second_gradient_norm;
+    total.first_hessian_condition = report.first_hessian_condition;
+    total.multiplier_updates = report.multiplier_updates + 1;
+    report = std::move(total);
+    if (!report.state_updated()) return;
+    violation = P.constraint_violation(q);
+  }
+  report.constraint_violation = violation;
+  if (violation > tolerance_) {
+    if (report.converged()) report.status = StepStatus::kMaxIterations;
+    const std::string message = "exact joints: largest violation " + short_number(violation) +
+                                " > tolerance after " + std::to_string(report.multiplier_updates) +
+                                " multiplier updates";
+    report.message = report.message.empty() ? message : message + "; " + report.message;
+  }
 }
 
 const char* StepSolver::non_finite_value(const StepReport& report, const State& q) const {

@@ -149,6 +149,11 @@ struct StepReport {
   // Ψ at the final state (from the last assembly there; NaN if the step failed before one).
   // Merged over components: the sum.
   double psi = std::numeric_limits<double>::quiet_NaN();
+  // Exact joints (StepSolver::solve): the largest violation ‖c‖∞ (m or rad) at the final
+  // state, 0 without exact joints, and the multiplier updates (the back-end's solves after
+  // the first). Merged over components: the largest.
+  double constraint_violation = 0.0;
+  int multiplier_updates = 0;
   // Why the step did not converge, when there is more to say than the status: the
   // back-end's own termination (Ceres, Ipopt), what stalled, what was not finite (else
   // empty).
@@ -212,6 +217,17 @@ class StepSolver {
   // Minimises the component's potential, starting from (and writing into) q. On failure
   // (state_updated() false), q is restored to its value on entry.
   //
+  // Exact joints (compliance 0; term.hpp, Constraint) are enforced by an augmented
+  // Lagrangian loop around the back-end's minimisation, the same for the three back-ends:
+  // after each solve, while the largest violation ‖c‖∞ exceeds the tolerance (metres and
+  // radians, as for the Newton step), every multiplier is updated, s ← s + c, and the
+  // back-end solves again from where it stopped — at most kMaxMultiplierUpdates times per
+  // step. Where a violation has not fallen below a tenth of the previous one, the penalties
+  // are raised tenfold (at most kMaxPenaltyGrowth over the initial ones). The multipliers are
+  // kept from step to step: the joint's force changes little per step, so most steps need
+  // one update or none. A step that is left with a violation above the tolerance (or whose
+  // last solve did not converge) is not converged: status kMaxIterations, with a message.
+  //
   // Every back-end's result passes one test here, so that no back-end can report a
   // non-finite outcome as a step: a step the back-end reports as done (state_updated()) is
   // turned into kNonFinite, with q restored and StepReport::message naming the value, when
@@ -232,13 +248,23 @@ class StepSolver {
   // SolverOptions::measure_condition for the next solves (Newton only; others ignore it).
   virtual void set_measure_condition(bool) {}
 
+  static constexpr int kMaxMultiplierUpdates = 30;
+  static constexpr double kMaxPenaltyGrowth = 1e6;
+
  protected:
+  explicit StepSolver(const SolverOptions& options) : tolerance_(options.tolerance) {}
+
   // The back-end's minimisation behind solve() (same contract, before the test).
   virtual StepReport minimize(State& q) = 0;
 
  private:
   // The name of the first non-finite value of the test in solve(), or nullptr.
   const char* non_finite_value(const StepReport& report, const State& q) const;
+  // The augmented Lagrangian loop above, after the first minimisation gave `report`.
+  void enforce_exact_constraints(State& q, StepReport& report);
+
+  double tolerance_;
+  double penalty_growth_ = 1.0;  // the penalties' factor over their initial values
 
   // Sized at the first solve (solve allocates nothing after it).
   bool sized_ = false;

@@ -5,8 +5,11 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <fstream>
+#include <sstream>
 #include <numbers>
 #include <string>
 #include <vector>
@@ -18,6 +21,7 @@
 #include "lib/so3.hpp"
 #include "problems/scene.hpp"
 #include "solvers/simulator.hpp"
+#include "solvers/step_solver.hpp"
 
 namespace liedyn {
 namespace {
@@ -39,48 +43,173 @@ Vector3 world_point(const State& q, int body, const Vector3& local) {
 // series, 11θ₀⁴/3072, is 3e-5). Backward Euler shifts the period by O((ωh)²) ≈ 6e-5 at
 // h = 2 ms (ω = 3.74 rad/s) and the hinge's compliance by ~1e-6: 1e-3 bounds all of them with
 // room, while a pivot in the wrong place (L off by 1 %) would miss by 5e-3.
-TEST(Joints, HingedPendulumSwingsWithTheCompoundPendulumPeriod) {
-  const Scene scene = joint_scene("pendulum.json");
+struct PendulumRun {
+  std::vector<double> crossings;  // times of the upward crossings of x = 0
+  double out_of_plane = 0.0;      // largest |y| of the centre of mass
+  double gap = 0.0;               // largest distance of the pivot point from the origin
+  double tilt = 0.0;              // largest ‖R ŷ − ŷ‖ of the hinge axis
+  double reported = 0.0;          // largest StepReport::constraint_violation
+};
+PendulumRun run_pendulum(const Scene& scene, int frames) {
   Simulator sim(scene.model, scene.solver);
-  std::vector<double> crossings;
-  double x_before = sim.state().points[0].x(), out_of_plane = 0.0, gap = 0.0;
-  for (int k = 1; k <= scene.frames; ++k) {
-    ASSERT_TRUE(sim.step().converged()) << "frame " << k;
+  PendulumRun run;
+  double x_before = sim.state().points[0].x();
+  for (int k = 1; k <= frames; ++k) {
+    const StepReport report = sim.step();
+    EXPECT_TRUE(report.converged()) << "frame " << k << " " << report.message;
+    if (!report.converged()) break;
+    run.reported = std::max(run.reported, report.constraint_violation);
     const double x = sim.state().points[0].x();
     if (x_before < 0.0 && x >= 0.0) {
-      crossings.push_back(sim.time() - scene.model.time_step * x / (x - x_before));
+      run.crossings.push_back(sim.time() - scene.model.time_step * x / (x - x_before));
     }
     x_before = x;
-    out_of_plane = std::max(out_of_plane, std::abs(sim.state().points[0].y()));
-    gap = std::max(gap, world_point(sim.state(), 0, Vector3(0, 0, 0.5)).norm());
+    run.out_of_plane = std::max(run.out_of_plane, std::abs(sim.state().points[0].y()));
+    run.gap = std::max(run.gap, world_point(sim.state(), 0, Vector3(0, 0, 0.5)).norm());
+    run.tilt = std::max(run.tilt, (sim.state().rotations[0] * Vector3::UnitY() - Vector3::UnitY()).norm());
   }
-  ASSERT_GE(crossings.size(), 3u);
+  return run;
+}
+
+TEST(Joints, HingedPendulumSwingsWithTheCompoundPendulumPeriod) {
+  Scene scene = joint_scene("pendulum.json");  // an exact hinge
   const double m = 1.0, I = 0.1, L = 0.5, g = 9.81, theta0 = 0.3;
   const double expected =
       2.0 * std::numbers::pi * std::sqrt((I + m * L * L) / (m * g * L)) * (1.0 + theta0 * theta0 / 16.0);
-  for (std::size_t i = 1; i < crossings.size(); ++i) {
-    EXPECT_NEAR((crossings[i] - crossings[i - 1]) / expected, 1.0, 1e-3) << "period " << i;
+  const PendulumRun exact = run_pendulum(scene, scene.frames);
+  ASSERT_GE(exact.crossings.size(), 3u);
+  for (std::size_t i = 1; i < exact.crossings.size(); ++i) {
+    EXPECT_NEAR((exact.crossings[i] - exact.crossings[i - 1]) / expected, 1.0, 1e-3) << "period " << i;
   }
-  EXPECT_EQ(out_of_plane, 0.0);  // a swing in the x-z plane stays there exactly
-  // The pivot stays at the origin within the hinge's compliance × its load (≲ 20 N).
-  EXPECT_LT(gap, 20.0 * 1e-7);
+  EXPECT_EQ(exact.out_of_plane, 0.0);  // a swing in the x-z plane stays there exactly
+  // The exact hinge holds to the tolerance: ‖c‖∞ ≤ tol as reported, and measured here
+  // independently (‖c‖₂ ≤ √3 ‖c‖∞).
+  EXPECT_LE(exact.reported, scene.solver.tolerance);
+  EXPECT_LE(exact.gap, std::sqrt(3.0) * scene.solver.tolerance);
+  EXPECT_LE(exact.tilt, std::sqrt(3.0) * scene.solver.tolerance);
+  // Elastic (compliance 1e-7): the same period, and the pivot opens by compliance × its load
+  // (≲ 20 N), far beyond the exact hinge's gap.
+  scene.model.joints[0].compliance = scene.model.joints[0].compliance_rotation = 1e-7;
+  const PendulumRun elastic = run_pendulum(scene, scene.frames);
+  ASSERT_EQ(elastic.crossings.size(), exact.crossings.size());
+  for (std::size_t i = 1; i < elastic.crossings.size(); ++i) {
+    EXPECT_NEAR((elastic.crossings[i] - elastic.crossings[i - 1]) / expected, 1.0, 1e-3) << "period " << i;
+  }
+  EXPECT_LT(elastic.gap, 20.0 * 1e-7);
+  EXPECT_GT(elastic.gap, 100.0 * exact.gap);
+  EXPECT_EQ(elastic.reported, 0.0);  // no exact joint to report
+}
+
+// Drift: over 10⁴ steps (20 s, ~12 periods) the exact hinge never opens beyond the tolerance,
+// whatever the multipliers went through (they are carried from step to step).
+TEST(Joints, AnExactHingeDoesNotDriftOverTenThousandSteps) {
+  const Scene scene = joint_scene("pendulum.json");
+  const PendulumRun run = run_pendulum(scene, 10000);
+  EXPECT_GE(run.crossings.size(), 11u);
+  EXPECT_LE(run.reported, scene.solver.tolerance);
+  EXPECT_LE(run.gap, std::sqrt(3.0) * scene.solver.tolerance);
+  EXPECT_LE(run.tilt, std::sqrt(3.0) * scene.solver.tolerance);
+}
+
+// The double pendulum on exact ball joints (joints/double_pendulum.json), a 3-D chaotic
+// motion: the total energy never increases (backward Euler; an exact joint does no work and
+// is not in the potential energy) and both joints hold to the tolerance at every step.
+TEST(Joints, DoublePendulumOnExactBallJointsLosesEnergyAndHolds) {
+  const Scene scene = joint_scene("double_pendulum.json");
+  Simulator sim(scene.model, scene.solver);
+  double energy = sim.kinetic_energy() + sim.potential_energy(), gap = 0.0, reported = 0.0;
+  const double initial = energy;
+  const Vector3 back(-0.15, 0, 0), front(0.15, 0, 0);
+  for (int k = 1; k <= scene.frames; ++k) {
+    const StepReport r = sim.step();
+    ASSERT_TRUE(r.converged()) << "frame " << k << " " << r.message;
+    reported = std::max(reported, r.constraint_violation);
+    const double e = sim.kinetic_energy() + sim.potential_energy();
+    EXPECT_LE(e, energy + 1e-12) << "frame " << k;
+    energy = e;
+    gap = std::max({gap, world_point(sim.state(), 0, back).norm(),
+                    (world_point(sim.state(), 1, back) - world_point(sim.state(), 0, front)).norm()});
+  }
+  EXPECT_LT(energy, initial);
+  EXPECT_LE(reported, scene.solver.tolerance);
+  EXPECT_LE(gap, std::sqrt(3.0) * scene.solver.tolerance);
+  // The motion left the plane: the lower bar's kick across it is not lost.
+  EXPECT_GT(std::abs(sim.state().points[1].y()), 1e-2);
+}
+
+// Two bodies welded together move as one rigid body: their relative pose stays to the
+// tolerance while the pair spins and falls (from velocities of one rigid motion, v_b = ω × r).
+TEST(Joints, AnExactWeldMakesTwoBodiesOne) {
+  const Scene scene = parse_scene(R"({
+    "time_step": 0.005, "frames": 400, "gravity": [0, 0, -9.81],
+    "solver": { "tolerance": 1e-10, "max_iterations": 50 },
+    "bodies": [ { "name": "a", "mass": 1, "inertia": [0.01, 0.02, 0.03],
+                  "angular_velocity": [0.3, 2, 0.5] },
+                { "name": "b", "mass": 2, "inertia": [0.02, 0.03, 0.04], "position": [0.3, 0, 0],
+                  "orientation": [0.9, 0.3, -0.2, 0.2449489742783178],
+                  "linear_velocity": [0, 0.15, -0.6], "angular_velocity": [0.3, 2, 0.5] } ],
+    "joints": [ { "type": "weld", "a": { "body": "b", "point": [0, 0, 0] }, "b": { "body": "a" } } ] })",
+                                 "weld.json");
+  Simulator sim(scene.model, scene.solver);
+  const Matrix3 relative0 = sim.state().rotations[1].transpose() * sim.state().rotations[0];
+  const Vector3 offset0 = sim.state().rotations[0].transpose() * (sim.state().points[1] - sim.state().points[0]);
+  double drift = 0.0, turn = 0.0, reported = 0.0, spun = 0.0;
+  for (int k = 1; k <= scene.frames; ++k) {
+    const StepReport r = sim.step();
+    ASSERT_TRUE(r.converged()) << "frame " << k << " " << r.message;
+    reported = std::max(reported, r.constraint_violation);
+    const State& q = sim.state();
+    drift = std::max(drift, (q.rotations[0].transpose() * (q.points[1] - q.points[0]) - offset0).norm());
+    turn = std::max(turn, so3::log(relative0.transpose() * q.rotations[1].transpose() * q.rotations[0]).norm());
+    spun = std::max(spun, so3::log(q.rotations[0]).norm());
+  }
+  EXPECT_LE(reported, scene.solver.tolerance);
+  EXPECT_LE(drift, 1e-9);  // ‖c‖ ≤ √3 tol, seen from the turning body a
+  EXPECT_LE(turn, std::sqrt(3.0) * scene.solver.tolerance);
+  EXPECT_GT(spun, 1.0);  // the pair did spin
+}
+
+// Exact joints that cannot all hold (two pivots 0.2 m apart on the body, 0.3 m apart in the
+// world) are reported, not hidden: the step is not converged, says why, and the violation
+// stays ~0.1 m.
+TEST(Joints, ExactJointsThatCannotHoldAreReported) {
+  const Scene scene = parse_scene(R"({
+    "time_step": 0.01, "frames": 1, "gravity": [0, 0, -9.81],
+    "bodies": [ { "name": "a", "mass": 1, "inertia": [0.1, 0.1, 0.1] } ],
+    "joints": [ { "type": "ball", "a": { "body": "a", "point": [-0.1, 0, 0] }, "b": { "world": [-0.15, 0, 0] } },
+                { "type": "ball", "a": { "body": "a", "point": [0.1, 0, 0] }, "b": { "world": [0.15, 0, 0] } } ] })",
+                                 "impossible.json");
+  Simulator sim(scene.model, scene.solver);
+  const StepReport r = sim.step();
+  EXPECT_TRUE(r.state_updated());
+  EXPECT_FALSE(r.converged()) << to_string(r.status);
+  EXPECT_EQ(r.multiplier_updates, StepSolver::kMaxMultiplierUpdates);
+  EXPECT_GT(r.constraint_violation, 0.01);
+  EXPECT_NE(r.message.find("exact joints: largest violation"), std::string::npos) << r.message;
 }
 
 // Kicked out of its plane, the hinge holds the axis: the body's swing axis stays within the
 // rotational compliance × the torque it takes (ω_x = 1 rad/s against k = 1e7 N·m/rad and
 // I = 0.1 kg m²: an angle ~ ω √(I/k) = 1e-4 rad).
+// An exact hinge (the bundled scene) holds it to the tolerance: ‖R ŷ − ŷ‖ ≤ √3 × 1e-9.
 TEST(Joints, AHingeHoldsItsAxisAgainstAnOutOfPlaneKick) {
   Scene scene = joint_scene("pendulum.json");
   scene.model.bodies[0].angular_velocity = Vector3(1.0, 0.0, 0.0);
-  Simulator sim(scene.model, scene.solver);
-  double tilt = 0.0;
-  for (int k = 1; k <= 500; ++k) {
-    ASSERT_TRUE(sim.step().state_updated()) << "frame " << k;
-    const Vector3 axis = sim.state().rotations[0] * Vector3::UnitY();
-    tilt = std::max(tilt, std::acos(std::min(1.0, axis.dot(Vector3::UnitY()))));
-  }
-  EXPECT_GT(tilt, 1e-6);  // the kick did reach the hinge
-  EXPECT_LT(tilt, 1e-3);
+  const auto largest_tilt = [](const Scene& s) {
+    Simulator sim(s.model, s.solver);
+    double tilt = 0.0;
+    for (int k = 1; k <= 500; ++k) {
+      EXPECT_TRUE(sim.step().converged()) << "frame " << k;
+      const Vector3 axis = sim.state().rotations[0] * Vector3::UnitY();
+      tilt = std::max(tilt, (axis - Vector3::UnitY()).norm());
+    }
+    return tilt;
+  };
+  EXPECT_LE(largest_tilt(scene), std::sqrt(3.0) * scene.solver.tolerance);
+  scene.model.joints[0].compliance = scene.model.joints[0].compliance_rotation = 1e-7;
+  const double elastic = largest_tilt(scene);
+  EXPECT_GT(elastic, 1e-6);  // the kick did reach the hinge
+  EXPECT_LT(elastic, 1e-3);
 }
 
 // A body welded to the world, in static equilibrium under gravity and a torque: it sags by
@@ -146,9 +275,14 @@ TEST(Joints, HingedChainNeverGainsEnergyAndItsHingesAreSpringsOfTheirCompliance)
 }
 
 // Every back-end and parameterisation (Ipopt has no quat) gives the Newton/Lie trajectory of the chain (the
-// hinges between bodies and to the world) to within the step tolerance's effect.
-TEST(Joints, BackEndsAndParameterisationsAgreeOnTheChain) {
+// hinges between bodies and to the world) to within the step tolerance's effect, with
+// elastic hinges (the bundled chain) and exact ones (each back-end inside the same augmented
+// Lagrangian loop, holding them to the tolerance).
+class JointsChain : public ::testing::TestWithParam<double> {};
+INSTANTIATE_TEST_SUITE_P(Compliance, JointsChain, ::testing::Values(1e-6, 0.0));
+TEST_P(JointsChain, BackEndsAndParameterisationsAgree) {
   Scene scene = joint_scene("chain.json");
+  for (JointSpec& j : scene.model.joints) j.compliance = j.compliance_rotation = GetParam();
   const int frames = 100;
   const auto run = [&](Backend backend, RotationParameterization rotation) {
     SolverOptions o = scene.solver;
@@ -157,7 +291,8 @@ TEST(Joints, BackEndsAndParameterisationsAgreeOnTheChain) {
     Simulator sim(scene.model, o);
     for (int k = 1; k <= frames; ++k) {
       const StepReport r = sim.step();
-      EXPECT_TRUE(r.state_updated()) << to_string(backend) << " frame " << k << " " << r.message;
+      EXPECT_TRUE(r.converged()) << to_string(backend) << " frame " << k << " " << r.message;
+      EXPECT_LE(r.constraint_violation, scene.solver.tolerance) << to_string(backend) << " frame " << k;
     }
     return sim.state();
   };
@@ -236,12 +371,14 @@ TEST(Joints, BadJointsNameTheirField) {
     }
     return std::string("accepted");
   };
-  EXPECT_EQ(error(R"({ "type": "ball", "compliance": 0, "a": { "body": "a" } })")
-                .rfind("joints[0].compliance: exact joints (compliance 0) are not implemented yet", 0),
-            0u);
   EXPECT_EQ(error(R"({ "type": "ball", "compliance": -1, "a": { "body": "a" } })")
-                .rfind("joints[0].compliance: must be a finite number > 0", 0),
+                .rfind("joints[0].compliance: must be 0 (an exact joint) or a finite number > 0", 0),
             0u);
+  EXPECT_EQ(error(R"({ "type": "hinge", "compliance_rotation": 1e-320, "a": { "body": "a", "axis": [0, 0, 1] } })")
+                .rfind("joints[0].compliance_rotation: must be 0 (an exact joint) or a finite number > 0 whose inverse is finite", 0),
+            0u);
+  // Without a compliance a joint is exact, in both parts.
+  EXPECT_EQ(error(R"({ "type": "ball", "a": { "body": "a" } })"), "accepted");
   EXPECT_EQ(error(R"({ "type": "slider", "compliance": 1, "a": { "body": "a" } })")
                 .rfind("joints[0].type: \"slider\" joints are not implemented yet", 0),
             0u);
@@ -331,6 +468,47 @@ TEST_F(JointsCli, GradcheckPassesThroughEveryJointType) {
   std::ofstream(dir_ / "gripper.json") << gripper.dump();
   const Result through_rod = run({"gradcheck", "gripper.json"});
   EXPECT_EQ(through_rod.exit_code, 0) << through_rod.out << through_rod.err;
+}
+
+// frames.csv reports the largest violation of the exact joints per frame (the column
+// constraint_violation, with the multiplier updates beside it): at the tolerance for the
+// bundled pendulum. Gradients through exact joints are refused, naming the joint.
+TEST_F(JointsCli, FramesReportTheExactJointsViolationAndGradientsAreRefused) {
+  const Result r = run({"simulate", (kScenes / "joints/pendulum.json").string(), "--out", "out"});
+  ASSERT_EQ(r.exit_code, 0) << r.out << r.err;
+  std::ifstream frames(dir_ / "out/frames.csv");
+  std::string header, line;
+  std::getline(frames, header);
+  const std::string column = "constraint_violation";
+  const auto position = header.find(column);
+  ASSERT_NE(position, std::string::npos) << header;
+  const auto index = std::count(header.begin(), header.begin() + position, ',');
+  int rows = 0;
+  double largest = 0.0;
+  while (std::getline(frames, line)) {
+    std::stringstream fields(line);
+    std::string field;
+    for (long i = 0; i <= index; ++i) std::getline(fields, field, ',');
+    largest = std::max(largest, std::stod(field));
+    ++rows;
+  }
+  EXPECT_EQ(rows, 2501);
+  EXPECT_LE(largest, 1e-9);
+  EXPECT_GT(largest, 0.0);  // a real measurement: round-off and the tolerance leave a trace
+
+  nlohmann::json scene = nlohmann::json::parse(test::read_file(kScenes / "joints/pendulum.json"));
+  scene["frames"] = 10;
+  scene["optimization"] = nlohmann::json::parse(R"({
+      "parameters": [ { "kind": "body_angular_velocity", "body": "pendulum" } ],
+      "objective": [ { "term": "body_pose", "body": "pendulum", "frame": -1,
+                       "position": [0, 0, -0.5], "orientation": [1, 0, 0, 0] } ] })");
+  std::ofstream(dir_ / "exact.json") << scene.dump();
+  const Result refused = run({"gradcheck", "exact.json"});
+  EXPECT_NE(refused.exit_code, 0);
+  EXPECT_NE(refused.err.find("joints[0].compliance: 0 (an exact joint): gradients through exact "
+                             "joints are not implemented yet"),
+            std::string::npos)
+      << refused.err;
 }
 
 }  // namespace
