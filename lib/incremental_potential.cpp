@@ -203,6 +203,18 @@ void add_joint_terms(const Model& model, std::vector<Component>& components) {
       hinge.axis_b = j.axis_b;
       set_stiffness(hinge, j.compliance_rotation, inertia);
       p.add(hinge);
+      if (j.has_motor) {
+        JointMotor motor;
+        motor.offsets = {oa[1], ob[1]};
+        motor.rotation_a = j.a.body;
+        motor.rotation_b = j.b.body;
+        motor.axis_a = j.axis_a;
+        motor.torque = j.motor_torque;
+        motor.control = j.motor;
+        motor.R_previous_a = model.bodies[j.a.body].orientation;
+        if (j.b.body >= 0) motor.R_previous_b = model.bodies[j.b.body].orientation;
+        p.add(motor);
+      }
     } else if (j.type == JointSpec::Type::kWeld) {
       JointWeld weld;
       weld.offsets = {oa[1], ob[1]};

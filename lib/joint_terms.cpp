@@ -158,4 +158,65 @@ void JointWeld::residual(const State& q, Residual& r, ResidualJacobian* J) const
   }
 }
 
+void JointMotor::begin_step(const State& previous, const Step&) {
+  R_previous_a = previous.rotations[rotation_a];
+  if (rotation_b >= 0) R_previous_b = previous.rotations[rotation_b];
+}
+
+ConstantTorque JointMotor::end_torque(int end) const {
+  ConstantTorque t;
+  t.rotation = end == 0 ? rotation_a : rotation_b;
+  t.R_previous = end == 0 ? R_previous_a : R_previous_b;
+  t.torque = (end == 0 ? torque : -torque) * axis();
+  t.scale = scale;
+  return t;
+}
+
+double JointMotor::evaluate(const State& q, LocalGradient<2>* g, LocalHessian<2>* H) const {
+  if (H != nullptr) H->setZero();  // the ends' torques do not couple
+  LocalGradient<1> g_end;
+  LocalHessian<1> H_end;
+  double value = 0.0;
+  for (int end = 0; end < 2; ++end) {
+    if (end == 1 && rotation_b < 0) {
+      if (g != nullptr) g->segment<3>(3).setZero();
+      break;
+    }
+    value += end_torque(end).evaluate(q, g != nullptr ? &g_end : nullptr,
+                                      H != nullptr ? &H_end : nullptr);
+    if (g != nullptr) g->segment<3>(3 * end) = g_end;
+    if (H != nullptr) H->block<3, 3>(3 * end, 3 * end) = H_end;
+  }
+  return value;
+}
+
+void JointMotor::add_step_adjoint(const State& q, const State&, const Step&,
+                                  const LocalGradient<2>& z, Eigen::VectorXd& a_previous,
+                                  Eigen::VectorXd&) const {
+  const ConstantTorque on_a = end_torque(0);
+  // τ hat(ê): M = torque_jacobian carries the load scale itself.
+  const Matrix3 tau_hat_axis = torque * so3::hat(axis());
+  // R_{a,k−1} through P_a, and through ê in both ends' torques (header).
+  const Matrix3 dC_a = on_a.previous_jacobian(q) - on_a.torque_jacobian(q) * tau_hat_axis;
+  Vector3 into_a = dC_a.transpose() * z.head<3>();
+  if (rotation_b >= 0) {
+    const ConstantTorque on_b = end_torque(1);
+    const Matrix3 dC_b_da = on_b.torque_jacobian(q) * tau_hat_axis;
+    into_a += dC_b_da.transpose() * z.tail<3>();
+    a_previous.segment<3>(tangent_rotation(q, rotation_b)) +=
+        on_b.previous_jacobian(q).transpose() * z.tail<3>();
+  }
+  a_previous.segment<3>(tangent_rotation(q, rotation_a)) += into_a;
+}
+
+void JointMotor::add_parameter_adjoint(const State& q, int frame, const LocalGradient<2>& z,
+                                       Eigen::VectorXd& dgamma) const {
+  const int slot = control.slot_at(frame);
+  if (slot < 0) return;
+  const Vector3 e = axis();
+  double d = (end_torque(0).torque_jacobian(q) * e).dot(z.head<3>());
+  if (rotation_b >= 0) d -= (end_torque(1).torque_jacobian(q) * e).dot(z.tail<3>());
+  dgamma(slot) += d;
+}
+
 }  // namespace liedyn

@@ -52,6 +52,7 @@
 // order: once the joint holds (F_a = F_b = F) the shifted E becomes F S' Fᵀ, which keeps the
 // current F_a S F_bᵀ — the torque ρ log E — when S' = F_bᵀ F_a S.
 
+#include "loads.hpp"
 #include "state.hpp"
 #include "term.hpp"
 
@@ -131,6 +132,41 @@ struct JointWeld {
   // Constraint (term.hpp): c = log(R_a A Bᵀ R_bᵀ), without the shift.
   double violation(const State& q) const;
   void update_multiplier(const State& q);
+};
+
+// A hinge's motor: a torque τ about the hinge axis, τ ê on body a and −τ ê on body b (none
+// on the world). ê = R_{a,k−1} â is the axis at the start of the step (lagged, first order like
+// backward Euler: a motor's work over a step is τ times the turn about the axis it had). Each
+// end's part is a ConstantTorque (loads.hpp) of that torque, whose incremental potential,
+// derivatives and adjoint blocks it takes; the axis's own dependence on R_{a,k−1},
+// ∂ê/∂φ_a = −hat(ê), adds to the previous-step block of a:
+//   C_a = M_a τ ê,  C_b = −M_b τ ê  (M = ConstantTorque's ∂C/∂torque)
+//   ⇒ ∂C_a/∂φ_a ⊇ −τ M_a hat(ê),  ∂C_b/∂φ_a ⊇ τ M_b hat(ê);
+// and ∂C/∂τ = (M_a ê, −M_b ê). τ is scheduled per frame and may be an optimisation parameter
+// (kind joint_motor); static load stepping scales it like any torque.
+struct JointMotor {
+  static constexpr int kBlocks = 2;
+  static constexpr const char* kName = "joint_motor";
+  std::array<int, kBlocks> offsets{-1, -1};  // θ_a, θ_b
+  int rotation_a = -1, rotation_b = -1;      // State::rotations; b −1: the world
+  Vector3 axis_a = Vector3::UnitZ();         // â, unit, in a's body coordinates
+  double torque = 0.0;                       // τ, N·m, about +ê (turns b against a by −τ)
+  double scale = 1.0;
+  ScheduledParameter<1> control;
+  Matrix3 R_previous_a = Matrix3::Identity(), R_previous_b = Matrix3::Identity();
+
+  void begin_step(const State& previous, const Step& previous_step);
+  void begin_frame(int k) { torque = control.at(k, Eigen::Matrix<double, 1, 1>(torque))(0); }
+  double evaluate(const State& q, LocalGradient<2>* g, LocalHessian<2>* H) const;
+  void add_step_adjoint(const State& q, const State& previous, const Step& previous_step,
+                        const LocalGradient<kBlocks>& z, Eigen::VectorXd& a_previous,
+                        Eigen::VectorXd& da_previous) const;
+  void add_parameter_adjoint(const State& q, int frame, const LocalGradient<kBlocks>& z,
+                             Eigen::VectorXd& dgamma) const;
+
+  // ê, and the ConstantTorque that end 0 (a) or 1 (b) feels.
+  Vector3 axis() const { return R_previous_a * axis_a; }
+  ConstantTorque end_torque(int end) const;
 };
 
 }  // namespace liedyn

@@ -170,6 +170,15 @@ void Model::validate() const {
                          "finite (an elastic joint)");
       }
     }
+    if (j.has_motor) {
+      if (j.type != JointSpec::Type::kHinge) {
+        throw ModelError(field("motor"), "only a hinge has a motor (a torque about its axis)");
+      }
+      if (!std::isfinite(j.motor_torque)) throw ModelError(field("motor.torque"), "must be finite");
+      for (const auto& tau : j.motor.schedule) {
+        if (!std::isfinite(tau(0))) throw ModelError(field("motor.torque"), "must be finite in every frame");
+      }
+    }
     if (j.type == JointSpec::Type::kHinge) {
       for (const auto& [axis, member] : {std::pair{j.axis_a, "a.axis"}, std::pair{j.axis_b, "b.axis"}}) {
         if (!(std::abs(axis.norm() - 1.0) <= 1e-12)) throw ModelError(field(member), "must be a unit vector");

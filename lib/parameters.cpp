@@ -17,7 +17,7 @@ struct KindName {
   ParameterKind kind;
   const char* name;
 };
-constexpr std::array<KindName, 15> kKindNames{{
+constexpr std::array<KindName, 16> kKindNames{{
     {ParameterKind::kBodyLinearVelocity, "body_linear_velocity"},
     {ParameterKind::kBodyAngularVelocity, "body_angular_velocity"},
     {ParameterKind::kBodyPosition, "body_position"},
@@ -27,6 +27,7 @@ constexpr std::array<KindName, 15> kKindNames{{
     {ParameterKind::kTorque, "torque"},
     {ParameterKind::kNodeForce, "node_force"},
     {ParameterKind::kCableTension, "cable_tension"},
+    {ParameterKind::kJointMotor, "joint_motor"},
     {ParameterKind::kRestDarboux, "rest_darboux"},
     {ParameterKind::kRestDarbouxPerFrame, "rest_darboux_per_frame"},
     {ParameterKind::kSpringStiffness, "spring_stiffness"},
@@ -54,6 +55,16 @@ ScheduledParameter<3> schedule_from(const Eigen::VectorXd& gamma, int slot, int 
   s.stride = 3;
   s.schedule.resize(frames);
   for (int k = 0; k < frames; ++k) s.schedule[k] = gamma.segment<3>(slot + 3 * k);
+  return s;
+}
+
+// The same for one number per step (stride 1).
+ScheduledParameter<1> scalar_schedule_from(const Eigen::VectorXd& gamma, int slot, int frames) {
+  ScheduledParameter<1> s;
+  s.slot = slot;
+  s.stride = 1;
+  s.schedule.resize(frames);
+  for (int k = 0; k < frames; ++k) s.schedule[k](0) = gamma(slot + k);
   return s;
 }
 
@@ -112,6 +123,7 @@ long long ParameterSet::block_size(const Model& model, ParameterKind kind, int i
     case ParameterKind::kNodeForce:
       return 3 * frames;
     case ParameterKind::kCableTension:
+    case ParameterKind::kJointMotor:
       return frames;
     case ParameterKind::kRestDarboux:
       return 3 * (nodes - 2);
@@ -131,7 +143,8 @@ void ParameterSet::add(const Model& model, ParameterKind kind, int index, int su
     // Forces, torques and springs are chosen by "index"; bodies and rods by name (resolved
     // by the caller), so an index of theirs is the caller's error, reported at the block.
     const bool by_index = kind == ParameterKind::kForce || kind == ParameterKind::kTorque ||
-                          kind == ParameterKind::kSpringStiffness;
+                          kind == ParameterKind::kSpringStiffness ||
+                          kind == ParameterKind::kJointMotor;
     throw ModelError(by_index ? field + ".index" : field,
                      std::string("refers to ") + what + " " + std::to_string(index) +
                          ", but the model has " + std::to_string(count));
@@ -152,6 +165,15 @@ void ParameterSet::add(const Model& model, ParameterKind kind, int index, int su
   if (kind == ParameterKind::kSpringStiffness &&
       (index < 0 || index >= static_cast<int>(model.springs.size()))) {
     out_of_range("spring", model.springs.size());
+  }
+  if (kind == ParameterKind::kJointMotor) {
+    if (index < 0 || index >= static_cast<int>(model.joints.size())) {
+      out_of_range("joint", model.joints.size());
+    }
+    if (!model.joints[index].has_motor) {
+      throw ModelError(field + ".index", "joint " + std::to_string(index) +
+                                             " has no motor (give it \"motor\": {\"torque\": …})");
+    }
   }
   if (kind == ParameterKind::kNodeForce &&
       (sub < 0 || sub >= static_cast<int>(model.rods[index].node_forces.size()))) {
@@ -221,6 +243,8 @@ std::string ParameterSet::describe(const Model& model, int i) const {
         return rod + ".node_forces" + bracket(b.sub) + step;
       case ParameterKind::kCableTension:
         return rod + ".cables" + bracket(b.sub) + ".tension.frame" + bracket(j + 1);
+      case ParameterKind::kJointMotor:
+        return "joints" + bracket(b.index) + ".motor.torque.frame" + bracket(j + 1);
       case ParameterKind::kRestDarboux:
         return rod + ".rest_darboux" + bracket(j / 3) + axis;
       case ParameterKind::kRestDarbouxPerFrame: {
@@ -297,6 +321,7 @@ Eigen::VectorXd ParameterSet::initial_values(const Model& model) const {
       case ParameterKind::kCableTension:
         block.setConstant(model.rods[b.index].cables[b.sub].tension);
         break;
+      case ParameterKind::kJointMotor: block.setConstant(model.joints[b.index].motor_torque); break;
       case ParameterKind::kRestDarboux:
       case ParameterKind::kRestDarbouxPerFrame: {
         const std::vector<Vector3> rest = discretize(model.rods[b.index]).rest_darboux;
@@ -346,14 +371,12 @@ Model ParameterSet::apply(const Model& base, const Eigen::VectorXd& gamma) const
       case ParameterKind::kNodeForce:
         m.rods[b.index].node_forces[b.sub].control = schedule_from(gamma, b.offset, frames_);
         break;
-      case ParameterKind::kCableTension: {
-        ScheduledParameter<1>& c = m.rods[b.index].cables[b.sub].control;
-        c.slot = b.offset;
-        c.stride = 1;
-        c.schedule.resize(frames_);
-        for (int k = 0; k < frames_; ++k) c.schedule[k](0) = block(k);
+      case ParameterKind::kCableTension:
+        m.rods[b.index].cables[b.sub].control = scalar_schedule_from(gamma, b.offset, frames_);
         break;
-      }
+      case ParameterKind::kJointMotor:
+        m.joints[b.index].motor = scalar_schedule_from(gamma, b.offset, frames_);
+        break;
       case ParameterKind::kRestDarboux:
       case ParameterKind::kRestDarbouxPerFrame: {
         RodSpec& rod = m.rods[b.index];

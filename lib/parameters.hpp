@@ -18,6 +18,7 @@
 //   force, torque            3·n     per-step world force (at a body point) / torque
 //   node_force               3·n     per-step world force on a rod node (rods[r].node_forces[j])
 //   cable_tension            n       per-step tension of a rod's cable (rods[r].cables[c])
+//   joint_motor              n       per-step torque of a hinge's motor (joints[i].motor)
 //   rest_darboux             3·(nodes−2)      static rest Darboux vectors of a rod
 //   rest_darboux_per_frame   3·(nodes−2)·n    per-step rest Darboux vectors (frame-major)
 //   spring_stiffness, stretch_stiffness, shear_stiffness   1
@@ -48,6 +49,7 @@ enum class ParameterKind {
   kTorque,
   kNodeForce,
   kCableTension,
+  kJointMotor,
   kRestDarboux,
   kRestDarbouxPerFrame,
   kSpringStiffness,
@@ -61,7 +63,7 @@ std::optional<ParameterKind> parse_parameter_kind(std::string_view name);
 
 struct ParameterBlock {
   ParameterKind kind;
-  int index = 0;  // body, forces[]/torques[]/springs[] entry, or rod
+  int index = 0;  // body, forces[]/torques[]/springs[]/joints[] entry, or rod
   int sub = -1;   // node_force / cable_tension: its index in rods[index].node_forces / cables
   int offset = 0;
   int size = 0;
@@ -80,8 +82,8 @@ class ParameterSet {
   // Appends a block; throws ModelError naming `field` (e.g. "optimization.parameters[2]")
   // when the block repeats one already added, γ would exceed kMaxSize or a rod's node
   // velocities are asked for when every node of the rod is clamped, and the key of an
-  // index that does not exist in the model (`field`.index for forces, torques and springs,
-  // .node_force, .cable).
+  // index that does not exist in the model (`field`.index for forces, torques, springs and
+  // joints — a joint must have a motor —, .node_force, .cable).
   void add(const Model& model, ParameterKind kind, int index, int sub, const std::string& field);
 
   // Bounds of the last block added; throws ModelError naming `field` unless lower < upper

@@ -75,6 +75,7 @@ void parse_parameter(ObjectReader& r, const Scene& scene, OptimizationSpec& spec
     case ParameterKind::kForce:
     case ParameterKind::kTorque:
     case ParameterKind::kSpringStiffness:
+    case ParameterKind::kJointMotor:
       index = r.integer("index", 0);
       break;
     case ParameterKind::kNodeForce:
@@ -297,6 +298,7 @@ OptimizationSpec parse_optimization(const json& value, const Scene& scene) {
                      {"torque", {"index"}},
                      {"node_force", {"rod", "node_force"}},
                      {"cable_tension", {"rod", "cable"}},
+                     {"joint_motor", {"index"}},
                      {"rest_darboux", {"rod"}},
                      {"rest_darboux_per_frame", {"rod"}},
                      {"spring_stiffness", {"index"}},

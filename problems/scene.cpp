@@ -120,8 +120,14 @@ JointSpec parse_joint(const json& value, const std::string& path, const std::str
   } else {
     j.fail(j.field("type"), "unknown joint type \"" + type + "\" (expected \"ball\", \"hinge\" or \"weld\")");
   }
-  for (const char* key : {"limits", "motor"}) {
-    if (j.has(key)) j.fail(j.field(key), "joint limits and motors are not implemented yet");
+  if (j.has("limits")) j.fail(j.field("limits"), "joint limits are not implemented yet");
+  if (j.has("motor")) {
+    ObjectReader m(j.get("motor"), j.field("motor"), source, {"torque", "force"});
+    if (m.has("force")) m.fail(m.field("force"), "a force motor drives a slider: sliders are not implemented yet");
+    if (spec.type != JointSpec::Type::kHinge) m.fail(j.field("motor"), "only a hinge has a motor (a torque about its axis)");
+    spec.has_motor = true;
+    spec.motor_torque = m.number("torque");
+    m.finish();
   }
   spec.compliance = j.number("compliance", 0.0);
   spec.compliance_rotation = j.number("compliance_rotation", spec.compliance);

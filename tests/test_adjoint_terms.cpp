@@ -37,6 +37,7 @@
 #include "fd_check.hpp"
 #include "lib/incremental_potential.hpp"
 #include "lib/inertia.hpp"
+#include "lib/joint_terms.hpp"
 #include "lib/loads.hpp"
 #include "lib/model.hpp"
 #include "lib/rod_terms.hpp"
@@ -372,6 +373,133 @@ TEST(AdjointTermConstantTorque, PreviousJacobianMatchesFiniteDifferences) {
     }
   }
   EXPECT_EQ(checked, 6 * static_cast<int>(kAngles.size() * kAngles.size()));
+}
+
+// ----------------------------------------------------------------------------------------
+// Hinge motor (lib/joint_terms.hpp): τ ê on a, −τ ê on b, ê = R_{a,k−1} â. Its value,
+// gradient and Hessian, and its two adjoint blocks — ∂C/∂(R_{a,k−1}, R_{b,k−1}) (through both
+// P's and the lagged axis) and ∂C/∂τ — by finite differences, over the angle list for the
+// previous and current rotations, |τ| from 1e-3 to 1e6, load scale 1 and 0.375, end b a body
+// or the world.
+
+struct MotorCase {
+  JointMotor term;
+  State previous, q;
+};
+
+MotorCase motor_case(double magnitude, double scale, double a_prev, double a, bool world_b,
+                     std::mt19937& rng) {
+  MotorCase c;
+  c.term.rotation_a = 0;
+  c.term.rotation_b = world_b ? -1 : 1;
+  c.term.offsets = {0, world_b ? -1 : 3};
+  c.term.axis_a = random_unit(rng);
+  c.term.torque = magnitude * (rng() % 2 == 0 ? 1.0 : -1.0);
+  c.term.scale = scale;
+  c.previous.rotations = {rotation_at(a_prev, rng), rotation_at(0.7, rng)};
+  c.q.rotations = {rotation_at(a, rng), rotation_at(a_prev, rng)};
+  c.term.begin_step(c.previous, Step{});
+  return c;
+}
+
+TEST(AdjointTermJointMotor, ValueGradientAndHessianMatchFiniteDifferences) {
+  std::mt19937 rng(1031);
+  int checked = 0;
+  for (const bool world_b : {false, true}) {
+    for (const double magnitude : {1e-3, 1.0, 1e6}) {
+      for (const double a_prev : kAngles) {
+        for (const double a : kAngles) {
+          SCOPED_TRACE(trace("world b, |τ|", world_b, magnitude));
+          SCOPED_TRACE(trace("angles R_{k-1}, R", a_prev, a));
+          const MotorCase c = motor_case(magnitude, 0.375, a_prev, a, world_b, rng);
+          // As for ConstantTorque (tests/test_terms.cpp): derivatives of every order are
+          // bounded by |τ|, so FD truncation is ≲ ε²|τ|, and where a step P = R R_{k−1}ᵀ is
+          // near I its block of the Hessian vanishes (V = −τ·θ + O(θ³)).
+          fd::TermCheckOptions opt;
+          opt.hessian.abs_floor = opt.hessian.step * opt.hessian.step * magnitude;
+          opt.hessian_from_value.abs_floor =
+              opt.hessian_from_value.step * opt.hessian_from_value.step * magnitude;
+          const bool small_step_a = so3::distance(c.q.rotations[0], c.previous.rotations[0]) < 1e-3;
+          const bool small_step_b = so3::distance(c.q.rotations[1], c.previous.rotations[1]) < 1e-3;
+          if (small_step_a || (!world_b && small_step_b)) {
+            opt.hessian.require_nonzero = small_step_a && (world_b || small_step_b)
+                                              ? fd::NonZero::kNone
+                                              : fd::NonZero::kAny;
+            opt.hessian_from_value.require_nonzero = opt.hessian.require_nonzero;
+          }
+          EXPECT_TRUE(fd::check_term(c.term, c.q,
+                                     {fd::rotation_dof(0), world_b ? fd::no_dof() : fd::rotation_dof(1)},
+                                     opt));
+          ++checked;
+        }
+      }
+    }
+  }
+  EXPECT_EQ(checked, 6 * static_cast<int>(kAngles.size() * kAngles.size()));
+}
+
+TEST(AdjointTermJointMotor, PreviousStepAndTorqueJacobiansMatchFiniteDifferences) {
+  std::mt19937 rng(1032);
+  int checked = 0;
+  for (const bool world_b : {false, true}) {
+    for (const double magnitude : {1e-3, 1.0, 1e6}) {
+      for (const double scale : {1.0, 0.375}) {
+        for (const double a_prev : kAngles) {
+          for (const double a : {0.0, 1e-9, 1.0, kPi - 1e-6, kPi}) {
+            SCOPED_TRACE(trace("world b, |τ|, scale", world_b, magnitude, scale));
+            SCOPED_TRACE(trace("angles R_{k-1}, R", a_prev, a));
+            const MotorCase c = motor_case(magnitude, scale, a_prev, a, world_b, rng);
+            // ∂C/∂(R_{a,k−1}, R_{b,k−1}), row by row from add_step_adjoint with unit z.
+            Eigen::MatrixXd J(6, 6);
+            for (int i = 0; i < 6; ++i) {
+              LocalGradient<2> z = LocalGradient<2>::Zero();
+              z(i) = 1.0;
+              Eigen::VectorXd a_previous = Eigen::VectorXd::Zero(tangent_size(c.q));
+              Eigen::VectorXd da_previous = Eigen::VectorXd::Zero(tangent_size(c.q));
+              c.term.add_step_adjoint(c.q, c.previous, Step{}, z, a_previous, da_previous);
+              EXPECT_EQ(da_previous.squaredNorm(), 0.0);  // no dependence on the previous step
+              J.row(i) = a_previous.segment<6>(tangent_rotation(c.q, 0)).transpose();
+            }
+            const fd::VectorFunction of_previous = [&](const State& s) {
+              JointMotor t = c.term;
+              t.begin_step(s, Step{});
+              LocalGradient<2> g;
+              t.evaluate(c.q, &g, nullptr);
+              return Eigen::VectorXd(g);
+            };
+            // C is built from P and ê (entries ≤ 1) times s|τ|.
+            if (world_b) J.rightCols<3>().setZero();
+            EXPECT_TRUE(fd::check_vector_jacobian(
+                of_previous, c.previous,
+                {fd::rotation_dof(0), world_b ? fd::no_dof() : fd::rotation_dof(1)}, J, {},
+                scale * magnitude));
+            // ∂C/∂τ, from add_parameter_adjoint with unit z (slot 0 for frame 1).
+            JointMotor with_slot = c.term;
+            with_slot.control.slot = 0;
+            Eigen::MatrixXd dtau(6, 1);
+            for (int i = 0; i < 6; ++i) {
+              LocalGradient<2> z = LocalGradient<2>::Zero();
+              z(i) = 1.0;
+              Eigen::VectorXd dgamma = Eigen::VectorXd::Zero(1);
+              with_slot.add_parameter_adjoint(c.q, 1, z, dgamma);
+              dtau(i, 0) = dgamma(0);
+            }
+            const ParameterFunction of_torque = [&](const Eigen::VectorXd& tau) {
+              JointMotor t = c.term;
+              t.torque = tau(0);
+              LocalGradient<2> g;
+              t.evaluate(c.q, &g, nullptr);
+              return Eigen::VectorXd(g);
+            };
+            EXPECT_TRUE(check_parameter_jacobian(of_torque, Eigen::VectorXd::Constant(1, c.term.torque),
+                                                 Eigen::VectorXd::Constant(1, unit_of(magnitude)), dtau));
+            ++checked;
+          }
+        }
+      }
+    }
+  }
+  EXPECT_EQ(checked, 12 * 5 * static_cast<int>(kAngles.size()));
 }
 
 // ----------------------------------------------------------------------------------------
