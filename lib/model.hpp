@@ -74,7 +74,7 @@ struct JointSpec {
   Matrix3 frame_b = Matrix3::Identity();
   double compliance = 0.0;                    // m/N, ≥ 0 (0: exact)
   double compliance_rotation = 0.0;           // rad/(N·m), ≥ 0 (0: exact)
-  // Hinge motor (lib/joint_terms.hpp, JointMotor): a torque about the axis, +τ on a and −τ
+  // Hinge motor (lib/joint_terms.hpp): a torque about the axis, +τ on a and −τ
   // on b, per step from `motor` (constant `motor_torque` without a schedule).
   bool has_motor = false;
   double motor_torque = 0.0;                  // N·m
