@@ -92,6 +92,31 @@ void IncrementalPotential::scale_penalties(double factor) {
   for_each_exact_constraint(*this, [&](auto& t) { t.stiffness *= factor; });
 }
 
+void IncrementalPotential::exact_forces(const State& q, std::vector<Vector3>& out) const {
+  for_each_exact_constraint(*this, [&](const auto& t) { out.push_back(t.force(q)); });
+}
+
+void IncrementalPotential::set_adjoint_multipliers(const Vector3* multipliers) {
+  for_each_exact_constraint(*this, [&](auto& t) {
+    t.adjoint = true;
+    t.multiplier = *multipliers++;
+  });
+}
+
+void IncrementalPotential::constraint_jacobian(const State& q, Eigen::MatrixXd& J) const {
+  J.setZero();
+  int row = 0;
+  for_each_exact_constraint(*this, [&](const auto& t) {
+    using T = std::decay_t<decltype(t)>;
+    typename T::ConstraintJacobian local;
+    t.constraint(q, &local);
+    for (int b = 0; b < T::kBlocks; ++b) {
+      if (t.offsets[b] >= 0) J.block(row, t.offsets[b], 3, 3) += local.template block<3, 3>(0, 3 * b);
+    }
+    row += 3;
+  });
+}
+
 namespace {
 
 // One shared copy of each collider, for the contact and friction terms of all components.

@@ -153,6 +153,14 @@ class IncrementalPotential {
   double constraint_violation(const State& q) const;
   void update_multipliers(const State& q);
   void scale_penalties(double factor);
+  // For the adjoint (joint_terms.hpp, solvers/adjoint.cpp), in the order of the terms:
+  // appends each exact term's λ (its force or torque, world) at q; switches every exact term
+  // to the Lagrangian λᵀc + ½ρ‖c‖² with λ from `multipliers` (exact_constraints() of them);
+  // and c(q) with J = ∂c/∂q, 3 rows per exact term, in the component's tangent layout
+  // (J sized by the caller: 3·exact_constraints() × dofs).
+  void exact_forces(const State& q, std::vector<Vector3>& out) const;
+  void set_adjoint_multipliers(const Vector3* multipliers);
+  void constraint_jacobian(const State& q, Eigen::MatrixXd& J) const;
 
  private:
   template <class Tuple>

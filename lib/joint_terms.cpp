@@ -27,6 +27,20 @@ Vector3 in_body_a(const State& q, int rotation_a, const Vector3& v) {
   return rotation_a < 0 ? v : Vector3(q.rotations[rotation_a].transpose() * v);
 }
 
+// The adjoint's Lagrangian of an exact part (header): λᵀc + ½ρ‖c‖², its gradient Jᵀ(λ + ρc)
+// and the Gauss–Newton part ρ JᵀJ of its Hessian; the term adds ∇²(λᵀc). The penalty's own
+// curvature ρ ∇²(cᵀc)/2 is left out: it vanishes with c, which is at the tolerance there, and
+// ρ c would otherwise weigh in beside λ (ρ ≈ 10⁴ m/h², so ρ·1e-9 is not small).
+template <class Term>
+double lagrangian(const Term& t, const State& q, LocalGradient<Term::kBlocks>* g,
+                  LocalHessian<Term::kBlocks>* H) {
+  typename Term::ConstraintJacobian J;
+  const Vector3 c = t.constraint(q, &J);
+  if (g != nullptr) *g = J.transpose() * (t.multiplier + t.stiffness * c);
+  if (H != nullptr) *H = t.stiffness * J.transpose() * J;
+  return t.multiplier.dot(c) + 0.5 * t.stiffness * c.squaredNorm();
+}
+
 }  // namespace
 
 AttachedPoint JointPoint::shifted_a() const {
@@ -36,6 +50,14 @@ AttachedPoint JointPoint::shifted_a() const {
 }
 
 double JointPoint::evaluate(const State& q, LocalGradient<4>* g, LocalHessian<4>* H) const {
+  if (adjoint) {  // + ∇²(λᵀc): the rotated points' curvature (point_pair.hpp)
+    const double value = lagrangian(*this, q, g, H);
+    if (H != nullptr) {
+      H->block<3, 3>(3, 3) += rotated_point_curvature(a.lever(q), -multiplier);
+      H->block<3, 3>(9, 9) += rotated_point_curvature(b.lever(q), multiplier);
+    }
+    return value;
+  }
   const AttachedPoint a_s = shifted_a();
   const Vector3 d = b.position(q) - a_s.position(q);
   if (g != nullptr || H != nullptr) {
@@ -44,6 +66,17 @@ double JointPoint::evaluate(const State& q, LocalGradient<4>* g, LocalHessian<4>
                            stiffness * Matrix3::Identity(), g, H);
   }
   return 0.5 * stiffness * d.squaredNorm();
+}
+
+Vector3 JointPoint::force(const State& q) const {
+  return stiffness * (b.position(q) - shifted_a().position(q));
+}
+
+Vector3 JointPoint::constraint(const State& q, ConstraintJacobian* J) const {
+  if (J != nullptr) {
+    *J << -Matrix3::Identity(), so3::hat(a.lever(q)), Matrix3::Identity(), -so3::hat(b.lever(q));
+  }
+  return b.position(q) - a.position(q);
 }
 
 void JointPoint::residual(const State& q, Residual& r, ResidualJacobian* J) const {
@@ -65,6 +98,14 @@ void JointPoint::update_multiplier(const State& q) {
 }
 
 double JointAlignment::evaluate(const State& q, LocalGradient<2>* g, LocalHessian<2>* H) const {
+  if (adjoint) {  // + ∇²(λᵀ(a − b)): λ·(½ θ × (θ × a)) is the rotated-point curvature
+    const double value = lagrangian(*this, q, g, H);
+    if (H != nullptr) {
+      H->block<3, 3>(0, 0) += rotated_point_curvature(end_rotation(q, rotation_a) * axis_a, multiplier);
+      H->block<3, 3>(3, 3) += rotated_point_curvature(end_rotation(q, rotation_b) * axis_b, -multiplier);
+    }
+    return value;
+  }
   const Vector3 a = end_rotation(q, rotation_a) * (axis_a + shift);
   const Vector3 b = end_rotation(q, rotation_b) * axis_b;
   const double ab = a.dot(b);
@@ -84,6 +125,18 @@ double JointAlignment::evaluate(const State& q, LocalGradient<2>* g, LocalHessia
   }
   // ½ k ‖a − b‖² rather than k (1 − a·b): no cancellation for nearly aligned axes.
   return 0.5 * stiffness * (a - b).squaredNorm();
+}
+
+Vector3 JointAlignment::force(const State& q) const {
+  return stiffness * (end_rotation(q, rotation_a) * (axis_a + shift) -
+                      end_rotation(q, rotation_b) * axis_b);
+}
+
+Vector3 JointAlignment::constraint(const State& q, ConstraintJacobian* J) const {
+  const Vector3 a = end_rotation(q, rotation_a) * axis_a;
+  const Vector3 b = end_rotation(q, rotation_b) * axis_b;
+  if (J != nullptr) *J << -so3::hat(a), so3::hat(b);
+  return a - b;
 }
 
 void JointAlignment::residual(const State& q, Residual& r, ResidualJacobian* J) const {
@@ -127,6 +180,17 @@ void JointWeld::update_multiplier(const State& q) {
 }
 
 double JointWeld::evaluate(const State& q, LocalGradient<2>* g, LocalHessian<2>* H) const {
+  if (adjoint) {  // + ∇²(λᵀφ) at E = I (header): the mixed blocks ½ hat(λ) E
+    const double value = lagrangian(*this, q, g, H);
+    if (H != nullptr) {
+      const Matrix3 E = end_rotation(q, rotation_a) * frame_a *
+                        (end_rotation(q, rotation_b) * frame_b).transpose();
+      const Matrix3 mixed = 0.5 * so3::hat(multiplier) * E;
+      H->block<3, 3>(0, 3) += mixed;
+      H->block<3, 3>(3, 0) += mixed.transpose();
+    }
+    return value;
+  }
   Matrix3 E;
   const Vector3 phi = relative_rotation(q, &E);
   if (g != nullptr) {
@@ -144,6 +208,20 @@ double JointWeld::evaluate(const State& q, LocalGradient<2>* g, LocalHessian<2>*
     H->block<3, 3>(3, 0) = mixed.transpose();
   }
   return 0.5 * stiffness * phi.squaredNorm();
+}
+
+Vector3 JointWeld::force(const State& q) const { return stiffness * relative_rotation(q); }
+
+Vector3 JointWeld::constraint(const State& q, ConstraintJacobian* J) const {
+  const Matrix3 F_a = end_rotation(q, rotation_a) * frame_a;
+  const Matrix3 F_b = end_rotation(q, rotation_b) * frame_b;
+  const Matrix3 E = F_a * F_b.transpose();
+  const Vector3 phi = so3::log(E);
+  if (J != nullptr) {
+    const Matrix3 J_inverse = so3::left_jacobian_inverse(phi);
+    *J << J_inverse, -J_inverse * E;
+  }
+  return phi;
 }
 
 void JointWeld::residual(const State& q, Residual& r, ResidualJacobian* J) const {

@@ -11,6 +11,17 @@
 // Conventions: so3.hpp (left perturbations R ← exp(θ) R, Lie gradient and symmetric Lie
 // Hessian). A world end has offset −1 and a constant frame.
 //
+// The adjoint of an exact part (solvers/adjoint.cpp, docs/design.md §8.6) needs the
+// constraint's Jacobian J = ∂c/∂(blocks), its multiplier λ at the converged step — the force
+// or torque the penalty exerts, λ = ρ (c + s) in world coordinates, so that the term's
+// gradient is Jᵀλ at c = 0 — and the Hessian of the Lagrangian. For that the adjoint sets
+// `adjoint` with λ in `multiplier`; the term is then
+//   V_adj = λᵀ c + ½ ρ ‖c‖²,   ∇V_adj = Jᵀ (λ + ρ c),   H_adj = ρ JᵀJ + ∇²(λᵀ c),
+// with ρ its `stiffness`: H_adj is V_adj's Hessian at c = 0 (at the converged step c is at the
+// tolerance), and the M = K + ρ JᵀJ the adjoint's bordered solve needs (any ρ > 0 that
+// keeps M positive definite gives the same adjoint, docs/design.md §8.6). ∇²(λᵀc) is exact
+// for the point and the hinge axis; for the weld it is taken at E = I (below).
+//
 // Translation (JointPoint). c = p_b − p_a with p = x + R p̄ (AttachedPoint); shift s:
 //   V = ½ k ‖p_b − (p_a − R_a s)‖²,   s ← s + R_aᵀ c,
 // a zero-rest-length spring (spring.hpp, point_pair.hpp) whose point a is p̄_a − s.
@@ -47,6 +58,10 @@
 // are k {0, 2, τ ± √(τ² + t²/4) (twice each)} — ½ dist(F_a, F_b)² is not jointly convex on
 // SO(3) × SO(3), which is curved — so Newton regularises away from rest (solvers/newton.hpp).
 // Residual form: r = √k φ, J = √k [J_l⁻¹(φ), −J_l⁻¹(φ) E] (Jᵀ r = k [φ, −φ]).
+// Adjoint: ∇²(μᵀφ) at E = I. There log(exp(θ_a) exp(−θ_b)) = θ_a − θ_b − ½ θ_a × θ_b + O(3),
+// so μᵀφ has no diagonal curvature and the mixed blocks D²/Dθ_a Dθ_b = ½ hat(μ),
+// D²/Dθ_b Dθ_a = −½ hat(μ); off E = I they are first order in ‖φ‖ (the exact joint holds to
+// the tolerance at every converged step).
 // Exact: the shift is a rotation S of frame a, E = R_a A S Bᵀ R_bᵀ (A S in place of A), and
 // c = log(F_a F_bᵀ) with the joint's own A. The update S ← (F_bᵀ F_a) S is s ← s + c to first
 // order: once the joint holds (F_a = F_b = F) the shifted E becomes F S' Fᵀ, which keeps the
@@ -79,6 +94,13 @@ struct JointPoint {
   double violation(const State& q) const;
   void update_multiplier(const State& q);
 
+  // The adjoint (header): λ, J, and the Lagrangian in place of the penalty.
+  bool adjoint = false;
+  Vector3 multiplier = Vector3::Zero();
+  Vector3 force(const State& q) const;  // λ = ρ (c + s), world
+  using ConstraintJacobian = LocalResidualJacobian<3, kBlocks>;
+  Vector3 constraint(const State& q, ConstraintJacobian* J) const;  // c, and J = ∂c/∂(blocks)
+
  private:
   AttachedPoint shifted_a() const;
 };
@@ -105,6 +127,13 @@ struct JointAlignment {
   // Constraint (term.hpp): c = R_a â − R_b b̂.
   double violation(const State& q) const;
   void update_multiplier(const State& q);
+
+  // The adjoint (header): λ, J, and the Lagrangian in place of the penalty.
+  bool adjoint = false;
+  Vector3 multiplier = Vector3::Zero();
+  Vector3 force(const State& q) const;  // λ = ρ (c + s), world
+  using ConstraintJacobian = LocalResidualJacobian<3, kBlocks>;
+  Vector3 constraint(const State& q, ConstraintJacobian* J) const;  // c, and J = ∂c/∂(blocks)
 };
 
 struct JointWeld {
@@ -126,12 +155,20 @@ struct JointWeld {
   using ResidualJacobian = LocalResidualJacobian<kResiduals, kBlocks>;
   void residual(const State& q, Residual& r, ResidualJacobian* J) const;
 
-  // φ = log(R_a A S Bᵀ R_bᵀ) and E, the term's (shifted) relative rotation.
+  // φ = log(R_a A S Bᵀ R_bᵀ) and E, the term's relative rotation (shifted, but not in the
+  // adjoint).
   Vector3 relative_rotation(const State& q, Matrix3* E = nullptr) const;
 
   // Constraint (term.hpp): c = log(R_a A Bᵀ R_bᵀ), without the shift.
   double violation(const State& q) const;
   void update_multiplier(const State& q);
+
+  // The adjoint (header): λ, J, and the Lagrangian in place of the penalty.
+  bool adjoint = false;
+  Vector3 multiplier = Vector3::Zero();
+  Vector3 force(const State& q) const;  // λ = ρ (c + s), world
+  using ConstraintJacobian = LocalResidualJacobian<3, kBlocks>;
+  Vector3 constraint(const State& q, ConstraintJacobian* J) const;  // c, and J = ∂c/∂(blocks)
 };
 
 // A hinge's motor: a torque τ about the hinge axis, τ ê on body a and −τ ê on body b (none

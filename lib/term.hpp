@@ -51,6 +51,8 @@
 //                           bool exact;  double stiffness;
 //                           double violation(const State& q) const;   ‖c(q)‖∞ (m or rad)
 //                           void update_multiplier(const State& q);   s ← s + c(q)
+//                         and, for the adjoint (joint_terms.hpp): bool adjoint; Vector3
+//                         multiplier; Vector3 force(q) (λ); Vector3 constraint(q, J*) (c, ∂c).
 //                         An exact term is not an energy of the state (EnergyOfState is then
 //                         ignored): a constraint does no work.
 //
@@ -138,11 +140,16 @@ concept HasParameters = requires(const T& t, const State& q, int frame,
 };
 
 template <class T>
-concept Constraint = requires(T& t, const T& ct, const State& q) {
+concept Constraint = requires(T& t, const T& ct, const State& q,
+                              typename T::ConstraintJacobian* J) {
   { t.exact } -> std::same_as<bool&>;
   { t.stiffness } -> std::same_as<double&>;
   { ct.violation(q) } -> std::same_as<double>;
   t.update_multiplier(q);
+  { t.adjoint } -> std::same_as<bool&>;
+  { t.multiplier } -> std::same_as<Vector3&>;
+  { ct.force(q) } -> std::same_as<Vector3>;
+  { ct.constraint(q, J) } -> std::same_as<Vector3>;
 };
 
 // add_parameter_adjoint of a term whose value is proportional to its scalar `stiffness` k

@@ -22,6 +22,10 @@ struct Trajectory {
   bool static_equilibrium = false;  // load steps: every Δq is zero (Model::static_equilibrium)
   std::vector<State> states;        // q_0 … q_n
   Step initial_step;                // Δq_0
+  // Exact joints: per frame k (index k, empty at 0), the multiplier λ of every exact
+  // constraint term at the converged q_k, over the components in build_components order and
+  // within each in term order (IncrementalPotential::exact_forces). Empty without any.
+  std::vector<std::vector<Vector3>> multipliers;
 
   int frames() const { return static_cast<int>(states.size()) - 1; }
 

@@ -1,5 +1,6 @@
 #include "adjoint.hpp"
 
+#include <Eigen/QR>
 #include <chrono>
 #include <memory>
 
@@ -61,13 +62,6 @@ DifferentiableSimulation::DifferentiableSimulation(Model base, ParameterSet para
       options_(options) {
   options_.validate();
   parameters_.apply(base_, initial_parameters()).validate();
-  // The forward steps would hold exact joints, but the backward solve has no multiplier
-  // equations yet: it would differentiate a penalty, not the constrained step.
-  if (const std::string field = base_.first_exact_joint(); !field.empty()) {
-    throw ModelError(field, "0 (an exact joint): gradients through exact joints are not "
-                            "implemented yet; give the joint a compliance > 0 to differentiate "
-                            "through it");
-  }
 }
 
 Trajectory DifferentiableSimulation::simulate(const Model& model, Result& result) const {
@@ -88,6 +82,8 @@ Trajectory DifferentiableSimulation::simulate(const Model& model, Result& result
                                     "), so the adjoint gradient would not be exact");
     }
     t.states.push_back(simulator.state());
+    if (k == 1) t.multipliers.resize(static_cast<std::size_t>(frames()) + 1);
+    simulator.exact_forces(t.multipliers[k]);
   }
   return t;
 }
@@ -118,7 +114,17 @@ void DifferentiableSimulation::backward(const Model& model, const Eigen::VectorX
                                         Eigen::VectorXd& gradient) const {
   std::vector<Component> components = build_components(model);
   std::vector<std::unique_ptr<HessianSolve>> solves;
-  for (const Component& c : components) solves.push_back(make_hessian_solve(c));
+  // Exact joint terms per component, and the first one's place in a frame's multipliers.
+  std::vector<int> exact_terms, first_exact;
+  int exact_total = 0;
+  for (const Component& c : components) {
+    solves.push_back(make_hessian_solve(c));
+    exact_terms.push_back(c.potential.exact_constraints());
+    first_exact.push_back(exact_total);
+    exact_total += exact_terms.back();
+  }
+  Eigen::MatrixXd J, Y;
+  Eigen::VectorXd column;
 
   const int n = trajectory.frames();
   const int size = tangent_size(trajectory.states[0]);
@@ -152,6 +158,10 @@ void DifferentiableSimulation::backward(const Model& model, const Eigen::VectorX
       IncrementalPotential& potential = components[c].potential;
       potential.begin_step(previous, previous_step, k);
       if (!dynamic) potential.set_load_scale(load_scale);
+      const int exact = exact_terms[c];
+      if (exact > 0) {
+        potential.set_adjoint_multipliers(trajectory.multipliers[k].data() + first_exact[c]);
+      }
       if (!solves[c]->factorize(potential, q)) {
         throw SimulationFailed(k, "the Hessian of the converged step is not positive definite "
                                   "(not a strict minimum): the adjoint is not defined");
@@ -165,6 +175,22 @@ void DifferentiableSimulation::backward(const Model& model, const Eigen::VectorX
       }
       solves[c]->solve(b, z);
       z = -z;  // H z = −(a + Δa)
+      if (exact > 0) {
+        // Exact joints: [M Jᵀ; J 0] [z; μ] = [−(a + Δa); 0] with M = K + ρJᵀJ the assembled
+        // Lagrangian Hessian (docs/design.md §8.6): z = z₀ − Y μ, Y = M⁻¹Jᵀ, (J Y) μ = J z₀.
+        // J Y is singular for a hinge (its 3 rows hold 2 constraints): the least-squares μ
+        // of a consistent system.
+        J.resize(3 * exact, components[c].dofs);
+        potential.constraint_jacobian(q, J);
+        Y.resize(components[c].dofs, 3 * exact);
+        for (int i = 0; i < 3 * exact; ++i) {
+          solves[c]->solve(J.row(i).transpose(), column);
+          Y.col(i) = column;
+        }
+        const Eigen::VectorXd mu =
+            (J * Y).completeOrthogonalDecomposition().solve(Eigen::VectorXd(J * z));
+        z -= Y * mu;
+      }
       potential.add_parameter_adjoint(q, k, z, gradient);
       potential.add_step_adjoint(q, previous, previous_step, z, a_previous, da_previous);
     }

@@ -135,6 +135,11 @@ double Simulator::constraint_violation() const {
   return violation;
 }
 
+void Simulator::exact_forces(std::vector<Vector3>& out) const {
+  out.clear();
+  for (const auto& s : solvers_) s->component().potential.exact_forces(state_, out);
+}
+
 std::vector<FreeDirection> Simulator::free_directions() const {
   std::vector<FreeDirection> out;
   for (const auto& s : solvers_) {

@@ -50,6 +50,9 @@ class Simulator {
   // Largest violation ‖c‖∞ of an exact joint (m or rad; IncrementalPotential::
   // constraint_violation) at the current state, 0 without exact joints.
   double constraint_violation() const;
+  // The multipliers λ of the exact joint terms at the current state, in component order
+  // (IncrementalPotential::exact_forces), written into `out` (cleared first).
+  void exact_forces(std::vector<Vector3>& out) const;
   // Directions that nothing holds at the current state (free_directions.hpp), over every
   // component: why a static step cannot meet the tolerance. One assembly per component.
   std::vector<FreeDirection> free_directions() const;

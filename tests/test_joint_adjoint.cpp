@@ -1,0 +1,229 @@
+// The joint terms' pieces of the constrained adjoint (lib/joint_terms.hpp, docs/design.md §8.6):
+//   * the constraint c(q) and its Jacobian J = ∂c/∂(blocks), against central differences in
+//     the tangent space, at generic states over the angle list (c ≠ 0 too: J is exact there);
+//   * the adjoint-mode Lagrangian λᵀc + ½ρ‖c‖², its gradient Jᵀ(λ + ρc) and Hessian
+//     ρJᵀJ + ∇²(λᵀc), by fd::check_term at states where the joint holds (c = 0, the only
+//     place the adjoint evaluates it; there H_adj is the Lagrangian's exact Hessian), body
+//     rotations over the angle list, |λ| from 1e-3 to 1e6 and ρ 1 and 1e6;
+//   * force(q) = λ: the penalty's gradient is Jᵀλ where the shifted joint holds, for a
+//     non-zero shift.
+// Tolerances are fd_check.hpp's defaults.
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+#include <numbers>
+#include <random>
+
+#include "fd_check.hpp"
+#include "lib/joint_terms.hpp"
+#include "lib/so3.hpp"
+
+namespace liedyn {
+namespace {
+
+using fd::kAngles;
+using fd::random_unit;
+using fd::random_vector;
+using fd::rotation_at;
+using fd::trace;
+
+// Ends a (rotation 0, point 0) and b (rotation 1, point 1), or b the world.
+struct Ends {
+  State q;
+  fd::Dofs rotations;  // the two rotation blocks (b: no_dof() for the world)
+  fd::Dofs point_pair; // x_a, θ_a, x_b, θ_b
+};
+
+Ends ends(double angle_a, double angle_b, bool world_b, std::mt19937& rng) {
+  Ends e;
+  e.q.points = {random_vector(rng, 1.0), random_vector(rng, 1.0)};
+  e.q.rotations = {rotation_at(angle_a, rng), rotation_at(angle_b, rng)};
+  const fd::Dof b = world_b ? fd::no_dof() : fd::rotation_dof(1);
+  e.rotations = {fd::rotation_dof(0), b};
+  e.point_pair = {fd::point_dof(0), fd::rotation_dof(0), world_b ? fd::no_dof() : fd::point_dof(1), b};
+  return e;
+}
+
+JointPoint point_term(const Ends& e, bool world_b, std::mt19937& rng) {
+  JointPoint t;
+  t.a = {0, 0, random_vector(rng, 0.5)};
+  t.offsets = {0, 3, world_b ? -1 : 6, world_b ? -1 : 9};
+  if (world_b) {
+    t.b = {-1, -1, t.a.position(e.q)};  // the world, where a's point is: c = 0
+  } else {
+    t.b = {1, 1, random_vector(rng, 0.5)};
+  }
+  return t;
+}
+
+JointAlignment alignment_term(const Ends&, bool world_b, std::mt19937& rng) {
+  JointAlignment t;
+  t.rotation_a = 0;
+  t.rotation_b = world_b ? -1 : 1;
+  t.offsets = {0, world_b ? -1 : 3};
+  t.axis_a = random_unit(rng);
+  t.axis_b = random_unit(rng);
+  return t;
+}
+
+JointWeld weld_term(const Ends&, bool world_b, std::mt19937& rng) {
+  JointWeld t;
+  t.rotation_a = 0;
+  t.rotation_b = world_b ? -1 : 1;
+  t.offsets = {0, world_b ? -1 : 3};
+  t.frame_a = rotation_at(1.3, rng);
+  t.frame_b = rotation_at(0.4, rng);
+  return t;
+}
+
+// Moves end b (or the term's b geometry) so that the joint holds exactly at e.q.
+void hold(JointPoint& t, Ends& e) {
+  if (t.b.point >= 0) e.q.points[1] += t.a.position(e.q) - t.b.position(e.q);
+}
+void hold(JointAlignment& t, const Ends& e) {
+  const Matrix3 R_b = t.rotation_b < 0 ? Matrix3::Identity() : e.q.rotations[1];
+  t.axis_b = R_b.transpose() * e.q.rotations[0] * t.axis_a;
+}
+void hold(JointWeld& t, const Ends& e) {
+  const Matrix3 R_b = t.rotation_b < 0 ? Matrix3::Identity() : e.q.rotations[1];
+  t.frame_b = so3::orthonormalize(R_b.transpose() * e.q.rotations[0] * t.frame_a);
+}
+
+template <class Term>
+::testing::AssertionResult check_constraint_jacobian(const Term& t, const State& q, const fd::Dofs& dofs) {
+  typename Term::ConstraintJacobian J;
+  t.constraint(q, &J);
+  const fd::VectorFunction c = [&](const State& s) { return Eigen::VectorXd(t.constraint(s, nullptr)); };
+  return fd::check_vector_jacobian(c, q, dofs, Eigen::MatrixXd(J));
+}
+
+template <class Term>
+::testing::AssertionResult check_lagrangian(Term t, const State& q, const fd::Dofs& dofs,
+                                            const Vector3& lambda, double rho) {
+  t.exact = true;
+  t.adjoint = true;
+  t.multiplier = lambda;
+  t.stiffness = rho;
+  if (!(t.constraint(q, nullptr).norm() <= 1e-12)) {
+    return ::testing::AssertionFailure() << "the joint does not hold: |c| = " << t.constraint(q, nullptr).norm();
+  }
+  // An absolute floor that scales with ρ rather than with the (here small) value: V(±ε) is
+  // dominated by ½ρε², computed from c = p_b − p_a whose entries carry the absolute round-off
+  // eps·L of positions of size L (L = 3 bounds |x| + |lever| here), which the difference
+  // turns into ρ·eps·L in the gradient. (The penalty adds no truncation: ‖c(θ)‖² has no
+  // third-order term at c = 0, since (θ × r)·(θ × (θ × r)) = 0.) It matters only where
+  // ρ ≫ |λ| (ρ = 1e6, |λ| = 1e-3).
+  // Likewise λᵀc carries the absolute round-off eps·|λ|·L of c (rotated vectors and log(E)
+  // are computed from entries of size 1, whatever the angle), which second differences of
+  // the value divide by ε².
+  constexpr double kL = 3.0;
+  constexpr double kEps = std::numeric_limits<double>::epsilon();
+  fd::TermCheckOptions opt;
+  opt.gradient.abs_floor = 16.0 * kEps * rho * kL;
+  const double e = opt.hessian_from_value.step;
+  opt.hessian_from_value.abs_floor = 16.0 * kEps * lambda.norm() * kL / (e * e);
+  // With |λ| = 1e6 and ρ = 1 that floor (~1) reaches the ρ-sized blocks: the differences of
+  // the gradient (which must resolve every block) carry the check there.
+  opt.hessian_from_value.require_nonzero = fd::NonZero::kNone;
+  return fd::check_term(t, q, dofs, opt);
+}
+
+// The three terms at every pair of angles of the list, both ends free and b the world.
+template <class Make, class Check>
+int for_each_case(std::mt19937& rng, Make make, Check check) {
+  int checked = 0;
+  for (const bool world_b : {false, true}) {
+    for (const double angle_a : kAngles) {
+      for (const double angle_b : {0.0, 1e-9, 1.0, std::numbers::pi - 1e-6, std::numbers::pi}) {
+        SCOPED_TRACE(trace("world b, angles R_a, R_b", world_b, angle_a, angle_b));
+        Ends e = ends(angle_a, angle_b, world_b, rng);
+        auto t = make(e, world_b, rng);
+        check(t, e, world_b);
+        ++checked;
+      }
+    }
+  }
+  return checked;
+}
+
+const int kCases = 2 * static_cast<int>(kAngles.size()) * 5;
+
+TEST(JointAdjoint, ConstraintJacobiansMatchFiniteDifferences) {
+  std::mt19937 rng(2101);
+  EXPECT_EQ(for_each_case(rng, point_term, [](const JointPoint& t, Ends& e, bool) {
+              EXPECT_TRUE(check_constraint_jacobian(t, e.q, e.point_pair));
+            }),
+            kCases);
+  EXPECT_EQ(for_each_case(rng, alignment_term, [](const JointAlignment& t, Ends& e, bool) {
+              EXPECT_TRUE(check_constraint_jacobian(t, e.q, e.rotations));
+            }),
+            kCases);
+  // The weld at a generic relative rotation (below π: at π the log has its cut).
+  EXPECT_EQ(for_each_case(rng, weld_term, [](const JointWeld& t, Ends& e, bool) {
+              if (t.constraint(e.q, nullptr).norm() > std::numbers::pi - 1e-3) return;
+              EXPECT_TRUE(check_constraint_jacobian(t, e.q, e.rotations));
+            }),
+            kCases);
+}
+
+TEST(JointAdjoint, LagrangiansMatchFiniteDifferencesWhereTheJointHolds) {
+  std::mt19937 rng(2102);
+  for (const double size : {1e-3, 1.0, 1e6}) {
+    for (const double rho : {1.0, 1e6}) {
+      SCOPED_TRACE(trace("|λ|, ρ", size, rho));
+      const Vector3 lambda = size * random_unit(rng);
+      EXPECT_EQ(for_each_case(rng, point_term, [&](JointPoint& t, Ends& e, bool) {
+                  hold(t, e);
+                  EXPECT_TRUE(check_lagrangian(t, e.q, e.point_pair, lambda, rho));
+                }),
+                kCases);
+      EXPECT_EQ(for_each_case(rng, alignment_term, [&](JointAlignment& t, Ends& e, bool) {
+                  hold(t, e);
+                  EXPECT_TRUE(check_lagrangian(t, e.q, e.rotations, lambda, rho));
+                }),
+                kCases);
+      EXPECT_EQ(for_each_case(rng, weld_term, [&](JointWeld& t, Ends& e, bool) {
+                  hold(t, e);
+                  EXPECT_TRUE(check_lagrangian(t, e.q, e.rotations, lambda, rho));
+                }),
+                kCases);
+    }
+  }
+}
+
+// force(q) is the multiplier of the penalty: where the joint holds (c = 0) with a shift s of
+// 1e-3, the penalty's gradient is Jᵀ force — although the shifted term's Jacobian J_s differs
+// from J (the point's lever is moved by R_a s, the axis is R_a (â + s)), the difference
+// meets a force parallel to R_a s (the point) or a cross product with a = b (the axis).
+TEST(JointAdjoint, ThePenaltysGradientIsJTransposeTimesItsForce) {
+  std::mt19937 rng(2103);
+  const auto check = [](const auto& t, const State& q) {
+    using T = std::decay_t<decltype(t)>;
+    LocalGradient<T::kBlocks> g;
+    t.evaluate(q, &g, nullptr);
+    typename T::ConstraintJacobian J;
+    t.constraint(q, &J);
+    const LocalGradient<T::kBlocks> expected = J.transpose() * t.force(q);
+    EXPECT_LE((g - expected).norm(), 1e-9 * (1.0 + g.norm())) << g.transpose() << "\n" << expected.transpose();
+  };
+  for (int i = 0; i < 20; ++i) {
+    Ends e = ends(0.3 * i, 0.2 * i, false, rng);
+    JointPoint p = point_term(e, false, rng);
+    hold(p, e);
+    p.exact = true;
+    p.stiffness = 1e6;
+    p.shift = 1e-3 * random_unit(rng);
+    check(p, e.q);
+    JointAlignment a = alignment_term(e, false, rng);
+    hold(a, e);
+    a.exact = true;
+    a.stiffness = 1e6;
+    a.shift = 1e-3 * random_unit(rng);
+    check(a, e.q);
+  }
+}
+
+}  // namespace
+}  // namespace liedyn
