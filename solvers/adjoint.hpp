@@ -24,7 +24,7 @@
 // component (the forward pass's factorisations are not kept: n of them would not fit for long
 // runs), and the trajectory stores one State per frame (lib/trajectory.hpp). Both passes are
 // timed by `liedyn gradcheck SCENE`, which prints "one forward pass … s, backward pass … s
-// (…× forward)", and by the benchmark in tests/bench_adjoint.cpp (docs/design.md §8.6).
+// (…× forward)", and by the benchmark in tests/bench_adjoint.cpp (docs/design.md §8.7).
 
 #include <Eigen/Core>
 #include <stdexcept>
