@@ -657,7 +657,7 @@ Scene parse(const json& root, const std::string& source) {
   if (top.has("solver")) {
     ObjectReader s(top.get("solver"), "solver", source,
                    {"backend", "rotation", "tolerance", "max_iterations", "armijo",
-                    "min_step_length", "assembly_threads", "ceres", "ipopt"});
+                    "min_step_length", "assembly_threads", "island_threads", "ceres", "ipopt"});
     const std::string backend = s.string("backend", "newton");
     if (const auto parsed = parse_backend(backend)) {
       scene.solver.backend = *parsed;
@@ -679,6 +679,10 @@ Scene parse(const json& root, const std::string& source) {
     if (s.has("assembly_threads")) {
       scene.solver.assembly_threads =
           s.integer("assembly_threads", 0, SolverOptions::kMaxAssemblyThreads);
+    }
+    if (s.has("island_threads")) {
+      scene.solver.island_threads =
+          s.integer("island_threads", 0, SolverOptions::kMaxAssemblyThreads);
     }
     // Back-end options: accepted whichever back-end runs, so that `liedyn compare
     // --backends` can switch; their values are checked by SolverOptions::validate.

@@ -1,5 +1,7 @@
 #include "simulator.hpp"
 
+#include <omp.h>
+
 #include <algorithm>
 
 #include "../lib/so3.hpp"
@@ -24,6 +26,11 @@ Simulator::Simulator(Model model, const SolverOptions& options)
   for (Component& c : build_components(model_)) {
     solvers_.push_back(make_step_solver(std::move(c), options_));
   }
+  reports_.resize(solvers_.size());
+  const int islands = static_cast<int>(solvers_.size());
+  island_threads_ = options_.island_threads == 0 ? omp_get_max_threads() : options_.island_threads;
+  island_threads_ = std::max(1, std::min(island_threads_, islands));
+  if (options_.backend == Backend::kIpopt) island_threads_ = 1;  // see SolverOptions
 }
 
 void Simulator::set_measure_condition(bool on) {
@@ -48,12 +55,22 @@ StepReport Simulator::step() {
       dynamic ? 1.0 : std::min(1.0, double(frame_ + 1) / double(model_.load_steps));
   apply_prescribed_motions(load_scale);
 
-  StepReport report;
-  for (auto& solver : solvers_) {
-    solver->component().potential.begin_step(previous_, previous_step_, frame_ + 1);
-    if (!dynamic) solver->component().potential.set_load_scale(load_scale);
-    report.merge(solver->solve(state_));
+  // The islands write disjoint entries of state_ and read previous_ and the model only.
+  const auto solve_island = [&](int i) {
+    IncrementalPotential& potential = solvers_[i]->component().potential;
+    potential.begin_step(previous_, previous_step_, frame_ + 1);
+    if (!dynamic) potential.set_load_scale(load_scale);
+    reports_[i] = solvers_[i]->solve(state_);
+  };
+  const int islands = static_cast<int>(solvers_.size());
+  if (island_threads_ > 1) {
+#pragma omp parallel for num_threads(island_threads_) schedule(dynamic)
+    for (int i = 0; i < islands; ++i) solve_island(i);
+  } else {  // no parallel region at all: even an inactive one allocates in libgomp
+    for (int i = 0; i < islands; ++i) solve_island(i);
   }
+  StepReport report;
+  for (const StepReport& r : reports_) report.merge(r);
 
   if (!report.state_updated()) {
     state_ = previous_;

@@ -75,6 +75,8 @@ class Simulator {
   Step step_, previous_step_;
   int frame_ = 0;
   std::vector<std::unique_ptr<StepSolver>> solvers_;  // one per component
+  std::vector<StepReport> reports_;                   // per component, for the islands' threads
+  int island_threads_ = 1;                            // SolverOptions::island_threads resolved
 };
 
 }  // namespace liedyn

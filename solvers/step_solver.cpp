@@ -27,6 +27,10 @@ void SolverOptions::validate() const {
     throw ModelError("solver.assembly_threads",
                      "must be in [0, " + std::to_string(kMaxAssemblyThreads) + "] (0: automatic)");
   }
+  if (island_threads < 0 || island_threads > kMaxAssemblyThreads) {
+    throw ModelError("solver.island_threads",
+                     "must be in [0, " + std::to_string(kMaxAssemblyThreads) + "] (0: automatic)");
+  }
   const auto one_of = [](const std::string& value, std::initializer_list<const char*> names) {
     for (const char* name : names) {
       if (value == name) return true;

@@ -97,6 +97,13 @@ struct SolverOptions {
   // thread keeps the second core busy for the whole run (README, Performance).
   int assembly_threads = 1;
   static constexpr int kMaxAssemblyThreads = 256;
+  // Threads for the independent components ("islands") of a step (Simulator::step): n ≥ 1
+  // uses up to n, one island per thread at a time; 0 chooses (as many as OpenMP may use).
+  // Islands of one step share nothing but the read-only model, so their solves run
+  // concurrently with the same results as in sequence. Ipopt's islands always run in
+  // sequence: its MUMPS (Debian's sequential build) is not known to be re-entrant. One by
+  // default; when it pays: README, Performance.
+  int island_threads = 1;
 
   // How rotations are parameterised (newton.hpp; Ceres: ceres_step.hpp). Ipopt supports lie
   // and rotvec.

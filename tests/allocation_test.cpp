@@ -478,6 +478,19 @@ TEST(Allocation, MixedComponentsStepDoesNotAllocate) {
   expect_no_allocation(run_counted(sim, kSteps), kSteps);
 }
 
+// The same islands on two threads (SolverOptions::island_threads): after the warm-up step,
+// which starts OpenMP's threads, neither thread allocates (the counters are global).
+TEST(Allocation, IslandsOnTwoThreadsDoNotAllocate) {
+  Model model = spring_chain(2);
+  RigidBody free_body = butterfly_bolt();
+  free_body.position = Vector3(0.0, 5.0, 0.0);
+  model.bodies.push_back(free_body);
+  SolverOptions options;
+  options.island_threads = 2;
+  Simulator sim(model, options);
+  expect_no_allocation(run_counted(sim, kSteps), kSteps);
+}
+
 }  // namespace
 
 // ---------------------------------------------------------------------------------------
