@@ -162,11 +162,12 @@ StepReport StepSolver::solve(State& q) {
     for (const RotationalInertia& t : c.potential.terms<RotationalInertia>()) {
       inertia_rotation_.push_back(block_of(c.rotations, t.rotation));
     }
+    has_exact_constraints_ = c.potential.exact_constraints() > 0;  // fixed with the terms
     sized_ = true;
   }
   entry_.save(c, q);
   StepReport report = minimize(q);
-  if (report.state_updated() && c.potential.exact_constraints() > 0) {
+  if (report.state_updated() && has_exact_constraints_) {
     enforce_exact_constraints(q, report);
     if (!report.state_updated()) entry_.restore(c, q);
   }

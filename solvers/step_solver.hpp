@@ -271,6 +271,7 @@ class StepSolver {
   void enforce_exact_constraints(State& q, StepReport& report);
 
   double tolerance_;
+  bool has_exact_constraints_ = false;
   double penalty_growth_ = 1.0;  // the penalties' factor over their initial values
 
   // Sized at the first solve (solve allocates nothing after it).
