@@ -217,7 +217,17 @@ void add_joint_terms(const Model& model, std::vector<Component>& components) {
     }
     translation.offsets = {oa[0], oa[1], ob[0], ob[1]};
     set_stiffness(translation, j.compliance, mass);
-    p.add(translation);
+    if (j.type == JointSpec::Type::kSlider) {  // the line through p_a along R_a â
+      JointLine line;
+      line.offsets = translation.offsets;
+      line.a = translation.a;
+      line.b = translation.b;
+      line.axis_a = j.axis_a;
+      set_stiffness(line, j.compliance, mass);
+      p.add(line);
+    } else {
+      p.add(translation);
+    }
     const double inertia = body_inertia(j.a.body) + body_inertia(j.b.body);
     if (j.type == JointSpec::Type::kHinge) {
       JointAlignment hinge;
@@ -240,7 +250,7 @@ void add_joint_terms(const Model& model, std::vector<Component>& components) {
         if (j.b.body >= 0) motor.R_previous_b = model.bodies[j.b.body].orientation;
         p.add(motor);
       }
-    } else if (j.type == JointSpec::Type::kWeld) {
+    } else if (j.type == JointSpec::Type::kWeld || j.type == JointSpec::Type::kSlider) {
       JointWeld weld;
       weld.offsets = {oa[1], ob[1]};
       weld.rotation_a = j.a.body;

@@ -47,7 +47,7 @@ class IncrementalPotential {
   // terms' capabilities; a new term type is added here and in the builder that creates it.
   using TermTypes = std::tuple<TranslationalInertia, RotationalInertia, Gravity, ConstantForce,
                                ConstantTorque, RegionForce, Spring, RodStretch, RodShear,
-                               RodBendTwist, CableSegment, JointPoint, JointAlignment, JointWeld,
+                               RodBendTwist, CableSegment, JointPoint, JointLine, JointAlignment, JointWeld,
                                JointMotor, Contact, Friction>;
 
   // The terms of type T (one contiguous vector per type).

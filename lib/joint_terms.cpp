@@ -97,6 +97,74 @@ void JointPoint::update_multiplier(const State& q) {
   shift += in_body_a(q, a.rotation, b.position(q) - a.position(q));
 }
 
+Vector3 JointLine::line(const State& q, const Vector3& w, ConstraintJacobian* J, const Vector3* mu,
+                        LocalHessian<4>* H) const {
+  const Matrix3& R_a = q.rotations[a.rotation];
+  const Vector3 n = R_a * axis_a;
+  const Vector3 d = b.position(q) - a.position(q);
+  const Vector3 r_a = a.lever(q), r_b = b.lever(q);
+  const Matrix3 hat_n = so3::hat(n);
+  if (J != nullptr) {
+    *J << -hat_n, hat_n * so3::hat(r_a) + n * d.transpose() - n.dot(d) * Matrix3::Identity() - so3::hat(w),
+        hat_n, -hat_n * so3::hat(r_b);
+  }
+  if (H != nullptr && mu != nullptr) {
+    const Vector3 mu_x_n = mu->cross(n);
+    H->block<3, 3>(3, 3) += rotated_point_curvature(n, d.cross(*mu)) +
+                            rotated_point_curvature(r_a, -mu_x_n) + rotated_point_curvature(w, *mu);
+    H->block<3, 3>(9, 9) += rotated_point_curvature(r_b, mu_x_n);
+    // The bilinear −δdᵀ hat(μ) hat(n) θ_a: Dᵀ A into the θ_a column, its transpose the row.
+    const Matrix3 A = -so3::hat(*mu) * hat_n;
+    Eigen::Matrix<double, 3, 12> D;
+    D << -Matrix3::Identity(), so3::hat(r_a), Matrix3::Identity(), -so3::hat(r_b);
+    const Eigen::Matrix<double, 12, 3> DtA = D.transpose() * A;
+    H->block<12, 3>(0, 3) += DtA;
+    H->block<3, 12>(3, 0) += DtA.transpose();
+  }
+  return n.cross(d) + w;
+}
+
+double JointLine::evaluate(const State& q, LocalGradient<4>* g, LocalHessian<4>* H) const {
+  if (adjoint) {
+    const double value = lagrangian(*this, q, g, H);
+    if (H != nullptr) line(q, Vector3::Zero(), nullptr, &multiplier, H);
+    return value;
+  }
+  const Vector3 w = q.rotations[a.rotation] * shift;
+  ConstraintJacobian J;
+  const bool derivatives = g != nullptr || H != nullptr;
+  const Vector3 c = line(q, w, derivatives ? &J : nullptr, nullptr, nullptr);
+  if (g != nullptr) *g = stiffness * J.transpose() * c;
+  if (H != nullptr) {
+    *H = stiffness * J.transpose() * J;
+    const Vector3 mu = stiffness * c;
+    line(q, w, nullptr, &mu, H);
+  }
+  return 0.5 * stiffness * c.squaredNorm();
+}
+
+void JointLine::residual(const State& q, Residual& r, ResidualJacobian* J) const {
+  const double s = std::sqrt(stiffness);
+  r = s * line(q, q.rotations[a.rotation] * shift, J, nullptr, nullptr);
+  if (J != nullptr) *J *= s;
+}
+
+double JointLine::violation(const State& q) const {
+  return line(q, Vector3::Zero(), nullptr, nullptr, nullptr).lpNorm<Eigen::Infinity>();
+}
+
+void JointLine::update_multiplier(const State& q) {
+  shift += in_body_a(q, a.rotation, line(q, Vector3::Zero(), nullptr, nullptr, nullptr));
+}
+
+Vector3 JointLine::force(const State& q) const {
+  return stiffness * line(q, q.rotations[a.rotation] * shift, nullptr, nullptr, nullptr);
+}
+
+Vector3 JointLine::constraint(const State& q, ConstraintJacobian* J) const {
+  return line(q, Vector3::Zero(), J, nullptr, nullptr);
+}
+
 double JointAlignment::evaluate(const State& q, LocalGradient<2>* g, LocalHessian<2>* H) const {
   if (adjoint) {  // + ∇²(λᵀ(a − b)): λ·(½ θ × (θ × a)) is the rotated-point curvature
     const double value = lagrangian(*this, q, g, H);

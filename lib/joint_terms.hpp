@@ -105,6 +105,52 @@ struct JointPoint {
   AttachedPoint shifted_a() const;
 };
 
+// Slider line (JointLine): the points of a slider stay on the line through p_a along
+// n = R_a â, c = n × d + R_a s, d = p_b − p_a (3 numbers for 2 constraints, zero exactly when
+// d ∥ n); its rotation is a weld. With w = R_a s, first variations
+//   δd = δx_b − δx_a + θ_b × r_b − θ_a × r_a,   δn = θ_a × n,   δw = θ_a × w,
+// so J = ∂c/∂(x_a, θ_a, x_b, θ_b) = [−hat(n), hat(n) hat(r_a) + n dᵀ − (n·d) I − hat(w),
+//                                    hat(n), −hat(n) hat(r_b)].
+// Second variation of μᵀc (μ = k c in V = ½ k ‖c‖², or λ in the adjoint): from n₂, d₂, w₂
+// the rotated-point curvatures C(n, d × μ) + C(r_a, −μ × n) + C(w, μ) at θ_aθ_a and
+// C(r_b, μ × n) at θ_bθ_b; from n₁ × d₁ the bilinear −δdᵀ hat(μ) hat(n) θ_a, i.e. with
+// δd = D δq (D = [−I, hat(r_a), I, −hat(r_b)]) and A = −hat(μ) hat(n) the blocks Dᵀ A at the
+// θ_a column and their transpose at the θ_a row. H = k JᵀJ + that (exact).
+struct JointLine {
+  static constexpr int kBlocks = 4;
+  static constexpr const char* kName = "joint_line";
+  static constexpr bool kEnergyOfState = true;
+  std::array<int, kBlocks> offsets{-1, -1, -1, -1};  // x_a, θ_a, x_b, θ_b
+  AttachedPoint a, b;                                // a: a body point
+  Vector3 axis_a = Vector3::UnitX();                 // â, unit, in a's body coordinates
+  double stiffness = 0.0;                            // k = 1/compliance (N/m), or ρ if exact
+  bool exact = false;
+  Vector3 shift = Vector3::Zero();                   // s, in a's body coordinates
+
+  double evaluate(const State& q, LocalGradient<4>* g, LocalHessian<4>* H) const;
+
+  static constexpr int kResiduals = 3;
+  using Residual = LocalResidual<kResiduals>;
+  using ResidualJacobian = LocalResidualJacobian<kResiduals, kBlocks>;
+  void residual(const State& q, Residual& r, ResidualJacobian* J) const;
+
+  // Constraint (term.hpp): c = n × d without the shift.
+  double violation(const State& q) const;
+  void update_multiplier(const State& q);
+
+  // The adjoint (header): λ, J, and the Lagrangian in place of the penalty.
+  bool adjoint = false;
+  Vector3 multiplier = Vector3::Zero();
+  Vector3 force(const State& q) const;  // λ = ρ (c + R_a s), world
+  using ConstraintJacobian = LocalResidualJacobian<3, kBlocks>;
+  Vector3 constraint(const State& q, ConstraintJacobian* J) const;
+
+ private:
+  // c (with w = R_a s), and J and the curvature of μᵀc (added into H) when non-null.
+  Vector3 line(const State& q, const Vector3& w, ConstraintJacobian* J, const Vector3* mu,
+               LocalHessian<4>* H) const;
+};
+
 struct JointAlignment {
   static constexpr int kBlocks = 2;
   static constexpr const char* kName = "joint_alignment";

@@ -179,12 +179,15 @@ void Model::validate() const {
         if (!std::isfinite(tau(0))) throw ModelError(field("motor.torque"), "must be finite in every frame");
       }
     }
+    if (j.type == JointSpec::Type::kSlider && !(std::abs(j.axis_a.norm() - 1.0) <= 1e-12)) {
+      throw ModelError(field("a.axis"), "must be a unit vector");
+    }
     if (j.type == JointSpec::Type::kHinge) {
       for (const auto& [axis, member] : {std::pair{j.axis_a, "a.axis"}, std::pair{j.axis_b, "b.axis"}}) {
         if (!(std::abs(axis.norm() - 1.0) <= 1e-12)) throw ModelError(field(member), "must be a unit vector");
       }
     }
-    if (j.type == JointSpec::Type::kWeld) {
+    if (j.type == JointSpec::Type::kWeld || j.type == JointSpec::Type::kSlider) {
       for (const auto& [frame, member] : {std::pair{j.frame_a, "a"}, std::pair{j.frame_b, "b"}}) {
         if (!((frame.transpose() * frame - Matrix3::Identity()).norm() <= 1e-9 && frame.determinant() > 0.0)) {
           throw ModelError(field(member), "the weld frame must be a rotation");

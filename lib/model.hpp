@@ -56,19 +56,20 @@ struct SpringSpec {
 };
 
 // A joint between a body and another body or the world (docs/scene-format.md#joints):
-//   translation  p_b = p_a   (the two points p = x + R p̄),
-//   rotation     hinge: the axes R_a â and R_b b̂ aligned; weld: the initial relative
-//                orientation kept, log(R_a A Bᵀ R_bᵀ) = 0; ball: none.
+//   translation  p_b = p_a   (the two points p = x + R p̄); slider: p_b on the line through
+//                p_a along R_a â;
+//   rotation     hinge: the axes R_a â and R_b b̂ aligned; weld and slider: the initial
+//                relative orientation kept, log(R_a A Bᵀ R_bᵀ) = 0; ball: none.
 // Each part is elastic, ½ ‖c‖²/compliance (translation) and ½ ‖c‖²/compliance_rotation, or
 // exact where its compliance is 0 (the augmented Lagrangian of StepSolver::solve).
 // End a is a body; end b a body, the world or a rod node (position only: ball joints).
 // Terms: lib/joint_terms.hpp.
 struct JointSpec {
-  enum class Type { kBall, kHinge, kWeld };
+  enum class Type { kBall, kHinge, kWeld, kSlider };
   Type type = Type::kBall;
   BodyPoint a, b;                             // body −1: the world (point in world coordinates)
   int rod_b = -1, node_b = -1;                // end b a rod node instead (ball joints only)
-  Vector3 axis_a = Vector3::UnitZ();          // hinge: unit, in a's body (or world) coordinates
+  Vector3 axis_a = Vector3::UnitZ();          // hinge, slider: unit, in a's body coordinates
   Vector3 axis_b = Vector3::UnitZ();          // hinge: unit, in b's body (or world) coordinates
   Matrix3 frame_a = Matrix3::Identity();      // weld: joint frames in body coordinates
   Matrix3 frame_b = Matrix3::Identity();

@@ -116,14 +116,15 @@ JointSpec parse_joint(const json& value, const std::string& path, const std::str
   } else if (type == "weld") {
     spec.type = JointSpec::Type::kWeld;
   } else if (type == "slider") {
-    j.fail(j.field("type"), "\"slider\" joints are not implemented yet (ball, hinge, weld are)");
+    spec.type = JointSpec::Type::kSlider;
   } else {
-    j.fail(j.field("type"), "unknown joint type \"" + type + "\" (expected \"ball\", \"hinge\" or \"weld\")");
+    j.fail(j.field("type"), "unknown joint type \"" + type +
+                                "\" (expected \"ball\", \"hinge\", \"slider\" or \"weld\")");
   }
   if (j.has("limits")) j.fail(j.field("limits"), "joint limits are not implemented yet");
   if (j.has("motor")) {
     ObjectReader m(j.get("motor"), j.field("motor"), source, {"torque", "force"});
-    if (m.has("force")) m.fail(m.field("force"), "a force motor drives a slider: sliders are not implemented yet");
+    if (m.has("force")) m.fail(m.field("force"), "a slider's force motor is not implemented yet (a hinge's torque motor is)");
     if (spec.type != JointSpec::Type::kHinge) m.fail(j.field("motor"), "only a hinge has a motor (a torque about its axis)");
     spec.has_motor = true;
     spec.motor_torque = m.number("torque");
@@ -177,8 +178,15 @@ JointSpec parse_joint(const json& value, const std::string& path, const std::str
       } else {  // a's axis at the start, in b's coordinates
         spec.axis_b = rotation_of(end.body).transpose() * rotation_of(spec.a.body) * spec.axis_a;
       }
+    } else if (spec.type == JointSpec::Type::kSlider) {
+      if (is_b && e.has("axis")) {
+        e.fail(e.field("axis"), "a slider's axis is end a's (it turns with a)");
+      } else if (!is_b) {
+        if (!e.has("axis")) e.fail(e.field("axis"), "a slider needs its axis on end a (body coordinates)");
+        spec.axis_a = unit_vector(e, "axis");
+      }
     } else if (e.has("axis")) {
-      e.fail(e.field("axis"), "only a hinge has an axis");
+      e.fail(e.field("axis"), "only a hinge or a slider has an axis");
     }
     e.finish();
     return end;

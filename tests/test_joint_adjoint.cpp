@@ -7,6 +7,8 @@
 //     rotations over the angle list, |λ| from 1e-3 to 1e6 and ρ 1 and 1e6;
 //   * force(q) = λ: the penalty's gradient is Jᵀλ where the shifted joint holds, for a
 //     non-zero shift.
+//   * the slider's line term (JointLine): value, gradient, Hessian, residual and constraint
+//     at generic states, its Lagrangian where the line holds, its violation and update.
 // Tolerances are fd_check.hpp's defaults.
 
 #include <gtest/gtest.h>
@@ -99,9 +101,13 @@ template <class Term>
   return fd::check_vector_jacobian(c, q, dofs, Eigen::MatrixXd(J));
 }
 
+// `truncation_length`: for a term whose ‖c(θ)‖² has a third-order term at c = 0 (the slider
+// line: 2 c₁·c₂ ≠ 0), the size L of the levers and of d, for the truncation floor ρ L³ ε² of
+// the gradient's differences.
 template <class Term>
 ::testing::AssertionResult check_lagrangian(Term t, const State& q, const fd::Dofs& dofs,
-                                            const Vector3& lambda, double rho) {
+                                            const Vector3& lambda, double rho,
+                                            double truncation_length = 0.0) {
   t.exact = true;
   t.adjoint = true;
   t.multiplier = lambda;
@@ -121,7 +127,9 @@ template <class Term>
   constexpr double kL = 3.0;
   constexpr double kEps = std::numeric_limits<double>::epsilon();
   fd::TermCheckOptions opt;
-  opt.gradient.abs_floor = 16.0 * kEps * rho * kL;
+  if (truncation_length > 0.0) opt.gradient.step = 1e-7;  // the truncation falls as ε²
+  opt.gradient.abs_floor = 16.0 * kEps * rho * kL + rho * std::pow(truncation_length, 3) *
+                                                        opt.gradient.step * opt.gradient.step;
   const double e = opt.hessian_from_value.step;
   opt.hessian_from_value.abs_floor = 16.0 * kEps * lambda.norm() * kL / (e * e);
   // With |λ| = 1e6 and ρ = 1 that floor (~1) reaches the ρ-sized blocks: the differences of
@@ -223,6 +231,104 @@ TEST(JointAdjoint, ThePenaltysGradientIsJTransposeTimesItsForce) {
     a.shift = 1e-3 * random_unit(rng);
     check(a, e.q);
   }
+}
+
+// ----------------------------------------------------------------------------------------
+// The slider's line term (JointLine): V = ½ k ‖n × d + R_a s‖², its residual, constraint and
+// Lagrangian, over the angle list for both ends, end b a body or the world, with and without
+// a shift, k from 1e-6 to 1e9 (the header's derivation, checked term by term).
+
+JointLine line_term(const Ends& e, bool world_b, std::mt19937& rng) {
+  JointLine t;
+  const JointPoint p = point_term(e, world_b, rng);
+  t.a = p.a;
+  t.b = p.b;
+  t.offsets = p.offsets;
+  t.axis_a = random_unit(rng);
+  return t;
+}
+
+TEST(JointLineTerm, DerivativesResidualAndConstraintMatchFiniteDifferences) {
+  std::mt19937 rng(2104);
+  for (const double k : {1e-6, 1.0, 1e9}) {
+    for (const double shift : {0.0, 0.2}) {
+      SCOPED_TRACE(trace("k, |s|", k, shift));
+      EXPECT_EQ(for_each_case(rng, line_term, [&](JointLine& t, Ends& e, bool world_b) {
+                  t.stiffness = k;
+                  t.shift = shift * random_unit(rng);
+                  // Off the line (c ≠ 0): move end b, or its world anchor.
+                  (world_b ? t.b.local : e.q.points[1]) += random_vector(rng, 0.3);
+                  EXPECT_TRUE(fd::check_term(t, e.q, e.point_pair));
+                  // Residual: ½‖r‖² = V, Jᵀr = g, J by differences of r.
+                  JointLine::Residual r;
+                  JointLine::ResidualJacobian J;
+                  t.residual(e.q, r, &J);
+                  LocalGradient<4> g;
+                  const double v = t.evaluate(e.q, &g, nullptr);
+                  EXPECT_NEAR(0.5 * r.squaredNorm(), v, 1e-13 * (1.0 + v));
+                  for (int b = 0; b < 4; ++b) {
+                    if (e.point_pair[b].kind == fd::DofKind::kNone) {
+                      J.block<3, 3>(0, 3 * b).setZero();
+                      g.segment<3>(3 * b).setZero();
+                    }
+                  }
+                  EXPECT_LE((J.transpose() * r - g).norm(), 1e-12 * (1.0 + g.norm()));
+                  const fd::VectorFunction residual = [&](const State& s) {
+                    JointLine::Residual rs;
+                    t.residual(s, rs, nullptr);
+                    return Eigen::VectorXd(rs);
+                  };
+                  JointLine::ResidualJacobian J_full;
+                  t.residual(e.q, r, &J_full);
+                  EXPECT_TRUE(fd::check_vector_jacobian(residual, e.q, e.point_pair, Eigen::MatrixXd(J_full)));
+                  EXPECT_TRUE(check_constraint_jacobian(t, e.q, e.point_pair));
+                }),
+                kCases);
+    }
+  }
+}
+
+TEST(JointLineTerm, LagrangianMatchesFiniteDifferencesWhereTheLineHolds) {
+  std::mt19937 rng(2105);
+  for (const double size : {1e-3, 1.0, 1e6}) {
+    for (const double rho : {1.0, 1e6}) {
+      SCOPED_TRACE(trace("|λ|, ρ", size, rho));
+      const Vector3 lambda = size * random_unit(rng);
+      EXPECT_EQ(for_each_case(rng, line_term, [&](JointLine& t, Ends& e, bool world_b) {
+                  // p_b on the line: move b (or its world anchor) along n from p_a.
+                  const Vector3 on_line = t.a.position(e.q) + 0.4 * (e.q.rotations[0] * t.axis_a);
+                  if (world_b) {
+                    t.b.local = on_line;
+                  } else {
+                    e.q.points[1] += on_line - t.b.position(e.q);
+                  }
+                  // Levers ≤ 0.5·√3, d = 0.4 along n: L = 1.5 bounds them.
+                  EXPECT_TRUE(check_lagrangian(t, e.q, e.point_pair, lambda, rho, 1.5));
+                }),
+                kCases);
+    }
+  }
+}
+
+// The line's violation is zero along the axis and the distance from it across; its
+// multiplier update carries the residual as the others do (s ← s + R_aᵀ c).
+TEST(JointLineTerm, ViolationIsTheDistanceFromTheLineTimesItsLength) {
+  std::mt19937 rng(2106);
+  Ends e = ends(0.7, 1.1, false, rng);
+  JointLine t = line_term(e, false, rng);
+  const Vector3 n = e.q.rotations[0] * t.axis_a;
+  e.q.points[1] += t.a.position(e.q) + 0.5 * n - t.b.position(e.q);
+  EXPECT_LE(t.violation(e.q), 1e-15);
+  const Vector3 across = n.cross(random_unit(rng)).normalized();
+  e.q.points[1] += 1e-3 * across;
+  // c = n × d with d = 0.5 n + 1e-3 u: |c| = 1e-3 (n ⊥ u), its largest entry at most that.
+  const Vector3 c = n.cross(t.b.position(e.q) - t.a.position(e.q));
+  EXPECT_NEAR(c.norm(), 1e-3, 1e-15);
+  EXPECT_EQ(t.violation(e.q), c.lpNorm<Eigen::Infinity>());
+  t.exact = true;
+  t.stiffness = 1e6;
+  t.update_multiplier(e.q);
+  EXPECT_LE((e.q.rotations[0] * t.shift - c).norm(), 1e-15);
 }
 
 }  // namespace

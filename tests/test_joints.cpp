@@ -9,6 +9,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <iomanip>
 #include <sstream>
 #include <numbers>
 #include <string>
@@ -238,6 +239,48 @@ TEST(Joints, AnExactWeldMakesTwoBodiesOne) {
   EXPECT_GT(spun, 1.0);  // the pair did spin
 }
 
+// A body on an exact slider along a rail tilted 30° from the horizontal, under gravity:
+// it slides with a = g sin 30° along the rail (backward Euler on a constant force has the
+// displacement h² a k(k+1)/2 after k steps, exactly), keeps its orientation and stays on the
+// rail to the tolerance.
+TEST(Joints, ABodySlidesDownAnExactRailWithGSinTheta) {
+  const double s = 0.5, c = std::sqrt(3.0) / 2.0;  // sin, cos 30°
+  const Scene scene = parse_scene(R"({
+    "time_step": 0.01, "frames": 50, "gravity": [0, 0, -9.81],
+    "solver": { "tolerance": 1e-12, "max_iterations": 50 },
+    "bodies": [ { "name": "cart", "mass": 2, "inertia": [0.01, 0.02, 0.03],
+                  "orientation": [0.9, 0.3, -0.2, 0.2449489742783178] } ],
+    "joints": [ { "type": "slider", "a": { "body": "cart", "point": [0.1, 0, 0],
+                  "axis": )" + [&] {
+    // The rail's world direction (−cos 30°, 0, −sin 30°) in the cart's body coordinates.
+    const Matrix3 R = so3::from_quaternion(Eigen::Quaterniond(0.9, 0.3, -0.2, 0.2449489742783178));
+    const Vector3 axis = R.transpose() * Vector3(-c, 0.0, -s);
+    std::ostringstream text;
+    text << std::setprecision(17) << "[" << axis.x() << ", " << axis.y() << ", " << axis.z() << "]";
+    return text.str();
+  }() + R"( } } ] })",
+                                 "rail.json");
+  Simulator sim(scene.model, scene.solver);
+  const Vector3 x0 = sim.state().points[0];
+  const Matrix3 R0 = sim.state().rotations[0];
+  const Vector3 rail = sim.state().rotations[0] * scene.model.joints[0].axis_a;
+  double off_rail = 0.0, turn = 0.0;
+  for (int k = 1; k <= scene.frames; ++k) {
+    const StepReport r = sim.step();
+    ASSERT_TRUE(r.converged()) << k << " " << r.message;
+    const Vector3 moved = sim.state().points[0] - x0;
+    off_rail = std::max(off_rail, (moved - moved.dot(rail) * rail).norm());
+    turn = std::max(turn, so3::distance(sim.state().rotations[0], R0));
+  }
+  const double k = scene.frames, h = scene.model.time_step;
+  const double along = (sim.state().points[0] - x0).dot(rail);
+  const double expected = 9.81 * (-rail.z()) * h * h * k * (k + 1) / 2.0;
+  EXPECT_NEAR(along / expected, 1.0, 1e-6) << along << " vs " << expected;
+  EXPECT_NEAR(-rail.z(), s, 1e-6);  // the rail is the one described
+  EXPECT_LE(off_rail, 1e-11);
+  EXPECT_LE(turn, 1e-11);
+}
+
 // Exact joints that cannot all hold (two pivots 0.2 m apart on the body, 0.3 m apart in the
 // world) are reported, not hidden: the step is not converged, says why, and the violation
 // stays ~0.1 m.
@@ -449,10 +492,14 @@ TEST(Joints, BadJointsNameTheirField) {
   // Without a compliance a joint is exact, in both parts.
   EXPECT_EQ(error(R"({ "type": "ball", "a": { "body": "a" } })"), "accepted");
   EXPECT_EQ(error(R"({ "type": "slider", "compliance": 1, "a": { "body": "a" } })")
-                .rfind("joints[0].type: \"slider\" joints are not implemented yet", 0),
+                .rfind("joints[0].a.axis: a slider needs its axis on end a", 0),
             0u);
+  EXPECT_EQ(error(R"({ "type": "slider", "a": { "body": "a", "axis": [1, 0, 0] }, "b": { "body": "r", "axis": [1, 0, 0] } })")
+                .rfind("joints[0].b.axis: a slider's axis is end a's", 0),
+            0u);
+  EXPECT_EQ(error(R"({ "type": "slider", "a": { "body": "a", "axis": [1, 0, 0] } })"), "accepted");
   EXPECT_EQ(error(R"({ "type": "twist", "compliance": 1, "a": { "body": "a" } })")
-                .rfind("joints[0].type: unknown joint type \"twist\"", 0),
+                .rfind("joints[0].type: unknown joint type \"twist\" (expected \"ball\", \"hinge\", \"slider\" or \"weld\")", 0),
             0u);
   EXPECT_EQ(error(R"({ "type": "ball", "compliance": 1, "a": { "body": "a" }, "b": { "rod": "x", "node": 0 } })")
                 .rfind("joints[0].b.rod: names no rod \"x\"", 0),
@@ -467,7 +514,7 @@ TEST(Joints, BadJointsNameTheirField) {
                 .rfind("joints[0].a.axis: must be a non-zero vector", 0),
             0u);
   EXPECT_EQ(error(R"({ "type": "ball", "compliance": 1, "a": { "body": "a", "axis": [0, 0, 1] } })")
-                .rfind("joints[0].a.axis: only a hinge has an axis", 0),
+                .rfind("joints[0].a.axis: only a hinge or a slider has an axis", 0),
             0u);
   EXPECT_EQ(error(R"({ "type": "ball", "compliance": 1, "a": { "body": "a" }, "b": { "body": "a" } })")
                 .rfind("joints[0].b.body: joins a body to itself", 0),
@@ -476,7 +523,7 @@ TEST(Joints, BadJointsNameTheirField) {
                 .rfind("joints[0].motor: only a hinge has a motor", 0),
             0u);
   EXPECT_EQ(error(R"({ "type": "hinge", "a": { "body": "a", "axis": [0, 0, 1] }, "motor": { "force": 1 } })")
-                .rfind("joints[0].motor.force: a force motor drives a slider: sliders are not implemented yet", 0),
+                .rfind("joints[0].motor.force: a slider's force motor is not implemented yet", 0),
             0u);
   EXPECT_EQ(error(R"({ "type": "hinge", "a": { "body": "a", "axis": [0, 0, 1] }, "motor": { "torque": 1, "speed": 2 } })")
                 .rfind("joints[0].motor.speed: unknown key", 0),
@@ -678,7 +725,8 @@ TEST_F(JointsCli, EveryJointSceneRunsUnderEveryBackEndAndParameterisation) {
 }
 
 // The constrained adjoint through every exact joint type: the chain of the elastic gradcheck
-// above with every joint exact (a hinge to the world, a ball joint, a weld), and the gripper
+// above with every joint exact (a hinge to the world, a ball joint, a weld; then a slider in
+// place of the weld), and the gripper
 // holding its rod by an exact ball joint. The forward tolerance is 1e-12 (the gradient is
 // exact at converged steps; gradcheck's differences need them much tighter than their step).
 TEST_F(JointsCli, GradcheckPassesThroughEveryExactJointType) {
@@ -702,6 +750,16 @@ TEST_F(JointsCli, GradcheckPassesThroughEveryExactJointType) {
   }
   const Result r = run({"gradcheck", "scene.json"});
   EXPECT_EQ(r.exit_code, 0) << r.out << r.err;
+  // A slider: the last link slides along the middle one's axis instead of being welded.
+  {
+    std::string text = test::read_file(dir_ / "scene.json");
+    const std::string weld = R"({ "type": "weld", "a": { "body": "l2", "point": [-0.2, 0, -0.1] }, "b": { "body": "l1" } })";
+    text.replace(text.find(weld), weld.size(),
+                 R"({ "type": "slider", "a": { "body": "l2", "point": [-0.2, 0, -0.1], "axis": [1, 0.2, 0] }, "b": { "body": "l1" } })");
+    std::ofstream(dir_ / "slider.json") << text;
+  }
+  const Result slider = run({"gradcheck", "slider.json"});
+  EXPECT_EQ(slider.exit_code, 0) << slider.out << slider.err;
   nlohmann::json gripper =
       nlohmann::json::parse(test::read_file(kScenes / "joints/gripper_rod.json"));
   for (auto& joint : gripper["joints"]) {
