@@ -67,21 +67,41 @@
 // order: once the joint holds (F_a = F_b = F) the shifted E becomes F S' Fᵀ, which keeps the
 // current F_a S F_bᵀ — the torque ρ log E — when S' = F_bᵀ F_a S.
 
+#include <type_traits>
+
 #include "loads.hpp"
 #include "state.hpp"
 #include "term.hpp"
 
 namespace liedyn {
 
-struct JointPoint {
+// What every joint part holds for the augmented Lagrangian and the adjoint (above): whether it
+// is exact, its multiplier shift s (a vector, or the weld's rotation S; none at first), and,
+// in the adjoint, λ in place of the penalty.
+template <class Shift>
+struct JointConstraintState {
+  bool exact = false;
+  Shift shift = no_shift();
+  bool adjoint = false;
+  Vector3 multiplier = Vector3::Zero();
+
+ private:
+  static Shift no_shift() {
+    if constexpr (std::is_same_v<Shift, Matrix3>) {
+      return Matrix3::Identity();
+    } else {
+      return Shift::Zero();
+    }
+  }
+};
+
+struct JointPoint : JointConstraintState<Vector3> {
   static constexpr int kBlocks = 4;
   static constexpr const char* kName = "joint_point";
   static constexpr bool kEnergyOfState = true;
   std::array<int, kBlocks> offsets{-1, -1, -1, -1};  // x_a, θ_a, x_b, θ_b
   AttachedPoint a, b;                                // a: not a world anchor
   double stiffness = 0.0;                            // k = 1/compliance (N/m), or ρ if exact
-  bool exact = false;
-  Vector3 shift = Vector3::Zero();                   // s, in a's body coordinates
 
   double evaluate(const State& q, LocalGradient<4>* g, LocalHessian<4>* H) const;
 
@@ -94,9 +114,7 @@ struct JointPoint {
   double violation(const State& q) const;
   void update_multiplier(const State& q);
 
-  // The adjoint (header): λ, J, and the Lagrangian in place of the penalty.
-  bool adjoint = false;
-  Vector3 multiplier = Vector3::Zero();
+  // The adjoint (header): λ, and c with J.
   Vector3 force(const State& q) const;  // λ = ρ (c + s), world
   using ConstraintJacobian = LocalResidualJacobian<3, kBlocks>;
   Vector3 constraint(const State& q, ConstraintJacobian* J) const;  // c, and J = ∂c/∂(blocks)
@@ -116,7 +134,7 @@ struct JointPoint {
 // C(r_b, μ × n) at θ_bθ_b; from n₁ × d₁ the bilinear −δdᵀ hat(μ) hat(n) θ_a, i.e. with
 // δd = D δq (D = [−I, hat(r_a), I, −hat(r_b)]) and A = −hat(μ) hat(n) the blocks Dᵀ A at the
 // θ_a column and their transpose at the θ_a row. H = k JᵀJ + that (exact).
-struct JointLine {
+struct JointLine : JointConstraintState<Vector3> {
   static constexpr int kBlocks = 4;
   static constexpr const char* kName = "joint_line";
   static constexpr bool kEnergyOfState = true;
@@ -124,8 +142,6 @@ struct JointLine {
   AttachedPoint a, b;                                // a: a body point
   Vector3 axis_a = Vector3::UnitX();                 // â, unit, in a's body coordinates
   double stiffness = 0.0;                            // k = 1/compliance (N/m), or ρ if exact
-  bool exact = false;
-  Vector3 shift = Vector3::Zero();                   // s, in a's body coordinates
 
   double evaluate(const State& q, LocalGradient<4>* g, LocalHessian<4>* H) const;
 
@@ -138,9 +154,7 @@ struct JointLine {
   double violation(const State& q) const;
   void update_multiplier(const State& q);
 
-  // The adjoint (header): λ, J, and the Lagrangian in place of the penalty.
-  bool adjoint = false;
-  Vector3 multiplier = Vector3::Zero();
+  // The adjoint (header): λ, and c with J.
   Vector3 force(const State& q) const;  // λ = ρ (c + R_a s), world
   using ConstraintJacobian = LocalResidualJacobian<3, kBlocks>;
   Vector3 constraint(const State& q, ConstraintJacobian* J) const;
@@ -151,7 +165,7 @@ struct JointLine {
                LocalHessian<4>* H) const;
 };
 
-struct JointAlignment {
+struct JointAlignment : JointConstraintState<Vector3> {
   static constexpr int kBlocks = 2;
   static constexpr const char* kName = "joint_alignment";
   static constexpr bool kEnergyOfState = true;
@@ -160,8 +174,6 @@ struct JointAlignment {
   Vector3 axis_a = Vector3::UnitZ();         // â, b̂: unit, in each end's body coordinates
   Vector3 axis_b = Vector3::UnitZ();
   double stiffness = 0.0;                    // k = 1/compliance_rot (N·m/rad), or ρ if exact
-  bool exact = false;
-  Vector3 shift = Vector3::Zero();           // s, in a's body coordinates
 
   double evaluate(const State& q, LocalGradient<2>* g, LocalHessian<2>* H) const;
 
@@ -174,15 +186,13 @@ struct JointAlignment {
   double violation(const State& q) const;
   void update_multiplier(const State& q);
 
-  // The adjoint (header): λ, J, and the Lagrangian in place of the penalty.
-  bool adjoint = false;
-  Vector3 multiplier = Vector3::Zero();
+  // The adjoint (header): λ, and c with J.
   Vector3 force(const State& q) const;  // λ = ρ (c + s), world
   using ConstraintJacobian = LocalResidualJacobian<3, kBlocks>;
   Vector3 constraint(const State& q, ConstraintJacobian* J) const;  // c, and J = ∂c/∂(blocks)
 };
 
-struct JointWeld {
+struct JointWeld : JointConstraintState<Matrix3> {
   static constexpr int kBlocks = 2;
   static constexpr const char* kName = "joint_weld";
   static constexpr bool kEnergyOfState = true;
@@ -191,8 +201,6 @@ struct JointWeld {
   Matrix3 frame_a = Matrix3::Identity();     // A, B: joint frames in body coordinates
   Matrix3 frame_b = Matrix3::Identity();
   double stiffness = 0.0;                    // k = 1/compliance_rot (N·m/rad), or ρ if exact
-  bool exact = false;
-  Matrix3 shift = Matrix3::Identity();       // S, a rotation in frame a's coordinates
 
   double evaluate(const State& q, LocalGradient<2>* g, LocalHessian<2>* H) const;
 
@@ -209,9 +217,7 @@ struct JointWeld {
   double violation(const State& q) const;
   void update_multiplier(const State& q);
 
-  // The adjoint (header): λ, J, and the Lagrangian in place of the penalty.
-  bool adjoint = false;
-  Vector3 multiplier = Vector3::Zero();
+  // The adjoint (header): λ, and c with J.
   Vector3 force(const State& q) const;  // λ = ρ (c + s), world
   using ConstraintJacobian = LocalResidualJacobian<3, kBlocks>;
   Vector3 constraint(const State& q, ConstraintJacobian* J) const;  // c, and J = ∂c/∂(blocks)

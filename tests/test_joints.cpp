@@ -559,46 +559,6 @@ class JointsCli : public test::CliFixture {
   JointsCli() : CliFixture("liedyn_joints_test_") {}
 };
 
-// The adjoint through every joint type: gradcheck on a chain of a hinge to the world, a
-// ball joint and a weld, optimising the initial velocities towards a pose; and through a rod
-// held by a ball joint.
-TEST_F(JointsCli, GradcheckPassesThroughEveryJointType) {
-  {
-    std::ofstream(dir_ / "scene.json") << R"({
-      "time_step": 0.01, "frames": 30, "gravity": [0, 0, -9.81],
-      "solver": { "tolerance": 1e-11, "max_iterations": 50 },
-      "bodies": [
-        { "name": "l0", "mass": 1, "inertia": [0.02, 0.03, 0.04], "position": [0.2, 0, 0] },
-        { "name": "l1", "mass": 1, "inertia": [0.02, 0.03, 0.04], "position": [0.6, 0, 0] },
-        { "name": "l2", "mass": 0.5, "inertia": [0.01, 0.02, 0.02], "position": [1.0, 0, 0.1] } ],
-      "joints": [
-        { "type": "hinge", "compliance": 1e-4, "a": { "body": "l0", "point": [-0.2, 0, 0], "axis": [0, 1, 0.2] } },
-        { "type": "ball", "compliance": 1e-4, "a": { "body": "l1", "point": [-0.2, 0, 0] }, "b": { "body": "l0" } },
-        { "type": "weld", "compliance": 1e-3, "a": { "body": "l2", "point": [-0.2, 0, -0.1] }, "b": { "body": "l1" } } ],
-      "optimization": {
-        "parameters": [ { "kind": "body_angular_velocity", "body": "l0" },
-                        { "kind": "body_linear_velocity", "body": "l2" } ],
-        "objective": [ { "term": "body_pose", "body": "l2", "frame": -1,
-                         "position": [0.5, 0.3, -0.5], "orientation": [1, 0, 0, 0], "orientation_weight": 1 } ] } })";
-  }
-  const Result r = run({"gradcheck", "scene.json"});
-  EXPECT_EQ(r.exit_code, 0) << r.out << r.err;
-  // Through a body–rod component: the gripper's spin moves the rod it holds.
-  nlohmann::json gripper =
-      nlohmann::json::parse(test::read_file(kScenes / "joints/gripper_rod.json"));
-  gripper["frames"] = 40;
-  gripper["optimization"] = nlohmann::json::parse(R"({
-      "parameters": [ { "kind": "body_angular_velocity", "body": "gripper" },
-                      { "kind": "rod_node_velocities", "rod": "rod" } ],
-      "objective": [ { "term": "body_pose", "body": "gripper", "frame": -1,
-                       "position": [0.1, 0.05, -0.2], "orientation": [1, 0, 0, 0], "orientation_weight": 1 },
-                     { "term": "point_targets", "rod": "rod", "frame": -1,
-                       "polyline": [[0.2, 0.1, -0.3], [0.3, 0.2, -0.8]] } ] })");
-  std::ofstream(dir_ / "gripper.json") << gripper.dump();
-  const Result through_rod = run({"gradcheck", "gripper.json"});
-  EXPECT_EQ(through_rod.exit_code, 0) << through_rod.out << through_rod.err;
-}
-
 // A motor is a torque about its hinge axis on a and the opposite on b: two bodies hinged
 // about z (no gravity) move exactly as under world torques ±τ z on each (the axis stays z,
 // so the lagged axis is exact here), and their total angular momentum is the same as
@@ -724,60 +684,66 @@ TEST_F(JointsCli, EveryJointSceneRunsUnderEveryBackEndAndParameterisation) {
   }
 }
 
-// The constrained adjoint through every exact joint type: the chain of the elastic gradcheck
-// above with every joint exact (a hinge to the world, a ball joint, a weld; then a slider in
-// place of the weld), and the gripper
-// holding its rod by an exact ball joint. The forward tolerance is 1e-12 (the gradient is
-// exact at converged steps; gradcheck's differences need them much tighter than their step).
-TEST_F(JointsCli, GradcheckPassesThroughEveryExactJointType) {
-  {
-    std::ofstream(dir_ / "scene.json") << R"({
+// The adjoint through every joint type, elastic and exact (the constrained adjoint):
+// gradcheck on a chain of a hinge to the world, a ball joint and a weld (then a slider in
+// place of the weld), optimising the initial velocities towards a pose; and through a rod
+// held by a gripper's ball joint. Elastic: compliances 1e-4 and 1e-3; exact: 0, with the
+// forward tolerance at 1e-12 (the gradient is exact at converged steps, and gradcheck's
+// differences need them much tighter than their step).
+TEST_F(JointsCli, GradcheckPassesThroughEveryJointTypeElasticAndExact) {
+  for (const bool exact : {false, true}) {
+    SCOPED_TRACE(exact ? "exact" : "elastic");
+    const std::string tolerance = exact ? "1e-12" : "1e-11";
+    const auto compliance = [&](const char* value) {
+      return exact ? std::string() : std::string(R"("compliance": )") + value + ", ";
+    };
+    const std::string chain = R"({
       "time_step": 0.01, "frames": 30, "gravity": [0, 0, -9.81],
-      "solver": { "tolerance": 1e-12, "max_iterations": 50 },
+      "solver": { "tolerance": )" + tolerance + R"(, "max_iterations": 50 },
       "bodies": [
         { "name": "l0", "mass": 1, "inertia": [0.02, 0.03, 0.04], "position": [0.2, 0, 0] },
         { "name": "l1", "mass": 1, "inertia": [0.02, 0.03, 0.04], "position": [0.6, 0, 0] },
         { "name": "l2", "mass": 0.5, "inertia": [0.01, 0.02, 0.02], "position": [1.0, 0, 0.1] } ],
       "joints": [
-        { "type": "hinge", "a": { "body": "l0", "point": [-0.2, 0, 0], "axis": [0, 1, 0.2] } },
-        { "type": "ball", "a": { "body": "l1", "point": [-0.2, 0, 0] }, "b": { "body": "l0" } },
-        { "type": "weld", "a": { "body": "l2", "point": [-0.2, 0, -0.1] }, "b": { "body": "l1" } } ],
+        { "type": "hinge", )" + compliance("1e-4") + R"("a": { "body": "l0", "point": [-0.2, 0, 0], "axis": [0, 1, 0.2] } },
+        { "type": "ball", )" + compliance("1e-4") + R"("a": { "body": "l1", "point": [-0.2, 0, 0] }, "b": { "body": "l0" } },
+        { "type": "LAST", )" + compliance("1e-3") + R"("a": { "body": "l2", "point": [-0.2, 0, -0.1] AXIS }, "b": { "body": "l1" } } ],
       "optimization": {
         "parameters": [ { "kind": "body_angular_velocity", "body": "l0" },
                         { "kind": "body_linear_velocity", "body": "l2" } ],
         "objective": [ { "term": "body_pose", "body": "l2", "frame": -1,
                          "position": [0.5, 0.3, -0.5], "orientation": [1, 0, 0, 0], "orientation_weight": 1 } ] } })";
+    for (const auto& [last, axis] : {std::pair{"weld", ""}, std::pair{"slider", R"(, "axis": [1, 0.2, 0])"}}) {
+      SCOPED_TRACE(last);
+      std::string text = chain;
+      text.replace(text.find("LAST"), 4, last);
+      text.replace(text.find("AXIS"), 4, axis);
+      std::ofstream(dir_ / "scene.json") << text;
+      const Result r = run({"gradcheck", "scene.json"});
+      EXPECT_EQ(r.exit_code, 0) << r.out << r.err;
+    }
+    // Through a body–rod component: the gripper's spin moves the rod it holds.
+    nlohmann::json gripper =
+        nlohmann::json::parse(test::read_file(kScenes / "joints/gripper_rod.json"));
+    if (exact) {
+      for (auto& joint : gripper["joints"]) {
+        joint["compliance"] = 0;
+        joint.erase("compliance_rotation");
+      }
+      gripper["solver"]["tolerance"] = 1e-12;
+    }
+    gripper["frames"] = 40;
+    gripper["optimization"] = nlohmann::json::parse(R"({
+        "parameters": [ { "kind": "body_angular_velocity", "body": "gripper" },
+                        { "kind": "rod_node_velocities", "rod": "rod" } ],
+        "objective": [ { "term": "body_pose", "body": "gripper", "frame": -1,
+                         "position": [0.1, 0.05, -0.2], "orientation": [1, 0, 0, 0], "orientation_weight": 1 },
+                       { "term": "point_targets", "rod": "rod", "frame": -1,
+                         "polyline": [[0.2, 0.1, -0.3], [0.3, 0.2, -0.8]] } ] })");
+    std::ofstream(dir_ / "gripper.json") << gripper.dump();
+    const Result through_rod = run({"gradcheck", "gripper.json"});
+    EXPECT_EQ(through_rod.exit_code, 0) << through_rod.out << through_rod.err;
   }
-  const Result r = run({"gradcheck", "scene.json"});
-  EXPECT_EQ(r.exit_code, 0) << r.out << r.err;
-  // A slider: the last link slides along the middle one's axis instead of being welded.
-  {
-    std::string text = test::read_file(dir_ / "scene.json");
-    const std::string weld = R"({ "type": "weld", "a": { "body": "l2", "point": [-0.2, 0, -0.1] }, "b": { "body": "l1" } })";
-    text.replace(text.find(weld), weld.size(),
-                 R"({ "type": "slider", "a": { "body": "l2", "point": [-0.2, 0, -0.1], "axis": [1, 0.2, 0] }, "b": { "body": "l1" } })");
-    std::ofstream(dir_ / "slider.json") << text;
-  }
-  const Result slider = run({"gradcheck", "slider.json"});
-  EXPECT_EQ(slider.exit_code, 0) << slider.out << slider.err;
-  nlohmann::json gripper =
-      nlohmann::json::parse(test::read_file(kScenes / "joints/gripper_rod.json"));
-  for (auto& joint : gripper["joints"]) {
-    joint["compliance"] = 0;
-    joint.erase("compliance_rotation");
-  }
-  gripper["frames"] = 40;
-  gripper["solver"]["tolerance"] = 1e-12;
-  gripper["optimization"] = nlohmann::json::parse(R"({
-      "parameters": [ { "kind": "body_angular_velocity", "body": "gripper" },
-                      { "kind": "rod_node_velocities", "rod": "rod" } ],
-      "objective": [ { "term": "body_pose", "body": "gripper", "frame": -1,
-                       "position": [0.1, 0.05, -0.2], "orientation": [1, 0, 0, 0], "orientation_weight": 1 },
-                     { "term": "point_targets", "rod": "rod", "frame": -1,
-                       "polyline": [[0.2, 0.1, -0.3], [0.3, 0.2, -0.8]] } ] })");
-  std::ofstream(dir_ / "gripper.json") << gripper.dump();
-  const Result through_rod = run({"gradcheck", "gripper.json"});
-  EXPECT_EQ(through_rod.exit_code, 0) << through_rod.out << through_rod.err;
 }
 
 }  // namespace
