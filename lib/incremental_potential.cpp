@@ -202,9 +202,15 @@ void add_joint_terms(const Model& model, std::vector<Component>& components) {
   };
   for (const JointSpec& j : model.joints) {
     IncrementalPotential& p = components[point_dof[j.a.body][0]].potential;
+    // The rotation blocks (θ_a, θ_b) of the hinge, weld and motor terms; set below.
+    std::array<int, 2> oa{-1, -1}, ob{-1, -1};
+    const auto rotation_ends = [&](auto& term) {
+      term.offsets = {oa[1], ob[1]};
+      term.rotation_a = j.a.body;
+      term.rotation_b = j.b.body;  // −1: the world
+    };
     JointPoint translation;
-    const auto oa = body_end(j.a, translation.a);
-    std::array<int, 2> ob{-1, -1};
+    oa = body_end(j.a, translation.a);
     double mass = body_mass(j.a.body);
     if (j.rod_b >= 0) {  // a rod node: a translating point without rotation
       const int node = model.rod_point(j.rod_b, j.node_b);
@@ -231,18 +237,14 @@ void add_joint_terms(const Model& model, std::vector<Component>& components) {
     const double inertia = body_inertia(j.a.body) + body_inertia(j.b.body);
     if (j.type == JointSpec::Type::kHinge) {
       JointAlignment hinge;
-      hinge.offsets = {oa[1], ob[1]};
-      hinge.rotation_a = j.a.body;
-      hinge.rotation_b = j.b.body;  // −1: the world
+      rotation_ends(hinge);
       hinge.axis_a = j.axis_a;
       hinge.axis_b = j.axis_b;
       set_stiffness(hinge, j.compliance_rotation, inertia);
       p.add(hinge);
       if (j.has_motor) {
         JointMotor motor;
-        motor.offsets = {oa[1], ob[1]};
-        motor.rotation_a = j.a.body;
-        motor.rotation_b = j.b.body;
+        rotation_ends(motor);
         motor.axis_a = j.axis_a;
         motor.torque = j.motor_torque;
         motor.control = j.motor;
@@ -252,9 +254,7 @@ void add_joint_terms(const Model& model, std::vector<Component>& components) {
       }
     } else if (j.type == JointSpec::Type::kWeld || j.type == JointSpec::Type::kSlider) {
       JointWeld weld;
-      weld.offsets = {oa[1], ob[1]};
-      weld.rotation_a = j.a.body;
-      weld.rotation_b = j.b.body;
+      rotation_ends(weld);
       weld.frame_a = j.frame_a;
       weld.frame_b = j.frame_b;
       set_stiffness(weld, j.compliance_rotation, inertia);

@@ -90,11 +90,11 @@ void JointPoint::residual(const State& q, Residual& r, ResidualJacobian* J) cons
 }
 
 double JointPoint::violation(const State& q) const {
-  return (b.position(q) - a.position(q)).lpNorm<Eigen::Infinity>();
+  return constraint(q, nullptr).lpNorm<Eigen::Infinity>();
 }
 
 void JointPoint::update_multiplier(const State& q) {
-  shift += in_body_a(q, a.rotation, b.position(q) - a.position(q));
+  shift += in_body_a(q, a.rotation, constraint(q, nullptr));
 }
 
 Vector3 JointLine::line(const State& q, const Vector3& w, ConstraintJacobian* J, const Vector3* mu,
@@ -150,11 +150,11 @@ void JointLine::residual(const State& q, Residual& r, ResidualJacobian* J) const
 }
 
 double JointLine::violation(const State& q) const {
-  return line(q, Vector3::Zero(), nullptr, nullptr, nullptr).lpNorm<Eigen::Infinity>();
+  return constraint(q, nullptr).lpNorm<Eigen::Infinity>();
 }
 
 void JointLine::update_multiplier(const State& q) {
-  shift += in_body_a(q, a.rotation, line(q, Vector3::Zero(), nullptr, nullptr, nullptr));
+  shift += in_body_a(q, a.rotation, constraint(q, nullptr));
 }
 
 Vector3 JointLine::force(const State& q) const {
@@ -219,13 +219,11 @@ void JointAlignment::residual(const State& q, Residual& r, ResidualJacobian* J) 
 }
 
 double JointAlignment::violation(const State& q) const {
-  return (end_rotation(q, rotation_a) * axis_a - end_rotation(q, rotation_b) * axis_b)
-      .lpNorm<Eigen::Infinity>();
+  return constraint(q, nullptr).lpNorm<Eigen::Infinity>();
 }
 
 void JointAlignment::update_multiplier(const State& q) {
-  shift += in_body_a(q, rotation_a,
-                     end_rotation(q, rotation_a) * axis_a - end_rotation(q, rotation_b) * axis_b);
+  shift += in_body_a(q, rotation_a, constraint(q, nullptr));
 }
 
 Vector3 JointWeld::relative_rotation(const State& q, Matrix3* E) const {
@@ -236,9 +234,7 @@ Vector3 JointWeld::relative_rotation(const State& q, Matrix3* E) const {
 }
 
 double JointWeld::violation(const State& q) const {
-  const Matrix3 F_a = end_rotation(q, rotation_a) * frame_a;
-  const Matrix3 F_b = end_rotation(q, rotation_b) * frame_b;
-  return so3::log(F_a * F_b.transpose()).lpNorm<Eigen::Infinity>();
+  return constraint(q, nullptr).lpNorm<Eigen::Infinity>();
 }
 
 void JointWeld::update_multiplier(const State& q) {

@@ -78,8 +78,14 @@ namespace liedyn {
 // What every joint part holds for the augmented Lagrangian and the adjoint (above): whether it
 // is exact, its multiplier shift s (a vector, or the weld's rotation S; none at first), and,
 // in the adjoint, λ in place of the penalty.
-template <class Shift>
+// Also the least-squares and constraint forms' types, 3 rows each over the term's B blocks.
+template <class Shift, int B>
 struct JointConstraintState {
+  static constexpr int kResiduals = 3;
+  using Residual = LocalResidual<kResiduals>;
+  using ResidualJacobian = LocalResidualJacobian<kResiduals, B>;
+  using ConstraintJacobian = LocalResidualJacobian<3, B>;
+
   bool exact = false;
   Shift shift = no_shift();
   bool adjoint = false;
@@ -95,7 +101,7 @@ struct JointConstraintState {
   }
 };
 
-struct JointPoint : JointConstraintState<Vector3> {
+struct JointPoint : JointConstraintState<Vector3, 4> {
   static constexpr int kBlocks = 4;
   static constexpr const char* kName = "joint_point";
   static constexpr bool kEnergyOfState = true;
@@ -105,9 +111,6 @@ struct JointPoint : JointConstraintState<Vector3> {
 
   double evaluate(const State& q, LocalGradient<4>* g, LocalHessian<4>* H) const;
 
-  static constexpr int kResiduals = 3;
-  using Residual = LocalResidual<kResiduals>;
-  using ResidualJacobian = LocalResidualJacobian<kResiduals, kBlocks>;
   void residual(const State& q, Residual& r, ResidualJacobian* J) const;
 
   // Constraint (term.hpp): c = p_b − p_a with the joint's own point a.
@@ -116,7 +119,6 @@ struct JointPoint : JointConstraintState<Vector3> {
 
   // The adjoint (header): λ, and c with J.
   Vector3 force(const State& q) const;  // λ = ρ (c + s), world
-  using ConstraintJacobian = LocalResidualJacobian<3, kBlocks>;
   Vector3 constraint(const State& q, ConstraintJacobian* J) const;  // c, and J = ∂c/∂(blocks)
 
  private:
@@ -134,7 +136,7 @@ struct JointPoint : JointConstraintState<Vector3> {
 // C(r_b, μ × n) at θ_bθ_b; from n₁ × d₁ the bilinear −δdᵀ hat(μ) hat(n) θ_a, i.e. with
 // δd = D δq (D = [−I, hat(r_a), I, −hat(r_b)]) and A = −hat(μ) hat(n) the blocks Dᵀ A at the
 // θ_a column and their transpose at the θ_a row. H = k JᵀJ + that (exact).
-struct JointLine : JointConstraintState<Vector3> {
+struct JointLine : JointConstraintState<Vector3, 4> {
   static constexpr int kBlocks = 4;
   static constexpr const char* kName = "joint_line";
   static constexpr bool kEnergyOfState = true;
@@ -145,9 +147,6 @@ struct JointLine : JointConstraintState<Vector3> {
 
   double evaluate(const State& q, LocalGradient<4>* g, LocalHessian<4>* H) const;
 
-  static constexpr int kResiduals = 3;
-  using Residual = LocalResidual<kResiduals>;
-  using ResidualJacobian = LocalResidualJacobian<kResiduals, kBlocks>;
   void residual(const State& q, Residual& r, ResidualJacobian* J) const;
 
   // Constraint (term.hpp): c = n × d without the shift.
@@ -156,7 +155,6 @@ struct JointLine : JointConstraintState<Vector3> {
 
   // The adjoint (header): λ, and c with J.
   Vector3 force(const State& q) const;  // λ = ρ (c + R_a s), world
-  using ConstraintJacobian = LocalResidualJacobian<3, kBlocks>;
   Vector3 constraint(const State& q, ConstraintJacobian* J) const;
 
  private:
@@ -165,7 +163,7 @@ struct JointLine : JointConstraintState<Vector3> {
                LocalHessian<4>* H) const;
 };
 
-struct JointAlignment : JointConstraintState<Vector3> {
+struct JointAlignment : JointConstraintState<Vector3, 2> {
   static constexpr int kBlocks = 2;
   static constexpr const char* kName = "joint_alignment";
   static constexpr bool kEnergyOfState = true;
@@ -177,9 +175,6 @@ struct JointAlignment : JointConstraintState<Vector3> {
 
   double evaluate(const State& q, LocalGradient<2>* g, LocalHessian<2>* H) const;
 
-  static constexpr int kResiduals = 3;
-  using Residual = LocalResidual<kResiduals>;
-  using ResidualJacobian = LocalResidualJacobian<kResiduals, kBlocks>;
   void residual(const State& q, Residual& r, ResidualJacobian* J) const;
 
   // Constraint (term.hpp): c = R_a â − R_b b̂.
@@ -188,11 +183,10 @@ struct JointAlignment : JointConstraintState<Vector3> {
 
   // The adjoint (header): λ, and c with J.
   Vector3 force(const State& q) const;  // λ = ρ (c + s), world
-  using ConstraintJacobian = LocalResidualJacobian<3, kBlocks>;
   Vector3 constraint(const State& q, ConstraintJacobian* J) const;  // c, and J = ∂c/∂(blocks)
 };
 
-struct JointWeld : JointConstraintState<Matrix3> {
+struct JointWeld : JointConstraintState<Matrix3, 2> {
   static constexpr int kBlocks = 2;
   static constexpr const char* kName = "joint_weld";
   static constexpr bool kEnergyOfState = true;
@@ -204,9 +198,6 @@ struct JointWeld : JointConstraintState<Matrix3> {
 
   double evaluate(const State& q, LocalGradient<2>* g, LocalHessian<2>* H) const;
 
-  static constexpr int kResiduals = 3;
-  using Residual = LocalResidual<kResiduals>;
-  using ResidualJacobian = LocalResidualJacobian<kResiduals, kBlocks>;
   void residual(const State& q, Residual& r, ResidualJacobian* J) const;
 
   // φ = log(R_a A S Bᵀ R_bᵀ) and E, the term's relative rotation (shifted, but not in the
@@ -219,7 +210,6 @@ struct JointWeld : JointConstraintState<Matrix3> {
 
   // The adjoint (header): λ, and c with J.
   Vector3 force(const State& q) const;  // λ = ρ (c + s), world
-  using ConstraintJacobian = LocalResidualJacobian<3, kBlocks>;
   Vector3 constraint(const State& q, ConstraintJacobian* J) const;  // c, and J = ∂c/∂(blocks)
 };
 
