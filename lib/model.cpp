@@ -242,17 +242,6 @@ void Model::validate_motion_speeds() const {
   }
 }
 
-std::string Model::first_exact_joint() const {
-  for (std::size_t i = 0; i < joints.size(); ++i) {
-    const JointSpec& j = joints[i];
-    if (j.compliance == 0.0) return index_field("joints", i, "compliance");
-    if (j.type != JointSpec::Type::kBall && j.compliance_rotation == 0.0) {
-      return index_field("joints", i, "compliance_rotation");
-    }
-  }
-  return "";
-}
-
 std::vector<std::pair<int, int>> Model::body_couplings() const {
   std::vector<std::pair<int, int>> out;
   for (const SpringSpec& s : springs) out.emplace_back(s.a.body, s.b.body);

@@ -119,10 +119,6 @@ struct Model {
   // ties bodies into one component, and what anchors them in static mode.
   std::vector<std::pair<int, int>> body_couplings() const;
 
-  // The field of the first exact joint part ("joints[i].compliance", or
-  // "joints[i].compliance_rotation" of a hinge or weld), or "" without any.
-  std::string first_exact_joint() const;
-
   // Index in State::points of a rod's node, and in State::rotations of a rod's edge (rod =
   // rods.size() with node or edge 0: one past the last).
   int rod_point(int rod, int node) const;
