@@ -2,6 +2,7 @@
 
 #include <memory>
 #include <numeric>
+#include <optional>
 
 #include "rod_terms.hpp"
 
@@ -172,9 +173,9 @@ void append_component(Component& into, Component from) {
 // conditioning. Where other stiffnesses dominate, StepSolver::solve raises ρ.
 constexpr double kExactPenalty = 1e4;
 
-// The joints' terms (JointSpec), added to the component of end a once every body and rod has
-// its place: where a point or rotation of the state is, as (component, offset), −1 if it is
-// not a DOF.
+// The joints' terms (JointSpec), added to the component of the ends once every body and rod
+// has its place: where a point or rotation of the state is, as (component, offset), −1 if it
+// is not a DOF.
 void add_joint_terms(const Model& model, std::vector<Component>& components) {
   if (model.joints.empty()) return;
   std::vector<std::array<int, 2>> point_dof(model.point_count(), {-1, -1});
@@ -184,57 +185,73 @@ void add_joint_terms(const Model& model, std::vector<Component>& components) {
     for (const DofBlock& b : components[c].points) point_dof[b.index] = {c, b.offset};
     for (const DofBlock& b : components[c].rotations) rotation_dof[b.index] = {c, b.offset};
   }
-  const auto body_end = [&](const BodyPoint& bp, AttachedPoint& at) -> std::array<int, 2> {
-    at = attach(bp);
-    if (bp.body < 0) return {-1, -1};
-    return {point_dof[bp.body][1], rotation_dof[bp.body][1]};
+  // The rods' lumped masses and edge inertias, discretised once for all joints to them.
+  std::vector<std::optional<RodDiscretization>> rods(model.rods.size());
+  const auto rod = [&](int r) -> const RodDiscretization& {
+    if (!rods[r]) rods[r] = discretize(model.rods[r]);
+    return *rods[r];
+  };
+  // An end's mass (what its point moves) and largest rotational inertia, 0 for the world.
+  const auto end_mass = [&](const JointEnd& e) {
+    switch (e.kind) {
+      case JointEnd::Kind::kBody: return model.bodies[e.object].mass;
+      case JointEnd::Kind::kRodNode:
+      case JointEnd::Kind::kRodEdge: return rod(e.object).node_mass[e.element];
+      default: return 0.0;
+    }
+  };
+  const auto end_inertia = [&](const JointEnd& e) {
+    switch (e.kind) {
+      case JointEnd::Kind::kBody: return rotational_mass(model.bodies[e.object].inertia).diagonal().maxCoeff();
+      case JointEnd::Kind::kRodEdge: return rotational_mass(rod(e.object).edge_inertia[e.element]).diagonal().maxCoeff();
+      default: return 0.0;
+    }
   };
   const double inv_h2 = 1.0 / (model.time_step * model.time_step);
-  // The ends' masses and largest rotational inertias (0 for the world).
-  const auto body_mass = [&](int body) { return body < 0 ? 0.0 : model.bodies[body].mass; };
-  const auto body_inertia = [&](int body) {
-    return body < 0 ? 0.0 : rotational_mass(model.bodies[body].inertia).diagonal().maxCoeff();
-  };
   // k = 1/compliance, or the initial penalty for compliance 0 (exact).
   const auto set_stiffness = [&](auto& term, double compliance, double inertia) {
     term.exact = compliance == 0.0;
     term.stiffness = term.exact ? kExactPenalty * inertia * inv_h2 : 1.0 / compliance;
   };
   for (const JointSpec& j : model.joints) {
-    IncrementalPotential& p = components[point_dof[j.a.body][0]].potential;
-    // The rotation blocks (θ_a, θ_b) of the hinge, weld and motor terms; set below.
-    std::array<int, 2> oa{-1, -1}, ob{-1, -1};
+    const AttachedPoint pa = model.attached_point(j.a), pb = model.attached_point(j.b);
+    // (point, rotation) offsets of each end, and the component of the first DOF among them
+    // (Model::validate: one end moves).
+    const auto offsets = [&](const AttachedPoint& at) -> std::array<int, 2> {
+      return {at.point < 0 ? -1 : point_dof[at.point][1], at.rotation < 0 ? -1 : rotation_dof[at.rotation][1]};
+    };
+    const std::array<int, 2> oa = offsets(pa), ob = offsets(pb);
+    int component = -1;
+    for (const auto& [index, dof] : {std::pair{pa.point, &point_dof}, std::pair{pa.rotation, &rotation_dof},
+                                     std::pair{pb.point, &point_dof}, std::pair{pb.rotation, &rotation_dof}}) {
+      if (component < 0 && index >= 0) component = (*dof)[index][0];
+    }
+    IncrementalPotential& p = components[component].potential;
+    // The rotation blocks (θ_a, θ_b) of the hinge, weld and motor terms.
     const auto rotation_ends = [&](auto& term) {
       term.offsets = {oa[1], ob[1]};
-      term.rotation_a = j.a.body;
-      term.rotation_b = j.b.body;  // −1: the world
+      term.rotation_a = pa.rotation;
+      term.rotation_b = pb.rotation;  // −1: the world
     };
-    JointPoint translation;
-    oa = body_end(j.a, translation.a);
-    double mass = body_mass(j.a.body);
-    if (j.rod_b >= 0) {  // a rod node: a translating point without rotation
-      const int node = model.rod_point(j.rod_b, j.node_b);
-      translation.b = {node, -1, Vector3::Zero()};
-      ob = {point_dof[node][1], -1};
-      mass += discretize(model.rods[j.rod_b]).node_mass[j.node_b];
-    } else {
-      ob = body_end(j.b, translation.b);
-      mass += body_mass(j.b.body);
-    }
-    translation.offsets = {oa[0], oa[1], ob[0], ob[1]};
-    set_stiffness(translation, j.compliance, mass);
+    const std::array<int, 4> translation_offsets{oa[0], oa[1], ob[0], ob[1]};
+    const double mass = end_mass(j.a) + end_mass(j.b);
     if (j.type == JointSpec::Type::kSlider) {  // the line through p_a along R_a â
       JointLine line;
-      line.offsets = translation.offsets;
-      line.a = translation.a;
-      line.b = translation.b;
+      line.offsets = translation_offsets;
+      line.a = pa;
+      line.b = pb;
       line.axis_a = j.axis_a;
       set_stiffness(line, j.compliance, mass);
       p.add(line);
     } else {
+      JointPoint translation;
+      translation.offsets = translation_offsets;
+      translation.a = pa;
+      translation.b = pb;
+      set_stiffness(translation, j.compliance, mass);
       p.add(translation);
     }
-    const double inertia = body_inertia(j.a.body) + body_inertia(j.b.body);
+    const double inertia = end_inertia(j.a) + end_inertia(j.b);
     if (j.type == JointSpec::Type::kHinge) {
       JointAlignment hinge;
       rotation_ends(hinge);
@@ -248,8 +265,8 @@ void add_joint_terms(const Model& model, std::vector<Component>& components) {
         motor.axis_a = j.axis_a;
         motor.torque = j.motor_torque;
         motor.control = j.motor;
-        motor.R_previous_a = model.bodies[j.a.body].orientation;
-        if (j.b.body >= 0) motor.R_previous_b = model.bodies[j.b.body].orientation;
+        motor.R_previous_a = model.initial_rotation(j.a);
+        motor.R_previous_b = model.initial_rotation(j.b);
         p.add(motor);
       }
     } else if (j.type == JointSpec::Type::kWeld || j.type == JointSpec::Type::kSlider) {
@@ -277,11 +294,8 @@ std::vector<Component> build_components(const Model& model) {
   const int objects = n + static_cast<int>(model.rods.size());
   std::vector<int> parent(objects);
   std::iota(parent.begin(), parent.end(), 0);
-  for (const auto& [a, b] : model.body_couplings()) {
+  for (const auto& [a, b] : model.couplings()) {
     if (a >= 0 && b >= 0) parent[find_root(parent, a)] = find_root(parent, b);
-  }
-  for (const JointSpec& j : model.joints) {
-    if (j.rod_b >= 0) parent[find_root(parent, j.a.body)] = find_root(parent, n + j.rod_b);
   }
 
   std::vector<Component> components;

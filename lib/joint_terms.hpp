@@ -1,5 +1,5 @@
 #pragma once
-// The parts of a joint between two frames (bodies, rod nodes, or a body and the world): its
+// The parts of a joint between two frames (bodies, rod nodes and edges, the world): its
 // translation (JointPoint) and, for hinges and welds, its rotation (JointAlignment,
 // JointWeld). Each part is a constraint c(q) = 0 (term.hpp, Constraint) held either
 // elastically, V = ½ k ‖c‖² with k = 1/compliance, or exactly (compliance 0) by the augmented
@@ -141,7 +141,7 @@ struct JointLine : JointConstraintState<Vector3, 4> {
   static constexpr const char* kName = "joint_line";
   static constexpr bool kEnergyOfState = true;
   std::array<int, kBlocks> offsets{-1, -1, -1, -1};  // x_a, θ_a, x_b, θ_b
-  AttachedPoint a, b;                                // a: a body point
+  AttachedPoint a, b;                                // a: a point with a rotation
   Vector3 axis_a = Vector3::UnitX();                 // â, unit, in a's body coordinates
   double stiffness = 0.0;                            // k = 1/compliance (N/m), or ρ if exact
 

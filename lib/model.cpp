@@ -3,6 +3,8 @@
 #include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
+#include <functional>
+#include <numeric>
 #include <numbers>
 #include <sstream>
 
@@ -37,6 +39,47 @@ void require_body(int body, std::size_t count, const std::string& field, bool al
     throw ModelError(field, "refers to body " + std::to_string(body) + ", but there are " +
                                 std::to_string(count) + " bodies");
   }
+}
+
+// A joint end's indices and point; `end_name` is "a" or "b".
+void validate_joint_end(const Model& m, const JointEnd& end, const std::string& end_name,
+                        const std::function<std::string(const std::string&)>& field) {
+  switch (end.kind) {
+    case JointEnd::Kind::kWorld: break;
+    case JointEnd::Kind::kBody: require_body(end.object, m.bodies.size(), field(end_name + ".body"), false); break;
+    case JointEnd::Kind::kRodNode:
+    case JointEnd::Kind::kRodEdge: {
+      if (end.object < 0 || end.object >= static_cast<int>(m.rods.size())) {
+        throw ModelError(field(end_name + ".rod"), "refers to rod " + std::to_string(end.object) +
+                                                      ", but there are " + std::to_string(m.rods.size()));
+      }
+      const bool node = end.kind == JointEnd::Kind::kRodNode;
+      const int count = node ? m.rods[end.object].node_count() : m.rods[end.object].edge_count();
+      if (end.element < 0 || end.element >= count) {
+        throw ModelError(field(end_name + (node ? ".node" : ".edge")),
+                         "refers to " + std::string(node ? "node " : "edge ") + std::to_string(end.element) +
+                             ", but the rod has " + std::to_string(count));
+      }
+      break;
+    }
+  }
+  require_finite(end.point, field(end_name + ".point"));
+}
+
+// Whether a joint end has a DOF: a body, or a rod node or edge that is not clamped.
+bool joint_end_moves(const Model& m, const JointEnd& end) {
+  const auto free = [](const std::vector<int>& fixed, int i) {
+    return std::find(fixed.begin(), fixed.end(), i) == fixed.end();
+  };
+  switch (end.kind) {
+    case JointEnd::Kind::kWorld: return false;
+    case JointEnd::Kind::kBody: return true;
+    case JointEnd::Kind::kRodNode: return free(m.rods[end.object].fixed_nodes, end.element);
+    case JointEnd::Kind::kRodEdge:
+      return free(m.rods[end.object].fixed_nodes, end.element) ||
+             free(m.rods[end.object].fixed_edges, end.element);
+  }
+  return false;
 }
 
 void validate_inertia(const Matrix3& I, const std::string& field) {
@@ -141,26 +184,31 @@ void Model::validate() const {
   for (std::size_t i = 0; i < joints.size(); ++i) {
     const JointSpec& j = joints[i];
     const auto field = [&](const std::string& member) { return index_field("joints", i, member); };
-    require_body(j.a.body, bodies.size(), field("a.body"), false);
-    require_body(j.b.body, bodies.size(), field("b.body"), true);
-    if (j.rod_b >= 0) {
-      if (j.rod_b >= static_cast<int>(rods.size())) {
-        throw ModelError(field("b.rod"), "refers to rod " + std::to_string(j.rod_b) + ", but there are " +
-                                             std::to_string(rods.size()));
-      }
-      if (j.node_b < 0 || j.node_b >= rods[j.rod_b].node_count()) {
-        throw ModelError(field("b.node"), "refers to node " + std::to_string(j.node_b) +
-                                              ", but the rod has " +
-                                              std::to_string(rods[j.rod_b].node_count()));
-      }
-      if (j.type != JointSpec::Type::kBall) {
-        throw ModelError(field("type"), "a rod node has a position only: only a ball joint can hold it");
-      }
-    } else if (j.a.body == j.b.body) {
-      throw ModelError(field("b.body"), "joins a body to itself (the joint would do nothing)");
+    if (j.a.kind == JointEnd::Kind::kWorld) {
+      throw ModelError(field("a"), "end a cannot be the world (put the world at end b)");
     }
-    require_finite(j.a.point, field("a.point"));
-    require_finite(j.b.point, field("b.point"));
+    validate_joint_end(*this, j.a, "a", field);
+    validate_joint_end(*this, j.b, "b", field);
+    if (j.a == j.b || (j.a.kind == JointEnd::Kind::kBody && j.b.kind == JointEnd::Kind::kBody &&
+                       j.a.object == j.b.object)) {
+      if (j.a.kind == JointEnd::Kind::kBody) {
+        throw ModelError(field("b.body"), "joins a body to itself (the joint would do nothing)");
+      }
+      throw ModelError(field("b"), "joins an end to itself (the joint would do nothing)");
+    }
+    if (!joint_end_moves(*this, j.a) && !joint_end_moves(*this, j.b)) {
+      throw ModelError(field("b"), "neither end can move (the world, or clamped rod nodes and edges): "
+                                   "the joint would hold nothing");
+    }
+    if (j.type != JointSpec::Type::kBall) {
+      for (const auto& [end, member] : {std::pair{&j.a, "a"}, std::pair{&j.b, "b"}}) {
+        if (end->kind == JointEnd::Kind::kRodNode) {
+          throw ModelError(field(std::string(member) + ".node"),
+                           "a rod node has a position only: only a ball joint can hold it (a rod "
+                           "edge has a frame)");
+        }
+      }
+    }
     // 0: exact; else 1/compliance is the stiffness of the terms: it must be finite too.
     for (const auto& [value, member] : {std::pair{j.compliance, "compliance"},
                                         std::pair{j.compliance_rotation, "compliance_rotation"}}) {
@@ -242,43 +290,80 @@ void Model::validate_motion_speeds() const {
   }
 }
 
-std::vector<std::pair<int, int>> Model::body_couplings() const {
+std::vector<std::pair<int, int>> Model::couplings() const {
   std::vector<std::pair<int, int>> out;
   for (const SpringSpec& s : springs) out.emplace_back(s.a.body, s.b.body);
-  for (const JointSpec& j : joints) out.emplace_back(j.a.body, j.b.body);
+  for (const JointSpec& j : joints) out.emplace_back(object_of(j.a), object_of(j.b));
   return out;
+}
+
+int Model::object_of(const JointEnd& end) const {
+  switch (end.kind) {
+    case JointEnd::Kind::kWorld: return -1;
+    case JointEnd::Kind::kBody: return end.object;
+    default: return static_cast<int>(bodies.size()) + end.object;
+  }
+}
+
+AttachedPoint Model::attached_point(const JointEnd& end) const {
+  switch (end.kind) {
+    case JointEnd::Kind::kWorld: return {-1, -1, end.point};
+    case JointEnd::Kind::kBody: return {end.object, end.object, end.point};
+    case JointEnd::Kind::kRodNode: return {rod_point(end.object, end.element), -1, Vector3::Zero()};
+    case JointEnd::Kind::kRodEdge:
+      return {rod_point(end.object, end.element), rod_rotation(end.object, end.element), end.point};
+  }
+  return {};
+}
+
+Vector3 Model::initial_origin(const JointEnd& end) const {
+  switch (end.kind) {
+    case JointEnd::Kind::kWorld: return Vector3::Zero();
+    case JointEnd::Kind::kBody: return bodies[end.object].position;
+    default: return rods[end.object].nodes[end.element];  // a node, or an edge's first node
+  }
+}
+
+Matrix3 Model::initial_rotation(const JointEnd& end) const {
+  switch (end.kind) {
+    case JointEnd::Kind::kBody: return bodies[end.object].orientation;
+    case JointEnd::Kind::kRodEdge: return parallel_transport_frames(rods[end.object].nodes)[end.element];
+    default: return Matrix3::Identity();
+  }
 }
 
 void Model::validate_anchoring() const {
   if (load_steps < 1) throw ModelError("frames", "static mode needs at least one load step");
-  for (std::size_t r = 0; r < rods.size(); ++r) {
-    if (rods[r].fixed_nodes.empty()) {
-      throw ModelError(index_field("rods", r, "fixed_nodes"),
-                       "static mode needs at least one clamped node (a free rod has no "
-                       "equilibrium under load)");
-    }
-  }
-  // Bodies: every group joined by springs needs a spring to a world anchor.
-  std::vector<int> parent(bodies.size());
-  for (std::size_t i = 0; i < parent.size(); ++i) parent[i] = static_cast<int>(i);
+  // Objects (bodies, then rods) joined by springs and joints form groups; a group is anchored
+  // by a coupling to the world or by a clamped rod node in it.
+  const int n = static_cast<int>(bodies.size());
+  std::vector<int> parent(n + rods.size());
+  std::iota(parent.begin(), parent.end(), 0);
   const auto root = [&](int i) {
     while (parent[i] != i) i = parent[i] = parent[parent[i]];
     return i;
   };
-  const std::vector<std::pair<int, int>> couplings = body_couplings();
-  for (const auto& [a, b] : couplings) {
+  const std::vector<std::pair<int, int>> pairs = couplings();
+  for (const auto& [a, b] : pairs) {
     if (a >= 0 && b >= 0) parent[root(a)] = root(b);
   }
-  std::vector<bool> anchored(bodies.size(), false);
-  for (const auto& [a, b] : couplings) {
+  std::vector<bool> anchored(parent.size(), false);
+  for (const auto& [a, b] : pairs) {
     if (a < 0 || b < 0) anchored[root(std::max(a, b))] = true;
   }
-  for (std::size_t i = 0; i < bodies.size(); ++i) {
-    if (!anchored[root(static_cast<int>(i))]) {
+  for (std::size_t r = 0; r < rods.size(); ++r) {
+    if (!rods[r].fixed_nodes.empty()) anchored[root(n + static_cast<int>(r))] = true;
+  }
+  for (int i = 0; i < static_cast<int>(parent.size()); ++i) {
+    if (anchored[root(i)]) continue;
+    if (i < n) {
       throw ModelError(index_field("bodies", i, ""),
                        "static mode needs every body connected by springs or joints to a world "
-                       "anchor");
+                       "anchor or a clamped rod node");
     }
+    throw ModelError(index_field("rods", i - n, "fixed_nodes"),
+                     "static mode needs at least one clamped node, or a joint to the world or to "
+                     "an anchored object (a free rod has no equilibrium under load)");
   }
 }
 

@@ -55,23 +55,44 @@ struct SpringSpec {
   int stiffness_slot = -1;    // index in an optimisation's parameter vector γ, or −1
 };
 
-// A joint between a body and another body or the world (docs/scene-format.md#joints):
-//   translation  p_b = p_a   (the two points p = x + R p̄); slider: p_b on the line through
-//                p_a along R_a â;
+// One end of a joint (docs/scene-format.md#joints):
+//   body      a body point p̄ and the body's frame (R p̄ + x);
+//   rod node  a node's position, without a rotation (ball joints only);
+//   rod edge  the edge's material frame R_j anchored at its first node x_j, and a point p̄ in
+//             it, p = x_j + R_j p̄ (as a cable's route point, rod.hpp): p̄ = (0, 0, l/2) with
+//             l the edge's initial length is its midpoint at the start, and stays so to
+//             within the edge's stretch and shear;
+//   world     a fixed point in world coordinates, with the identity frame.
+struct JointEnd {
+  enum class Kind { kWorld, kBody, kRodNode, kRodEdge };
+  Kind kind = Kind::kWorld;
+  int object = -1;                  // the body, or the rod of a node or an edge
+  int element = -1;                 // the rod's node or edge
+  Vector3 point = Vector3::Zero();  // body or edge coordinates; world coordinates for the world
+
+  static JointEnd body(int b, const Vector3& p) { return {Kind::kBody, b, -1, p}; }
+  static JointEnd world(const Vector3& p) { return {Kind::kWorld, -1, -1, p}; }
+  static JointEnd rod_node(int rod, int node) { return {Kind::kRodNode, rod, node, Vector3::Zero()}; }
+  static JointEnd rod_edge(int rod, int edge, const Vector3& p) { return {Kind::kRodEdge, rod, edge, p}; }
+  bool has_rotation() const { return kind == Kind::kBody || kind == Kind::kRodEdge; }
+  bool operator==(const JointEnd&) const = default;
+};
+
+// A joint between two ends (above; docs/scene-format.md#joints):
+//   translation  p_b = p_a   (the two ends' points); slider: p_b on the line through p_a
+//                along R_a â;
 //   rotation     hinge: the axes R_a â and R_b b̂ aligned; weld and slider: the initial
 //                relative orientation kept, log(R_a A Bᵀ R_bᵀ) = 0; ball: none.
 // Each part is elastic, ½ ‖c‖²/compliance (translation) and ½ ‖c‖²/compliance_rotation, or
 // exact where its compliance is 0 (the augmented Lagrangian of StepSolver::solve).
-// End a is a body; end b a body, the world or a rod node (position only: ball joints).
-// Terms: lib/joint_terms.hpp.
+// A rod node has no rotation: only a ball joint holds it. Terms: lib/joint_terms.hpp.
 struct JointSpec {
   enum class Type { kBall, kHinge, kWeld, kSlider };
   Type type = Type::kBall;
-  BodyPoint a, b;                             // body −1: the world (point in world coordinates)
-  int rod_b = -1, node_b = -1;                // end b a rod node instead (ball joints only)
-  Vector3 axis_a = Vector3::UnitZ();          // hinge, slider: unit, in a's body coordinates
-  Vector3 axis_b = Vector3::UnitZ();          // hinge: unit, in b's body (or world) coordinates
-  Matrix3 frame_a = Matrix3::Identity();      // weld: joint frames in body coordinates
+  JointEnd a, b;
+  Vector3 axis_a = Vector3::UnitZ();          // hinge, slider: unit, in a's coordinates
+  Vector3 axis_b = Vector3::UnitZ();          // hinge: unit, in b's coordinates
+  Matrix3 frame_a = Matrix3::Identity();      // weld, slider: joint frames in the ends' coordinates
   Matrix3 frame_b = Matrix3::Identity();
   double compliance = 0.0;                    // m/N, ≥ 0 (0: exact)
   double compliance_rotation = 0.0;           // rad/(N·m), ≥ 0 (0: exact)
@@ -114,10 +135,21 @@ struct Model {
   bool static_equilibrium = false;
   int load_steps = 1;
 
-  // The bodies that springs and joints couple, as (a, b) pairs (−1: the world, or a rod
-  // node, which in static mode is anchored too: every rod there has a clamped node): what
-  // ties bodies into one component, and what anchors them in static mode.
-  std::vector<std::pair<int, int>> body_couplings() const;
+  // The objects that springs and joints couple, as (a, b) pairs: body i is i, rod r is
+  // bodies.size() + r, and −1 the world. What ties objects into one component, and what
+  // anchors them in static mode.
+  std::vector<std::pair<int, int>> couplings() const;
+  // The object (as in couplings()) of a joint end, −1 for the world.
+  int object_of(const JointEnd& end) const;
+
+  // A joint end as a point of the state (−1 for the world or no rotation), and its frame's
+  // origin and rotation at the start (a rod node: the identity).
+  AttachedPoint attached_point(const JointEnd& end) const;
+  Vector3 initial_origin(const JointEnd& end) const;
+  Matrix3 initial_rotation(const JointEnd& end) const;
+  Vector3 initial_position(const JointEnd& end) const {
+    return initial_origin(end) + initial_rotation(end) * end.point;
+  }
 
   // Index in State::points of a rod's node, and in State::rotations of a rod's edge (rod =
   // rods.size() with node or edge 0: one past the last).

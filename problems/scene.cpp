@@ -132,57 +132,73 @@ JointSpec parse_joint(const json& value, const std::string& path, const std::str
   }
   spec.compliance = j.number("compliance", 0.0);
   spec.compliance_rotation = j.number("compliance_rotation", spec.compliance);
-  const auto rotation_of = [&](int body) -> Matrix3 {
-    return body < 0 ? Matrix3::Identity() : model.bodies[body].orientation;
-  };
   const bool hinge = spec.type == JointSpec::Type::kHinge;
-  // An end: {"body": name, "point", "axis"} or {"world": point, "axis"}; rods: not yet.
+  // An end: {"body": name, "point", "axis"}, {"rod": name, "node": i},
+  // {"rod": name, "edge": j, "point", "axis"} or, for b only, {"world": point, "axis"}.
   const auto parse_end = [&](const char* key, bool is_b) {
     ObjectReader e(j.get(key), j.field(key), source, {"body", "point", "axis", "world", "rod", "node", "edge"});
-    BodyPoint end;
-    if (e.has("edge")) {
-      e.fail(e.field("edge"), "joints to rod edges are not implemented yet (a rod node can be held by a ball joint)");
+    const int kinds = e.has("body") + e.has("world") + e.has("rod");
+    if (kinds != 1) {
+      e.fail(e.field(kinds == 0 ? "body" : "world"),
+             is_b ? "give one of \"body\", \"rod\" or \"world\"" : "give one of \"body\" or \"rod\"");
     }
-    if (e.has("rod")) {
-      if (!is_b) e.fail(e.field("rod"), "end a must be a body (put the rod at end b)");
+    JointEnd end;
+    if (e.has("world")) {
+      if (!is_b) e.fail(e.field("world"), "end a must be a body or a rod (put the world at end b)");
+      end = JointEnd::world(e.vector<3>("world"));
+    } else if (e.has("rod")) {
       const std::string rod = e.string("rod");
       const auto& rods = model.rods;
       const auto it = std::find_if(rods.begin(), rods.end(), [&](const RodSpec& r) { return r.name == rod; });
       if (it == rods.end()) e.fail(e.field("rod"), "names no rod \"" + rod + "\"");
-      spec.rod_b = static_cast<int>(it - rods.begin());
-      spec.node_b = e.to_integer(e.get("node"), e.field("node"), 0);
-      if (e.has("point") || e.has("axis")) {
-        e.fail(e.field(e.has("point") ? "point" : "axis"), "a rod node end has no point or axis of its own");
+      const int r = static_cast<int>(it - rods.begin());
+      if (e.has("node") == e.has("edge")) {
+        e.fail(e.field("node"), "give one of \"node\" (a position) or \"edge\" (a frame) of the rod");
       }
-      e.finish();
-      return end;
-    }
-    if (e.has("world")) {
-      if (!is_b) e.fail(e.field("world"), "end a must be a body (put the world at end b)");
-      if (e.has("body")) e.fail(e.field("world"), "give \"body\" or \"world\", not both");
-      end.point = e.vector<3>("world");
+      if (e.has("node")) {
+        end = JointEnd::rod_node(r, e.integer("node", 0, it->node_count() - 1));
+        if (e.has("point") || e.has("axis")) {
+          e.fail(e.field(e.has("point") ? "point" : "axis"),
+                 "a rod node end has no point or axis of its own (a rod edge has)");
+        }
+      } else {
+        const int edge = e.integer("edge", 0, it->edge_count() - 1);
+        // The edge's midpoint at the start, in its material frame (whose z axis is the edge).
+        end = JointEnd::rod_edge(r, edge, Vector3(0, 0, 0.5 * (it->nodes[edge + 1] - it->nodes[edge]).norm()));
+      }
     } else {
-      end.body = body_index(e, "body", names, rod_names, false);
+      if (e.has("node") || e.has("edge")) {
+        e.fail(e.field(e.has("node") ? "node" : "edge"), "a node or an edge belongs to a \"rod\", not a body");
+      }
+      const std::string name = e.string("body");
+      if (rod_names.count(name)) {
+        e.fail(e.field("body"), "names the rod \"" + name +
+                                    "\" (a joint holds a rod by {\"rod\": name, \"node\": i} or "
+                                    "{\"rod\": name, \"edge\": j})");
+      }
+      end = JointEnd::body(body_index(e, "body", names, rod_names, false), Vector3::Zero());
+    }
+    const Matrix3 R = model.initial_rotation(end);
+    if (end.kind == JointEnd::Kind::kBody || end.kind == JointEnd::Kind::kRodEdge) {
       if (e.has("point")) {
         end.point = e.vector<3>("point");
       } else if (is_b) {  // where a's point is at the start, in b's coordinates
-        end.point = rotation_of(end.body).transpose() *
-                    (initial_world_point(model, spec.a) - model.bodies[end.body].position);
+        end.point = R.transpose() * (model.initial_position(spec.a) - model.initial_origin(end));
       }
     }
     if (hinge) {
       if (e.has("axis")) {
         (is_b ? spec.axis_b : spec.axis_a) = unit_vector(e, "axis");
       } else if (!is_b) {
-        e.fail(e.field("axis"), "a hinge needs its axis on end a (body coordinates)");
+        e.fail(e.field("axis"), "a hinge needs its axis on end a (in a's coordinates)");
       } else {  // a's axis at the start, in b's coordinates
-        spec.axis_b = rotation_of(end.body).transpose() * rotation_of(spec.a.body) * spec.axis_a;
+        spec.axis_b = R.transpose() * model.initial_rotation(spec.a) * spec.axis_a;
       }
     } else if (spec.type == JointSpec::Type::kSlider) {
       if (is_b && e.has("axis")) {
         e.fail(e.field("axis"), "a slider's axis is end a's (it turns with a)");
       } else if (!is_b) {
-        if (!e.has("axis")) e.fail(e.field("axis"), "a slider needs its axis on end a (body coordinates)");
+        if (!e.has("axis")) e.fail(e.field("axis"), "a slider needs its axis on end a (in a's coordinates)");
         spec.axis_a = unit_vector(e, "axis");
       }
     } else if (e.has("axis")) {
@@ -195,11 +211,11 @@ JointSpec parse_joint(const json& value, const std::string& path, const std::str
   if (j.has("b")) {
     spec.b = parse_end("b", true);
   } else {
-    spec.b.point = initial_world_point(model, spec.a);  // the world, where a's point is at the start
-    if (hinge) spec.axis_b = rotation_of(spec.a.body) * spec.axis_a;
+    spec.b = JointEnd::world(model.initial_position(spec.a));  // the world, where a's point is at the start
+    if (hinge) spec.axis_b = model.initial_rotation(spec.a) * spec.axis_a;
   }
   // Weld: F_a = R_a, F_b = R_b R_b0ᵀ R_a0, so that E = F_a F_bᵀ = I at the start.
-  spec.frame_b = rotation_of(spec.b.body).transpose() * rotation_of(spec.a.body);
+  spec.frame_b = model.initial_rotation(spec.b).transpose() * model.initial_rotation(spec.a);
   j.finish();
   return spec;
 }

@@ -504,9 +504,6 @@ TEST(Joints, BadJointsNameTheirField) {
   EXPECT_EQ(error(R"({ "type": "ball", "compliance": 1, "a": { "body": "a" }, "b": { "rod": "x", "node": 0 } })")
                 .rfind("joints[0].b.rod: names no rod \"x\"", 0),
             0u);
-  EXPECT_EQ(error(R"({ "type": "ball", "compliance": 1, "a": { "body": "a" }, "b": { "rod": "x", "edge": 0 } })")
-                .rfind("joints[0].b.edge: joints to rod edges are not implemented yet", 0),
-            0u);
   EXPECT_EQ(error(R"({ "type": "hinge", "compliance": 1, "a": { "body": "a" } })")
                 .rfind("joints[0].a.axis: a hinge needs its axis", 0),
             0u);
@@ -536,7 +533,7 @@ TEST(Joints, BadJointsNameTheirField) {
                 .rfind("joints[0].limits: joint limits are not implemented yet", 0),
             0u);
   EXPECT_EQ(error(R"({ "type": "ball", "compliance": 1, "a": { "world": [0, 0, 0] } })")
-                .rfind("joints[0].a.world: end a must be a body", 0),
+                .rfind("joints[0].a.world: end a must be a body or a rod", 0),
             0u);
   EXPECT_EQ(error(R"({ "type": "ball", "compliance": 1, "a": { "body": "a" }, "colour": 1 })")
                 .rfind("joints[0].colour: unknown key", 0),
@@ -743,6 +740,12 @@ TEST_F(JointsCli, GradcheckPassesThroughEveryJointTypeElasticAndExact) {
     std::ofstream(dir_ / "gripper.json") << gripper.dump();
     const Result through_rod = run({"gradcheck", "gripper.json"});
     EXPECT_EQ(through_rod.exit_code, 0) << through_rod.out << through_rod.err;
+    // The gripper clamping the rod's first edge in a weld instead.
+    gripper["joints"][1]["type"] = "weld";
+    gripper["joints"][1]["b"] = nlohmann::json::parse(R"({ "rod": "rod", "edge": 0, "point": [0, 0, 0] })");
+    std::ofstream(dir_ / "clamp.json") << gripper.dump();
+    const Result through_edge = run({"gradcheck", "clamp.json"});
+    EXPECT_EQ(through_edge.exit_code, 0) << through_edge.out << through_edge.err;
   }
 }
 
