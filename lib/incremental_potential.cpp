@@ -243,6 +243,17 @@ void add_joint_terms(const Model& model, std::vector<Component>& components) {
       line.axis_a = j.axis_a;
       set_stiffness(line, j.compliance, mass);
       p.add(line);
+      if (j.has_motor) {
+        JointForceMotor motor;
+        motor.offsets = translation_offsets;
+        motor.a = pa;
+        motor.b = pb;
+        motor.axis_a = j.axis_a;
+        motor.force = j.motor_effort;
+        motor.control = j.motor;
+        motor.R_previous_a = model.initial_rotation(j.a);
+        p.add(motor);
+      }
     } else {
       JointPoint translation;
       translation.offsets = translation_offsets;
@@ -263,7 +274,7 @@ void add_joint_terms(const Model& model, std::vector<Component>& components) {
         JointMotor motor;
         rotation_ends(motor);
         motor.axis_a = j.axis_a;
-        motor.torque = j.motor_torque;
+        motor.torque = j.motor_effort;
         motor.control = j.motor;
         motor.R_previous_a = model.initial_rotation(j.a);
         motor.R_previous_b = model.initial_rotation(j.b);

@@ -48,7 +48,7 @@ class IncrementalPotential {
   using TermTypes = std::tuple<TranslationalInertia, RotationalInertia, Gravity, ConstantForce,
                                ConstantTorque, RegionForce, Spring, RodStretch, RodShear,
                                RodBendTwist, CableSegment, JointPoint, JointLine, JointAlignment, JointWeld,
-                               JointMotor, Contact, Friction>;
+                               JointMotor, JointForceMotor, Contact, Friction>;
 
   // The terms of type T (one contiguous vector per type).
   template <class T>

@@ -361,4 +361,49 @@ void JointMotor::add_parameter_adjoint(const State& q, int frame, const LocalGra
   dgamma(slot) += d;
 }
 
+void JointForceMotor::begin_step(const State& previous, const Step&) {
+  R_previous_a = previous.rotations[a.rotation];
+}
+
+ConstantForce JointForceMotor::end_force(int end) const {
+  ConstantForce f;
+  f.at = end == 0 ? a : b;
+  f.force = (end == 0 ? -force : force) * axis();
+  f.scale = scale;
+  return f;
+}
+
+double JointForceMotor::evaluate(const State& q, LocalGradient<4>* g, LocalHessian<4>* H) const {
+  if (H != nullptr) H->setZero();  // the ends' forces do not couple
+  LocalGradient<2> g_end;
+  LocalHessian<2> H_end;
+  double value = 0.0;
+  for (int end = 0; end < 2; ++end) {
+    value += end_force(end).evaluate(q, g != nullptr ? &g_end : nullptr, H != nullptr ? &H_end : nullptr);
+    if (g != nullptr) g->segment<6>(6 * end) = g_end;
+    if (H != nullptr) H->block<6, 6>(6 * end, 6 * end) = H_end;
+  }
+  return value;
+}
+
+void JointForceMotor::add_step_adjoint(const State& q, const State&, const Step&,
+                                       const LocalGradient<4>& z, Eigen::VectorXd& a_previous,
+                                       Eigen::VectorXd&) const {
+  // f hat(ê) through each end's M = force_jacobian (which carries the load scale), header.
+  const Matrix3 f_hat_axis = force * so3::hat(axis());
+  const Eigen::Matrix<double, 6, 3> dC_a = end_force(0).force_jacobian(q) * f_hat_axis;
+  const Eigen::Matrix<double, 6, 3> dC_b = -end_force(1).force_jacobian(q) * f_hat_axis;
+  a_previous.segment<3>(tangent_rotation(q, a.rotation)) +=
+      dC_a.transpose() * z.head<6>() + dC_b.transpose() * z.tail<6>();
+}
+
+void JointForceMotor::add_parameter_adjoint(const State& q, int frame, const LocalGradient<4>& z,
+                                            Eigen::VectorXd& dgamma) const {
+  const int slot = control.slot_at(frame);
+  if (slot < 0) return;
+  const Vector3 e = axis();
+  dgamma(slot) += (end_force(1).force_jacobian(q) * e).dot(z.tail<6>()) -
+                  (end_force(0).force_jacobian(q) * e).dot(z.head<6>());
+}
+
 }  // namespace liedyn

@@ -219,12 +219,14 @@ void Model::validate() const {
       }
     }
     if (j.has_motor) {
-      if (j.type != JointSpec::Type::kHinge) {
-        throw ModelError(field("motor"), "only a hinge has a motor (a torque about its axis)");
+      const bool hinge = j.type == JointSpec::Type::kHinge;
+      if (!hinge && j.type != JointSpec::Type::kSlider) {
+        throw ModelError(field("motor"), "only a hinge (a torque about its axis) or a slider (a force along it) has a motor");
       }
-      if (!std::isfinite(j.motor_torque)) throw ModelError(field("motor.torque"), "must be finite");
-      for (const auto& tau : j.motor.schedule) {
-        if (!std::isfinite(tau(0))) throw ModelError(field("motor.torque"), "must be finite in every frame");
+      const std::string member = hinge ? "motor.torque" : "motor.force";
+      if (!std::isfinite(j.motor_effort)) throw ModelError(field(member), "must be finite");
+      for (const auto& effort : j.motor.schedule) {
+        if (!std::isfinite(effort(0))) throw ModelError(field(member), "must be finite in every frame");
       }
     }
     if (j.type == JointSpec::Type::kSlider && !(std::abs(j.axis_a.norm() - 1.0) <= 1e-12)) {

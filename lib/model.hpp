@@ -96,10 +96,11 @@ struct JointSpec {
   Matrix3 frame_b = Matrix3::Identity();
   double compliance = 0.0;                    // m/N, ≥ 0 (0: exact)
   double compliance_rotation = 0.0;           // rad/(N·m), ≥ 0 (0: exact)
-  // Hinge motor (lib/joint_terms.hpp): a torque about the axis, +τ on a and −τ
-  // on b, per step from `motor` (constant `motor_torque` without a schedule).
+  // Motor (lib/joint_terms.hpp): a hinge's torque about its axis, +τ on a and −τ on b, or a
+  // slider's force along its axis, +f on b and −f on a; per step from `motor` (constant
+  // `motor_effort` without a schedule).
   bool has_motor = false;
-  double motor_torque = 0.0;                  // N·m
+  double motor_effort = 0.0;                  // N·m (hinge) or N (slider)
   ScheduledParameter<1> motor;
 };
 

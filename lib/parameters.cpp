@@ -172,7 +172,7 @@ void ParameterSet::add(const Model& model, ParameterKind kind, int index, int su
     }
     if (!model.joints[index].has_motor) {
       throw ModelError(field + ".index", "joint " + std::to_string(index) +
-                                             " has no motor (give it \"motor\": {\"torque\": …})");
+                                             " has no motor (give a hinge \"motor\": {\"torque\": …}, a slider \"motor\": {\"force\": …})");
     }
   }
   if (kind == ParameterKind::kNodeForce &&
@@ -244,7 +244,9 @@ std::string ParameterSet::describe(const Model& model, int i) const {
       case ParameterKind::kCableTension:
         return rod + ".cables" + bracket(b.sub) + ".tension.frame" + bracket(j + 1);
       case ParameterKind::kJointMotor:
-        return "joints" + bracket(b.index) + ".motor.torque.frame" + bracket(j + 1);
+        return "joints" + bracket(b.index) +
+               (model.joints[b.index].type == JointSpec::Type::kSlider ? ".motor.force" : ".motor.torque") +
+               ".frame" + bracket(j + 1);
       case ParameterKind::kRestDarboux:
         return rod + ".rest_darboux" + bracket(j / 3) + axis;
       case ParameterKind::kRestDarbouxPerFrame: {
@@ -321,7 +323,7 @@ Eigen::VectorXd ParameterSet::initial_values(const Model& model) const {
       case ParameterKind::kCableTension:
         block.setConstant(model.rods[b.index].cables[b.sub].tension);
         break;
-      case ParameterKind::kJointMotor: block.setConstant(model.joints[b.index].motor_torque); break;
+      case ParameterKind::kJointMotor: block.setConstant(model.joints[b.index].motor_effort); break;
       case ParameterKind::kRestDarboux:
       case ParameterKind::kRestDarbouxPerFrame: {
         const std::vector<Vector3> rest = discretize(model.rods[b.index]).rest_darboux;

@@ -18,7 +18,7 @@
 //   force, torque            3·n     per-step world force (at a body point) / torque
 //   node_force               3·n     per-step world force on a rod node (rods[r].node_forces[j])
 //   cable_tension            n       per-step tension of a rod's cable (rods[r].cables[c])
-//   joint_motor              n       per-step torque of a hinge's motor (joints[i].motor)
+//   joint_motor              n       per-step torque (hinge) or force (slider) of joints[i].motor
 //   rest_darboux             3·(nodes−2)      static rest Darboux vectors of a rod
 //   rest_darboux_per_frame   3·(nodes−2)·n    per-step rest Darboux vectors (frame-major)
 //   spring_stiffness, stretch_stiffness, shear_stiffness   1

@@ -124,10 +124,16 @@ JointSpec parse_joint(const json& value, const std::string& path, const std::str
   if (j.has("limits")) j.fail(j.field("limits"), "joint limits are not implemented yet");
   if (j.has("motor")) {
     ObjectReader m(j.get("motor"), j.field("motor"), source, {"torque", "force"});
-    if (m.has("force")) m.fail(m.field("force"), "a slider's force motor is not implemented yet (a hinge's torque motor is)");
-    if (spec.type != JointSpec::Type::kHinge) m.fail(j.field("motor"), "only a hinge has a motor (a torque about its axis)");
+    if (spec.type == JointSpec::Type::kHinge) {
+      if (m.has("force")) m.fail(m.field("force"), "a hinge's motor is a torque (\"torque\": τ about its axis)");
+      spec.motor_effort = m.number("torque");
+    } else if (spec.type == JointSpec::Type::kSlider) {
+      if (m.has("torque")) m.fail(m.field("torque"), "a slider's motor is a force (\"force\": f along its axis)");
+      spec.motor_effort = m.number("force");
+    } else {
+      m.fail(j.field("motor"), "only a hinge (a torque about its axis) or a slider (a force along it) has a motor");
+    }
     spec.has_motor = true;
-    spec.motor_torque = m.number("torque");
     m.finish();
   }
   spec.compliance = j.number("compliance", 0.0);

@@ -503,6 +503,126 @@ TEST(AdjointTermJointMotor, PreviousStepAndTorqueJacobiansMatchFiniteDifferences
 }
 
 // ----------------------------------------------------------------------------------------
+// Slider motor (lib/joint_terms.hpp): −f ê at a's point, +f ê at b's, ê = R_{a,k−1} â. Its
+// value, gradient and Hessian over (x_a, θ_a, x_b, θ_b), and its adjoint blocks ∂C/∂R_{a,k−1}
+// (through the lagged axis) and ∂C/∂f, by finite differences over the angle list for the
+// previous and current rotations of a (b at a generic angle), |f| from 1e-3 to 1e6, load
+// scale 1 and 0.375, end b a body or the world.
+
+struct ForceMotorCase {
+  JointForceMotor term;
+  State previous, q;
+};
+
+ForceMotorCase force_motor_case(double magnitude, double scale, double a_prev, double a,
+                                bool world_b, std::mt19937& rng) {
+  ForceMotorCase c;
+  c.term.a = {0, 0, random_vector(rng, 1.0)};
+  c.term.b = world_b ? AttachedPoint{-1, -1, random_vector(rng, 1.0)}
+                     : AttachedPoint{1, 1, random_vector(rng, 1.0)};
+  c.term.offsets = {0, 6, world_b ? -1 : 3, world_b ? -1 : 9};
+  c.term.axis_a = random_unit(rng);
+  c.term.force = magnitude * (rng() % 2 == 0 ? 1.0 : -1.0);
+  c.term.scale = scale;
+  c.previous.points = {random_vector(rng, 1.0), random_vector(rng, 1.0)};
+  c.previous.rotations = {rotation_at(a_prev, rng), rotation_at(0.7, rng)};
+  c.q.points = {random_vector(rng, 1.0), random_vector(rng, 1.0)};
+  c.q.rotations = {rotation_at(a, rng), rotation_at(2.5, rng)};
+  c.term.begin_step(c.previous, Step{});
+  return c;
+}
+
+fd::Dofs force_motor_dofs(bool world_b) {
+  return {fd::point_dof(0), fd::rotation_dof(0), world_b ? fd::no_dof() : fd::point_dof(1),
+          world_b ? fd::no_dof() : fd::rotation_dof(1)};
+}
+
+TEST(AdjointTermJointForceMotor, ValueGradientAndHessianMatchFiniteDifferences) {
+  std::mt19937 rng(1033);
+  int checked = 0;
+  for (const bool world_b : {false, true}) {
+    for (const double magnitude : {1e-3, 1.0, 1e6}) {
+      for (const double a_prev : kAngles) {
+        for (const double a : kAngles) {
+          SCOPED_TRACE(trace("world b, |f|", world_b, magnitude));
+          SCOPED_TRACE(trace("angles R_{a,k-1}, R_a", a_prev, a));
+          const ForceMotorCase c = force_motor_case(magnitude, 0.375, a_prev, a, world_b, rng);
+          // Linear in x: the translation rows of the Hessian are zero, its rotation blocks
+          // (the levers' curvature, eq. 23) are not.
+          fd::TermCheckOptions opt;
+          opt.hessian.require_nonzero = fd::NonZero::kAny;
+          EXPECT_TRUE(fd::check_term(c.term, c.q, force_motor_dofs(world_b), opt));
+          ++checked;
+        }
+      }
+    }
+  }
+  EXPECT_EQ(checked, 6 * static_cast<int>(kAngles.size() * kAngles.size()));
+}
+
+TEST(AdjointTermJointForceMotor, PreviousStepAndForceJacobiansMatchFiniteDifferences) {
+  std::mt19937 rng(1034);
+  int checked = 0;
+  for (const bool world_b : {false, true}) {
+    for (const double magnitude : {1e-3, 1.0, 1e6}) {
+      for (const double scale : {1.0, 0.375}) {
+        for (const double a_prev : kAngles) {
+          for (const double a : {0.0, 1e-9, 1.0, kPi - 1e-6, kPi}) {
+            SCOPED_TRACE(trace("world b, |f|, scale", world_b, magnitude, scale));
+            SCOPED_TRACE(trace("angles R_{a,k-1}, R_a", a_prev, a));
+            const ForceMotorCase c = force_motor_case(magnitude, scale, a_prev, a, world_b, rng);
+            // ∂C/∂R_{a,k−1}, row by row from add_step_adjoint with unit z; nothing else of
+            // the previous state or step is read.
+            Eigen::MatrixXd J(12, 3);
+            for (int i = 0; i < 12; ++i) {
+              LocalGradient<4> z = LocalGradient<4>::Zero();
+              z(i) = 1.0;
+              Eigen::VectorXd a_previous = Eigen::VectorXd::Zero(tangent_size(c.q));
+              Eigen::VectorXd da_previous = Eigen::VectorXd::Zero(tangent_size(c.q));
+              c.term.add_step_adjoint(c.q, c.previous, Step{}, z, a_previous, da_previous);
+              EXPECT_EQ(da_previous.squaredNorm(), 0.0);
+              J.row(i) = a_previous.segment<3>(tangent_rotation(c.q, 0)).transpose();
+              a_previous.segment<3>(tangent_rotation(c.q, 0)).setZero();
+              EXPECT_EQ(a_previous.squaredNorm(), 0.0);
+            }
+            const fd::VectorFunction of_previous = [&](const State& s) {
+              JointForceMotor t = c.term;
+              t.begin_step(s, Step{});
+              LocalGradient<4> g;
+              t.evaluate(c.q, &g, nullptr);
+              return Eigen::VectorXd(g);
+            };
+            EXPECT_TRUE(fd::check_vector_jacobian(of_previous, c.previous, {fd::rotation_dof(0)}, J));
+            // ∂C/∂f, from add_parameter_adjoint with unit z (slot 0 for frame 1).
+            JointForceMotor with_slot = c.term;
+            with_slot.control.slot = 0;
+            Eigen::MatrixXd df(12, 1);
+            for (int i = 0; i < 12; ++i) {
+              LocalGradient<4> z = LocalGradient<4>::Zero();
+              z(i) = 1.0;
+              Eigen::VectorXd dgamma = Eigen::VectorXd::Zero(1);
+              with_slot.add_parameter_adjoint(c.q, 1, z, dgamma);
+              df(i, 0) = dgamma(0);
+            }
+            const ParameterFunction of_force = [&](const Eigen::VectorXd& f) {
+              JointForceMotor t = c.term;
+              t.force = f(0);
+              LocalGradient<4> g;
+              t.evaluate(c.q, &g, nullptr);
+              return Eigen::VectorXd(g);
+            };
+            EXPECT_TRUE(check_parameter_jacobian(of_force, Eigen::VectorXd::Constant(1, c.term.force),
+                                                 Eigen::VectorXd::Constant(1, unit_of(magnitude)), df));
+            ++checked;
+          }
+        }
+      }
+    }
+  }
+  EXPECT_EQ(checked, 12 * 5 * static_cast<int>(kAngles.size()));
+}
+
+// ----------------------------------------------------------------------------------------
 // Constant force: C = s (−F, r × (−F)), blocks (x, θ).
 
 enum class Lever { kRotating, kTranslating, kNone };

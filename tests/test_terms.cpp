@@ -631,7 +631,7 @@ TEST(TermCapabilities, EveryTermTypeHasExactlyItsCapabilities) {
                 HasParameters<Spring> && HasParameters<RodStretch> && HasParameters<RodShear> &&
                 !HasParameters<Gravity> && !HasParameters<Contact> && !HasParameters<Friction>);
   static_assert(PointLoad<Gravity> && PointLoad<ConstantForce> && !PointLoad<ConstantTorque>);
-  // Joints: the three constraint parts, and the motor, a load like a torque.
+  // Joints: the three constraint parts, and the motors, loads like a torque and a force.
   static_assert(Constraint<JointPoint> && Constraint<JointAlignment> && Constraint<JointWeld> &&
                 !Constraint<Spring> && !Constraint<JointMotor>);
   static_assert(HasResidual<JointPoint> && HasResidual<JointAlignment> && HasResidual<JointWeld> &&
@@ -640,6 +640,10 @@ TEST(TermCapabilities, EveryTermTypeHasExactlyItsCapabilities) {
   static_assert(!HasResidual<JointMotor> && !EnergyOfState<JointMotor> && BeginsStep<JointMotor> &&
                 Scheduled<JointMotor> && LoadScaled<JointMotor> &&
                 ReadsPreviousStep<JointMotor> && HasParameters<JointMotor>);
+  static_assert(!HasResidual<JointForceMotor> && !EnergyOfState<JointForceMotor> &&
+                BeginsStep<JointForceMotor> && Scheduled<JointForceMotor> &&
+                LoadScaled<JointForceMotor> && ReadsPreviousStep<JointForceMotor> &&
+                HasParameters<JointForceMotor> && !Constraint<JointForceMotor>);
   // A force with a lever arm is not a point load; one on a bare point is.
   ConstantForce on_body;
   on_body.at = {0, 0, Vector3(1, 0, 0)};
