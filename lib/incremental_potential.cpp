@@ -1,5 +1,6 @@
 #include "incremental_potential.hpp"
 
+#include <Eigen/Geometry>
 #include <memory>
 #include <numeric>
 #include <optional>
@@ -287,6 +288,40 @@ void add_joint_terms(const Model& model, std::vector<Component>& components) {
       weld.frame_b = j.frame_b;
       set_stiffness(weld, j.compliance_rotation, inertia);
       p.add(weld);
+    }
+    if (j.has_limits) {  // one term per bound (joint_limits.hpp), as exact or elastic as the joint
+      const auto add_bounds = [&](auto limit, double compliance, double inertia_of_ends) {
+        set_stiffness(limit, compliance, inertia_of_ends);
+        for (const auto& [bound, side] : {std::pair{j.lower_limit, -1.0}, std::pair{j.upper_limit, 1.0}}) {
+          limit.bound = bound;
+          limit.side = side;
+          p.add(limit);
+        }
+      };
+      const Matrix3 Ra0 = model.initial_rotation(j.a);
+      if (j.type == JointSpec::Type::kHinge) {
+        JointLimit<HingeAngle> limit;
+        limit.offsets = {oa[1], ob[1]};
+        HingeAngle& angle = limit.coordinate;
+        angle.rotation_a = pa.rotation;
+        angle.rotation_b = pb.rotation;
+        angle.axis_a = j.axis_a;
+        // û: the unit vector ⟂ â nearest the coordinate axis least aligned with â.
+        Eigen::Index least = 0;
+        j.axis_a.cwiseAbs().minCoeff(&least);
+        angle.reference_a = j.axis_a.cross(Vector3::Unit(least)).cross(j.axis_a).normalized();
+        angle.reference_b = model.initial_rotation(j.b).transpose() * Ra0 * angle.reference_a;
+        add_bounds(limit, j.compliance_rotation, inertia);
+      } else {
+        JointLimit<SliderPosition> limit;
+        limit.offsets = translation_offsets;
+        SliderPosition& position = limit.coordinate;
+        position.a = pa;
+        position.b = pb;
+        position.axis_a = j.axis_a;
+        position.origin = (Ra0 * j.axis_a).dot(model.initial_position(j.b) - model.initial_position(j.a));
+        add_bounds(limit, j.compliance, mass);
+      }
     }
   }
 }

@@ -21,6 +21,7 @@
 #include "contact.hpp"
 #include "friction.hpp"
 #include "inertia.hpp"
+#include "joint_limits.hpp"
 #include "joint_terms.hpp"
 #include "loads.hpp"
 #include "model.hpp"
@@ -48,7 +49,8 @@ class IncrementalPotential {
   using TermTypes = std::tuple<TranslationalInertia, RotationalInertia, Gravity, ConstantForce,
                                ConstantTorque, RegionForce, Spring, RodStretch, RodShear,
                                RodBendTwist, CableSegment, JointPoint, JointLine, JointAlignment, JointWeld,
-                               JointMotor, JointForceMotor, Contact, Friction>;
+                               JointMotor, JointForceMotor, JointLimit<HingeAngle>,
+                               JointLimit<SliderPosition>, Contact, Friction>;
 
   // The terms of type T (one contiguous vector per type).
   template <class T>

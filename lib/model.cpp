@@ -229,6 +229,20 @@ void Model::validate() const {
         if (!std::isfinite(effort(0))) throw ModelError(field(member), "must be finite in every frame");
       }
     }
+    if (j.has_limits) {
+      if (j.type != JointSpec::Type::kHinge && j.type != JointSpec::Type::kSlider) {
+        throw ModelError(field("limits"), "only a hinge (an angle, rad) or a slider (a distance, m) has limits");
+      }
+      if (!std::isfinite(j.lower_limit) || !std::isfinite(j.upper_limit)) {
+        throw ModelError(field("limits"), "must be finite");
+      }
+      if (!(j.lower_limit < j.upper_limit)) {
+        throw ModelError(field("limits"), "the lower limit must be below the upper (a weld fixes the angle, a hinge fixes the position)");
+      }
+      if (!(j.lower_limit <= 0.0 && 0.0 <= j.upper_limit)) {
+        throw ModelError(field("limits"), "must hold the start (angle and position 0): [lo, hi] with lo ≤ 0 ≤ hi");
+      }
+    }
     if (j.type == JointSpec::Type::kSlider && !(std::abs(j.axis_a.norm() - 1.0) <= 1e-12)) {
       throw ModelError(field("a.axis"), "must be a unit vector");
     }

@@ -102,6 +102,10 @@ struct JointSpec {
   bool has_motor = false;
   double motor_effort = 0.0;                  // N·m (hinge) or N (slider)
   ScheduledParameter<1> motor;
+  // Limits (lib/joint_limits.hpp): lower ≤ ξ ≤ upper on a hinge's angle (rad) or a slider's
+  // position (m), ξ = 0 at the start; as exact or as elastic as the joint.
+  bool has_limits = false;
+  double lower_limit = 0.0, upper_limit = 0.0;
 };
 
 struct ForceSpec {

@@ -121,7 +121,12 @@ JointSpec parse_joint(const json& value, const std::string& path, const std::str
     j.fail(j.field("type"), "unknown joint type \"" + type +
                                 "\" (expected \"ball\", \"hinge\", \"slider\" or \"weld\")");
   }
-  if (j.has("limits")) j.fail(j.field("limits"), "joint limits are not implemented yet");
+  if (j.has("limits")) {
+    const Eigen::Vector2d limits = j.vector<2>("limits");  // [lo, hi]
+    spec.has_limits = true;
+    spec.lower_limit = limits(0);
+    spec.upper_limit = limits(1);
+  }
   if (j.has("motor")) {
     ObjectReader m(j.get("motor"), j.field("motor"), source, {"torque", "force"});
     if (spec.type == JointSpec::Type::kHinge) {

@@ -536,8 +536,22 @@ TEST(Joints, BadJointsNameTheirField) {
                 .rfind("joints[0].motor.torque:", 0),
             0u);
   EXPECT_EQ(error(R"({ "type": "hinge", "a": { "body": "a", "axis": [0, 0, 1] }, "motor": { "torque": 0.5 } })"), "accepted");
-  EXPECT_EQ(error(R"({ "type": "hinge", "compliance": 1, "a": { "body": "a", "axis": [0, 0, 1] }, "limits": [0, 1] })")
-                .rfind("joints[0].limits: joint limits are not implemented yet", 0),
+  EXPECT_EQ(error(R"({ "type": "hinge", "compliance": 1, "a": { "body": "a", "axis": [0, 0, 1] }, "limits": [0, 1] })"), "accepted");
+  EXPECT_EQ(error(R"({ "type": "slider", "a": { "body": "a", "axis": [0, 0, 1] }, "limits": [-0.5, 0] })"), "accepted");
+  EXPECT_EQ(error(R"({ "type": "ball", "a": { "body": "a" }, "limits": [-1, 1] })")
+                .rfind("joints[0].limits: only a hinge (an angle, rad) or a slider (a distance, m) has limits", 0),
+            0u);
+  EXPECT_EQ(error(R"({ "type": "hinge", "a": { "body": "a", "axis": [0, 0, 1] }, "limits": [1, 2] })")
+                .rfind("joints[0].limits: must hold the start", 0),
+            0u);
+  EXPECT_EQ(error(R"({ "type": "hinge", "a": { "body": "a", "axis": [0, 0, 1] }, "limits": [0, 0] })")
+                .rfind("joints[0].limits: the lower limit must be below the upper", 0),
+            0u);
+  EXPECT_EQ(error(R"({ "type": "hinge", "a": { "body": "a", "axis": [0, 0, 1] }, "limits": [-1, 1e999] })")
+                .rfind("joints[0].limits[1]:", 0),
+            0u);
+  EXPECT_EQ(error(R"({ "type": "slider", "a": { "body": "a", "axis": [0, 0, 1] }, "limits": [-1] })")
+                .rfind("joints[0].limits: must be an array of 2 numbers", 0),
             0u);
   EXPECT_EQ(error(R"({ "type": "ball", "compliance": 1, "a": { "world": [0, 0, 0] } })")
                 .rfind("joints[0].a.world: end a must be a body or a rod", 0),
