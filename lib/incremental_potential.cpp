@@ -319,7 +319,7 @@ void add_joint_terms(const Model& model, std::vector<Component>& components) {
         position.a = pa;
         position.b = pb;
         position.axis_a = j.axis_a;
-        position.origin = (Ra0 * j.axis_a).dot(model.initial_position(j.b) - model.initial_position(j.a));
+        position.origin = (Ra0 * j.axis_a).dot(model.initial_position(j.a) - model.initial_position(j.b));
         add_bounds(limit, j.compliance, mass);
       }
     }

@@ -61,8 +61,10 @@ double SliderPosition::value(const State& q, LocalGradient<4>* g, LocalHessian<4
     const Eigen::Matrix<double, 3, 12> nD = so3::hat(n) * D;
     H->block<3, 12>(3, 0) += nD;
     H->block<12, 3>(0, 3) += nD.transpose();
+    *H = -*H;
   }
-  return n.dot(d) - origin;
+  if (g != nullptr) *g = -*g;
+  return -n.dot(d) - origin;
 }
 
 template <class Coordinate>

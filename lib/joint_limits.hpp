@@ -7,7 +7,9 @@
 // 1/compliance_rotation), or exactly by the augmented Lagrangian of StepSolver::solve:
 // V = ½ ρ max(0, g + s)² with the shift s ≥ 0 updated s ← max(0, s + g), the inequality form
 // of the joint parts' update (joint_terms.hpp): the multiplier λ = ρ max(0, g + s) ≥ 0 is the
-// stop's torque or force, zero while the joint is inside its range. Lie derivatives of V from
+// stop's torque or force, zero while the joint is inside its range. The loop runs until
+// |max(g, −s)| ≤ tolerance: feasible (g ≤ 0) and complementary (no push, s = 0, from a
+// distance, g < 0), the measure of an inequality's KKT conditions. Lie derivatives of V from
 // those of ξ: ∇V = k m σ ∇ξ, ∇²V = k (∇ξ ∇ξᵀ + m σ ∇²ξ), m = max(0, g (+ s)); V is C¹ at the
 // switch m = 0, where the Hessian jumps by k ∇ξ ∇ξᵀ (as the contact penalty's does).
 // The adjoint (solvers/adjoint.cpp) sees an exact limit as an equality c = g where it is
@@ -34,9 +36,11 @@
 // (ρ = 0: b's reference along a's axis, which an intact hinge never reaches).
 //
 // Slider position (SliderPosition). With n = R_a â (turning with a, not lagged) and
-// d = p_b − p_a (AttachedPoint), ξ = n·d − ξ₀, ξ₀ its value at the start. First variations
-// δn = θ_a × n, δd = δx_b − δx_a + θ_b × r_b − θ_a × r_a give
-//   ∇ξ = (−n, n × (d + r_a), n, r_b × n)   over (x_a, θ_a, x_b, θ_b),
+// d = p_b − p_a (AttachedPoint), ξ = −n·d − ξ₀ = n·(p_a − p_b) − ξ₀, a's place along the rail
+// relative to b (positive where the slider motor pushes a), ξ₀ its value at the start. The
+// derivatives of n·d: first variations δn = θ_a × n, δd = δx_b − δx_a + θ_b × r_b − θ_a × r_a
+// give
+//   ∇(n·d) = (−n, n × (d + r_a), n, r_b × n)   over (x_a, θ_a, x_b, θ_b),
 // and the second variation: C(n, d) + C(r_a, −n) at θ_aθ_a, C(r_b, n) at θ_bθ_b (the rotated
 // vectors' second order), plus the bilinear δn·δd = θ_aᵀ hat(n) D δq with
 // D = [−I, hat(r_a), I, −hat(r_b)]: hat(n) D into the θ_a rows and its transpose into the θ_a
@@ -100,7 +104,9 @@ struct JointLimit {
   double evaluate(const State& q, LocalGradient<kBlocks>* g, LocalHessian<kBlocks>* H) const;
   void residual(const State& q, Residual& r, ResidualJacobian* J) const;
 
-  double violation(const State& q) const { return std::max(0.0, gap(q)); }
+  // |max(g, −s)|: the gap where the stop is passed, and where the stop pushes (s > 0) from a
+  // distance (g < 0) the smaller of the two — zero only when g ≤ 0 = s or g = 0 ≤ s.
+  double violation(const State& q) const { return std::abs(std::max(gap(q), exact ? -shift : 0.0)); }
   void update_multiplier(const State& q) { shift = std::max(0.0, shift + gap(q)); }
   Vector3 force(const State& q) const;                              // (λ, 0, 0)
   Vector3 constraint(const State& q, ConstraintJacobian* J) const;  // (g, 0, 0) where active

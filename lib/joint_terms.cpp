@@ -368,7 +368,7 @@ void JointForceMotor::begin_step(const State& previous, const Step&) {
 ConstantForce JointForceMotor::end_force(int end) const {
   ConstantForce f;
   f.at = end == 0 ? a : b;
-  f.force = (end == 0 ? -force : force) * axis();
+  f.force = (end == 0 ? force : -force) * axis();
   f.scale = scale;
   return f;
 }
@@ -391,8 +391,8 @@ void JointForceMotor::add_step_adjoint(const State& q, const State&, const Step&
                                        Eigen::VectorXd&) const {
   // f hat(ê) through each end's M = force_jacobian (which carries the load scale), header.
   const Matrix3 f_hat_axis = force * so3::hat(axis());
-  const Eigen::Matrix<double, 6, 3> dC_a = end_force(0).force_jacobian(q) * f_hat_axis;
-  const Eigen::Matrix<double, 6, 3> dC_b = -end_force(1).force_jacobian(q) * f_hat_axis;
+  const Eigen::Matrix<double, 6, 3> dC_a = -end_force(0).force_jacobian(q) * f_hat_axis;
+  const Eigen::Matrix<double, 6, 3> dC_b = end_force(1).force_jacobian(q) * f_hat_axis;
   a_previous.segment<3>(tangent_rotation(q, a.rotation)) +=
       dC_a.transpose() * z.head<6>() + dC_b.transpose() * z.tail<6>();
 }
@@ -402,8 +402,8 @@ void JointForceMotor::add_parameter_adjoint(const State& q, int frame, const Loc
   const int slot = control.slot_at(frame);
   if (slot < 0) return;
   const Vector3 e = axis();
-  dgamma(slot) += (end_force(1).force_jacobian(q) * e).dot(z.tail<6>()) -
-                  (end_force(0).force_jacobian(q) * e).dot(z.head<6>());
+  dgamma(slot) += (end_force(0).force_jacobian(q) * e).dot(z.head<6>()) -
+                  (end_force(1).force_jacobian(q) * e).dot(z.tail<6>());
 }
 
 }  // namespace liedyn

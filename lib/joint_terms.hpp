@@ -248,15 +248,17 @@ struct JointMotor {
   ConstantTorque end_torque(int end) const;
 };
 
-// A slider's motor: a force f along the slider's axis, +f ê on b's point and −f ê on a's,
-// ê = R_{a,k−1} â lagged as the hinge motor's axis (above). Both forces act along the line
-// through p_a along ê, which holds p_b while the slider holds: they are equal, opposite and
-// collinear, so they push b along the rail without a net torque. Each end's part is a
-// ConstantForce (loads.hpp) at that end's point, whose potential, derivatives and adjoint
-// blocks it takes; the axis's dependence on R_{a,k−1} adds to the previous-step block of a:
-//   C_a = −f M_a ê,  C_b = f M_b ê  (M = ConstantForce's ∂C/∂F)
-//   ⇒ ∂C_a/∂φ_a ⊇ f M_a hat(ê),  ∂C_b/∂φ_a ⊇ −f M_b hat(ê);
-// and ∂C/∂f = (−M_a ê, M_b ê). f is scheduled per frame and may be an optimisation
+// A slider's motor: a force f along the slider's axis, +f ê on a's point and −f ê on b's (as
+// the hinge motor's +τ on a: both drive the joint's coordinate, a relative to b, the positive
+// way; joint_limits.hpp), ê = R_{a,k−1} â lagged as the hinge motor's axis (above). Both
+// forces act along the line through p_a along ê, which holds p_b while the slider holds: they
+// are equal, opposite and collinear, so they push a along the rail without a net torque.
+// Each end's part is a ConstantForce (loads.hpp) at that end's point, whose potential,
+// derivatives and adjoint blocks it takes; the axis's dependence on R_{a,k−1} adds to the
+// previous-step block of a:
+//   C_a = f M_a ê,  C_b = −f M_b ê  (M = ConstantForce's ∂C/∂F)
+//   ⇒ ∂C_a/∂φ_a ⊇ −f M_a hat(ê),  ∂C_b/∂φ_a ⊇ f M_b hat(ê);
+// and ∂C/∂f = (M_a ê, −M_b ê). f is scheduled per frame and may be an optimisation
 // parameter (kind joint_motor); static load stepping scales it like any force.
 struct JointForceMotor {
   static constexpr int kBlocks = 4;
@@ -264,7 +266,7 @@ struct JointForceMotor {
   std::array<int, kBlocks> offsets{-1, -1, -1, -1};  // x_a, θ_a, x_b, θ_b
   AttachedPoint a, b;                                // a: a point with a rotation
   Vector3 axis_a = Vector3::UnitX();                 // â, unit, in a's coordinates
-  double force = 0.0;                                // f, N, along +ê on b
+  double force = 0.0;                                // f, N, along +ê on a
   double scale = 1.0;
   ScheduledParameter<1> control;
   Matrix3 R_previous_a = Matrix3::Identity();

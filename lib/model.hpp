@@ -97,7 +97,7 @@ struct JointSpec {
   double compliance = 0.0;                    // m/N, ≥ 0 (0: exact)
   double compliance_rotation = 0.0;           // rad/(N·m), ≥ 0 (0: exact)
   // Motor (lib/joint_terms.hpp): a hinge's torque about its axis, +τ on a and −τ on b, or a
-  // slider's force along its axis, +f on b and −f on a; per step from `motor` (constant
+  // slider's force along its axis, +f on a and −f on b; per step from `motor` (constant
   // `motor_effort` without a schedule).
   bool has_motor = false;
   double motor_effort = 0.0;                  // N·m (hinge) or N (slider)

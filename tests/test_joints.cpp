@@ -606,7 +606,7 @@ TEST(Joints, AMotorIsEqualAndOppositeTorquesAboutItsAxis) {
   EXPECT_LT((m.angular_momentum() - t.angular_momentum()).norm(), 1e-10);
 }
 
-// A slider's motor pushes b along the rail and a back. A cart on an exact rail to the world
+// A slider's motor pushes a along the rail and b back. A cart on an exact rail to the world
 // (no gravity) moves with a = f/m: backward Euler's h² a k(k+1)/2 after k steps, exactly, as
 // on the tilted rail. Between two free bodies at rest, each moves by the same law with f/m_i,
 // in opposite directions; set spinning, the pair's forces stay internal: the centre of mass
@@ -616,13 +616,13 @@ TEST(Joints, ASliderMotorPushesAlongTheRailEqualAndOpposite) {
   const double h = 0.01, k = 40, law = h * h * k * (k + 1) / 2.0;
   const Scene rail = parse_scene("{" + solver + R"(
       "bodies": [ { "name": "cart", "mass": 2, "inertia": [0.01, 0.02, 0.03], "orientation": [0.9, 0.3, -0.2, 0.2449489742783178] } ],
-      "joints": [ { "type": "slider", "a": { "body": "cart", "point": [0.1, 0, 0], "axis": [0.6, 0, 0.8] }, "motor": { "force": -3 } } ] })",
+      "joints": [ { "type": "slider", "a": { "body": "cart", "point": [0.1, 0, 0], "axis": [0.6, 0, 0.8] }, "motor": { "force": 3 } } ] })",
                                  "rail.json");
   Simulator sim(rail.model, rail.solver);
   const Vector3 x0 = sim.state().points[0];
   const Vector3 axis = sim.state().rotations[0] * Vector3(0.6, 0, 0.8);
   for (int f = 1; f <= rail.frames; ++f) ASSERT_TRUE(sim.step().converged()) << f;
-  // b is the world: the cart (a) feels −f ê = +3 ê.
+  // b is the world: the cart (a) feels +f ê = +3 ê.
   const Vector3 expected = (3.0 / 2.0) * law * axis;
   EXPECT_LT((sim.state().points[0] - x0 - expected).norm(), 1e-9 * expected.norm()) << (sim.state().points[0] - x0).transpose();
   EXPECT_LT(so3::distance(sim.state().rotations[0], rail.model.bodies[0].orientation), 1e-11);
@@ -632,7 +632,7 @@ TEST(Joints, ASliderMotorPushesAlongTheRailEqualAndOpposite) {
       "bodies": [ { "name": "a", "mass": 1, "inertia": [0.02, 0.02, 0.01], "angular_velocity": )" + spin + R"( },
                   { "name": "b", "mass": 3, "inertia": [0.05, 0.05, 0.03], "position": [0.1, 0.2, 0.3] } ],
       "joints": [ { "type": "slider", "a": { "body": "a", "point": [0, 0, 0], "axis": [1, 2, 3] }, "b": { "body": "b" },
-                    "motor": { "force": 0.5 } } ] })",
+                    "motor": { "force": -0.5 } } ] })",
                        "pair.json");
   };
   const Vector3 e = Vector3(1, 2, 3).normalized();
