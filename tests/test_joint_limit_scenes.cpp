@@ -8,12 +8,15 @@
 //  * A wheel spun by its hinge motor through several turns into a stop beyond 2π (the angle
 //    is continued across turns): it comes to rest at the stop, having turned hi in total,
 //    with the stop's torque equal to the motor's.
+//  * joints/stops.json ends as its description says.
 //  * The three back-ends agree on a pendulum swinging into an exact stop.
 //  * gradcheck through an active stop, exact and elastic.
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <numbers>
 #include <string>
@@ -167,6 +170,34 @@ TEST(JointLimits, BackEndsAgreeThroughTheStops) {
     EXPECT_LT((q.points[0] - newton.points[0]).norm(), 1e-6) << to_string(b);
     EXPECT_LT(so3::distance(q.rotations[0], newton.rotations[0]), 1e-6) << to_string(b);
   }
+}
+
+// joints/stops.json does what its description says: the arm ends on its stop at 1.2 rad,
+// held by m g l cos(1.2); the cart 0.25 m down its rail on the lower stop, held by
+// m g sin 30° − 5 N; every step converged with the stops to the tolerance.
+TEST(JointLimits, TheBundledStopsSceneEndsOnItsStops) {
+  const Scene scene = load_scene(std::filesystem::path(LIEDYN_SOURCE_DIR) / "problems/scenes/joints/stops.json");
+  Simulator sim(scene.model, scene.solver);
+  double worst = 0.0;
+  for (int k = 1; k <= scene.frames; ++k) {
+    const StepReport r = sim.step();
+    ASSERT_TRUE(r.converged()) << k;
+    worst = std::max(worst, r.constraint_violation);
+  }
+  EXPECT_LE(worst, scene.solver.tolerance);
+  const double tol = scene.solver.tolerance;
+  EXPECT_NEAR(angle_about_y(sim.state().rotations[0]), 1.2, 2 * tol);
+  const Vector3 rail(std::sqrt(0.75), 0, 0.5);
+  EXPECT_NEAR((sim.state().points[1] - scene.model.bodies[1].position).dot(rail), -0.25, 2 * tol);
+  EXPECT_LT((sim.state().points[1] - scene.model.bodies[1].position).cross(rail).norm(), 2 * tol);
+  // One component per body: the hinge's point, axis, lower and upper stop; the slider's
+  // line, weld, lower and upper stop.
+  const std::vector<Vector3> f = stop_forces(sim);
+  ASSERT_EQ(f.size(), 8u);
+  EXPECT_NEAR(f[3](0), 1.0 * kG * 0.4 * std::cos(1.2), multiplier_accuracy(0.02, scene));
+  EXPECT_NEAR(f[6](0), 2.0 * kG * 0.5 - 5.0, multiplier_accuracy(2.0, scene));
+  EXPECT_EQ(f[2](0), 0.0);
+  EXPECT_EQ(f[7](0), 0.0);
 }
 
 class JointLimitsCli : public test::CliFixture {

@@ -720,7 +720,7 @@ TEST_F(JointsCli, FramesReportTheExactJointsViolation) {
 // pair Ipopt does not support (quat) is a failed row that says why.
 TEST_F(JointsCli, EveryJointSceneRunsUnderEveryBackEndAndParameterisation) {
   for (const char* name : {"joints/pendulum.json", "joints/double_pendulum.json", "joints/chain.json",
-                           "joints/gripper_rod.json", "optimization/arm_reach.json"}) {
+                           "joints/gripper_rod.json", "joints/stops.json", "optimization/arm_reach.json"}) {
     SCOPED_TRACE(name);
     nlohmann::json scene = nlohmann::json::parse(test::read_file(kScenes / name));
     scene["frames"] = 100;
