@@ -289,6 +289,23 @@ void add_joint_terms(const Model& model, std::vector<Component>& components) {
       set_stiffness(weld, j.compliance_rotation, inertia);
       p.add(weld);
     }
+    if (j.type == JointSpec::Type::kSplice) {
+      // The bending and twist across the junction, as at a rod's interior node between its
+      // edges i−1 and i (add_rod_terms): a's last edge and b's first, over their Voronoi
+      // length, with the two rods' mean stiffness and the junction's initial curvature at rest.
+      const int ra = j.a.object, rb = j.b.object;
+      const int edge_a = model.rods[ra].edge_count() - 1;
+      const RodDiscretization& da = rod(ra);
+      const RodDiscretization& db = rod(rb);
+      RodBendTwist bend;
+      bend.edge0 = model.rod_rotation(ra, edge_a);
+      bend.edge1 = model.rod_rotation(rb, 0);
+      bend.offsets = {rotation_dof[bend.edge0][1], rotation_dof[bend.edge1][1]};
+      bend.rest_length = 0.5 * (da.rest_length[edge_a] + db.rest_length[0]);
+      bend.stiffness = 0.5 * (model.rods[ra].bending_stiffness + model.rods[rb].bending_stiffness);
+      bend.rest_darboux = darboux_vector(da.frames[edge_a], db.frames[0], bend.rest_length);
+      p.add(bend);
+    }
     if (j.has_limits) {  // one term per bound (joint_limits.hpp), as exact or elastic as the joint
       const auto add_bounds = [&](auto limit, double compliance, double inertia_of_ends) {
         set_stiffness(limit, compliance, inertia_of_ends);

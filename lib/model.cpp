@@ -7,6 +7,7 @@
 #include <numeric>
 #include <numbers>
 #include <sstream>
+#include <tuple>
 
 #include "inertia.hpp"
 #include "so3.hpp"
@@ -200,7 +201,21 @@ void Model::validate() const {
       throw ModelError(field("b"), "neither end can move (the world, or clamped rod nodes and edges): "
                                    "the joint would hold nothing");
     }
-    if (j.type != JointSpec::Type::kBall) {
+    if (j.type == JointSpec::Type::kSplice) {
+      for (const auto& [end, member, last] : {std::tuple{&j.a, "a", true}, std::tuple{&j.b, "b", false}}) {
+        const std::string which = last ? "the last node of a rod" : "the first node of a rod";
+        if (end->kind != JointEnd::Kind::kRodNode) {
+          throw ModelError(field(member), std::string("a splice joins the last node of one rod (a) to the first node of another (b): ") +
+                                               member + " must be " + which);
+        }
+        const int n = rods[end->object].node_count();
+        if (end->element != (last ? n - 1 : 0)) {
+          throw ModelError(field(std::string(member) + ".node"),
+                           "must be " + which + " (" + std::to_string(last ? n - 1 : 0) + " for rod \"" +
+                               rods[end->object].name + "\"): the rods run on through the junction");
+        }
+      }
+    } else if (j.type != JointSpec::Type::kBall) {
       for (const auto& [end, member] : {std::pair{&j.a, "a"}, std::pair{&j.b, "b"}}) {
         if (end->kind == JointEnd::Kind::kRodNode) {
           throw ModelError(field(std::string(member) + ".node"),

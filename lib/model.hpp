@@ -87,7 +87,9 @@ struct JointEnd {
 // exact where its compliance is 0 (the augmented Lagrangian of StepSolver::solve).
 // A rod node has no rotation: only a ball joint holds it. Terms: lib/joint_terms.hpp.
 struct JointSpec {
-  enum class Type { kBall, kHinge, kWeld, kSlider };
+  // kSplice: two rods joined end to end as one — the last node of a's rod held to the first
+  // of b's (as a ball joint), and the bending and twist across the junction as within a rod.
+  enum class Type { kBall, kHinge, kWeld, kSlider, kSplice };
   Type type = Type::kBall;
   JointEnd a, b;
   Vector3 axis_a = Vector3::UnitZ();          // hinge, slider: unit, in a's coordinates

@@ -166,6 +166,16 @@ void ParameterSet::add(const Model& model, ParameterKind kind, int index, int su
       (index < 0 || index >= static_cast<int>(model.springs.size()))) {
     out_of_range("spring", model.springs.size());
   }
+  if (kind == ParameterKind::kBendingStiffness) {
+    for (std::size_t i = 0; i < model.joints.size(); ++i) {
+      const JointSpec& j = model.joints[i];
+      if (j.type == JointSpec::Type::kSplice && (j.a.object == index || j.b.object == index)) {
+        throw ModelError(field, "rod " + std::to_string(index) + " is spliced (joints[" + std::to_string(i) +
+                                    "]): the junction's bending, the two rods' mean, is not an optimisation parameter, "
+                                    "so the rod's bending stiffness cannot be one either");
+      }
+    }
+  }
   if (kind == ParameterKind::kJointMotor) {
     if (index < 0 || index >= static_cast<int>(model.joints.size())) {
       out_of_range("joint", model.joints.size());

@@ -117,9 +117,14 @@ JointSpec parse_joint(const json& value, const std::string& path, const std::str
     spec.type = JointSpec::Type::kWeld;
   } else if (type == "slider") {
     spec.type = JointSpec::Type::kSlider;
+  } else if (type == "splice") {
+    spec.type = JointSpec::Type::kSplice;
+    if (j.has("compliance_rotation")) {
+      j.fail(j.field("compliance_rotation"), "a splice bends and twists as the rods do (their bending_stiffness)");
+    }
   } else {
     j.fail(j.field("type"), "unknown joint type \"" + type +
-                                "\" (expected \"ball\", \"hinge\", \"slider\" or \"weld\")");
+                                "\" (expected \"ball\", \"hinge\", \"slider\", \"weld\" or \"splice\")");
   }
   if (j.has("limits")) {
     const Eigen::Vector2d limits = j.vector<2>("limits");  // [lo, hi]

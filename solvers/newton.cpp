@@ -186,6 +186,9 @@ StepReport Newton<System>::iterate(State& q, int max_iterations) {
     }
     if (report.iterations >= max_iterations) {
       report.status = StepStatus::kMaxIterations;
+      report.message = "newton: " + std::to_string(max_iterations) + " iterations (max_iterations) used up; Newton step " +
+                       short_number(report.step_norm) + " > tolerance" +
+                       (regularized ? ", the Hessian shifted (not positive definite: a free or unstable mode?)" : "");
       return report;
     }
     // Backtracking (Armijo) line search on Ψ, below. Near convergence the predicted decrease

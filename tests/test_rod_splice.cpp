@@ -1,0 +1,175 @@
+// A splice (joints of type "splice", lib/incremental_potential.cpp's add_joint_terms): two
+// rods joined end to end are one rod. Its parts are the exact point joint (the last node of
+// a's rod on the first of b's) and the rod's own bending and twist term across the junction,
+// so that with the lumped masses summing at the junction (half an edge from each side) the
+// pair has the single rod's energy and inertia term for term. Checked against one rod of
+// the same total length, mass and stiffness, node for node:
+//  * a clamped cantilever under gravity and a tip load in static equilibrium;
+//  * the same cantilever swinging (dynamic mode), every frame;
+//  * a free rod spinning and bending in free flight (no clamp, both halves free);
+// and the bad inputs, each naming its field.
+// Agreement: the step tolerance 1e-10 bounds each solve's error; as for the clamp of
+// tests/test_rod_joints.cpp, the cantilever's softest mode turns it into ≲ 1e-8 m at the
+// tip, and the splice's exact joint holds to 1e-10 m. 1e-7 m bounds both; without the
+// junction's bending term (a plain ball joint) the rod differs by centimetres.
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <string>
+#include <vector>
+
+#include "lib/so3.hpp"
+
+#include "problems/scene.hpp"
+#include "solvers/simulator.hpp"
+
+namespace liedyn {
+namespace {
+
+constexpr double kAgreement = 1e-7;
+
+// A rod along x from x0 to x1 with `edges` edges and mass ∝ length (0.05 kg for 0.6 m).
+std::string rod(const std::string& name, double x0, double x1, int edges, const std::string& extra) {
+  return R"({ "name": ")" + name + R"(", "shape": { "type": "line", "start": [)" + std::to_string(x0) +
+         R"(, 0, 0], "end": [)" + std::to_string(x1) + R"(, 0, 0], "edges": )" + std::to_string(edges) +
+         R"( }, "mass": )" + std::to_string(0.05 * (x1 - x0) / 0.6) + R"(, "radius": 0.005,
+      "stretch_stiffness": 1000, "shear_stiffness": 1000, "bending_stiffness": [0.005, 0.004, 0.003] )" +
+         extra + " }";
+}
+
+std::string scene(const std::string& mode, const std::string& rods, const std::string& rest = "") {
+  return R"({ "mode": ")" + mode + R"(", "time_step": 0.005, "frames": 40, "gravity": [0, 0, -9.81],
+    "solver": { "tolerance": 1e-10, "max_iterations": 200 }, "rods": [ )" + rods + " ]" + rest + " }";
+}
+
+// The nodes and edge frames of a run's last state, every step converged and the splice held.
+struct Shape {
+  std::vector<Vector3> nodes;
+  std::vector<Matrix3> frames;
+};
+
+Shape run(const std::string& text, std::vector<Shape>* every = nullptr) {
+  const Scene s = parse_scene(text, "splice.json");
+  Simulator sim(s.model, s.solver);
+  for (int k = 1; k <= s.frames; ++k) {
+    const StepReport r = sim.step();
+    EXPECT_TRUE(r.converged()) << "frame " << k << ": " << r.message;
+    EXPECT_LE(r.constraint_violation, s.solver.tolerance) << k;
+    if (every != nullptr) every->push_back({sim.state().points, sim.state().rotations});
+  }
+  return {sim.state().points, sim.state().rotations};
+}
+
+// The spliced pair's nodes in the single rod's order: a's 0…6, then b's 1…6 (b's node 0 is
+// a's node 6); its edges a's 0…5 then b's 0…5 — the state's own order, less b's node 0.
+double largest_difference(const Shape& one, const Shape& two) {
+  double d = 0.0;
+  for (int i = 0; i <= 12; ++i) {
+    const int j = i <= 6 ? i : i + 1;
+    d = std::max(d, (one.nodes[i] - two.nodes[j]).norm());
+  }
+  for (int e = 0; e < 12; ++e) d = std::max(d, so3::distance(one.frames[e], two.frames[e]) * 0.6);
+  return d;
+}
+
+const std::string kTip = R"(, "node_forces": [ { "node": 6, "force": [0, 0.05, -0.2] } ])";
+const std::string kTipOfOne = R"(, "node_forces": [ { "node": 12, "force": [0, 0.05, -0.2] } ])";
+const std::string kClamp = R"(, "fixed_nodes": [0], "fixed_edges": [0])";
+const std::string kSplice = R"(, "joints": [ { "type": "splice", "a": { "rod": "a", "node": 6 }, "b": { "rod": "b", "node": 0 } } ])";
+
+TEST(RodSplice, TwoRodsSplicedEndToEndAreOneCantileverInStaticEquilibrium) {
+  const Shape one = run(scene("static", rod("r", 0, 0.6, 12, kClamp + kTipOfOne)));
+  const Shape two = run(scene("static", rod("a", 0, 0.3, 6, kClamp) + ", " + rod("b", 0.3, 0.6, 6, kTip), kSplice));
+  EXPECT_GT(-one.nodes[12].z(), 0.05);  // a large deflection, not a rod at rest
+  EXPECT_LT(largest_difference(one, two), kAgreement);
+}
+
+TEST(RodSplice, TwoRodsSplicedEndToEndSwingAsOneRodFrameByFrame) {
+  std::vector<Shape> one, two;
+  run(scene("dynamic", rod("r", 0, 0.6, 12, kClamp + kTipOfOne)), &one);
+  run(scene("dynamic", rod("a", 0, 0.3, 6, kClamp) + ", " + rod("b", 0.3, 0.6, 6, kTip), kSplice), &two);
+  ASSERT_EQ(one.size(), two.size());
+  double worst = 0.0;
+  for (std::size_t k = 0; k < one.size(); ++k) worst = std::max(worst, largest_difference(one[k], two[k]));
+  EXPECT_LT(worst, kAgreement);
+  EXPECT_GT(-one.back().nodes[12].z(), 1e-2);
+  // A ball joint in place of the splice is a free joint in the middle of the cantilever (in
+  // static mode b would have no equilibrium to converge to: it spins freely about its axis).
+  std::string ball = kSplice;
+  ball.replace(ball.find("splice"), 6, "ball");
+  std::vector<Shape> loose;
+  run(scene("dynamic", rod("a", 0, 0.3, 6, kClamp) + ", " + rod("b", 0.3, 0.6, 6, kTip), ball), &loose);
+  EXPECT_GT(largest_difference(one.back(), loose.back()), 1e-2);
+}
+
+// No clamp, no gravity: thrown spinning, both halves free, the splice's joint force and
+// bending internal to the pair.
+TEST(RodSplice, AFreeSplicedRodFliesAsOneRod) {
+  const std::string spin = R"(, "node_velocities": [)";
+  // Node velocities of a spin about z through the middle plus a bend: v_i = ω × (x_i − c) + w_i.
+  const auto velocities = [](double x0, int nodes) {
+    std::string v;
+    for (int i = 0; i < nodes; ++i) {
+      const double x = x0 + 0.05 * i - 0.3;
+      v += (i ? ", " : "") + std::string("[0, ") + std::to_string(2.0 * x) + ", " + std::to_string(0.5 * x * x) + "]";
+    }
+    return v + "]";
+  };
+  auto free_scene = [&](const std::string& rods, const std::string& rest) {
+    std::string s = scene("dynamic", rods, rest);
+    s.replace(s.find(R"("gravity": [0, 0, -9.81])"), 24, R"("gravity": [0, 0, 0])");
+    return s;
+  };
+  std::vector<Shape> one, two;
+  run(free_scene(rod("r", 0, 0.6, 12, spin + velocities(0, 13)), ""), &one);
+  run(free_scene(rod("a", 0, 0.3, 6, spin + velocities(0, 7)) + ", " + rod("b", 0.3, 0.6, 6, spin + velocities(0.3, 7)),
+                 kSplice),
+      &two);
+  double worst = 0.0;
+  for (std::size_t k = 0; k < one.size(); ++k) worst = std::max(worst, largest_difference(one[k], two[k]));
+  EXPECT_LT(worst, kAgreement);
+  EXPECT_GT((one.back().nodes[0] - Vector3(0, 0, 0)).norm(), 1e-2);  // it moved
+}
+
+TEST(RodSplice, BadSplicesNameTheirField) {
+  const auto error = [](const std::string& joint, const std::string& optimization = "") {
+    try {
+      parse_scene(scene("dynamic", rod("a", 0, 0.3, 6, "") + ", " + rod("b", 0.3, 0.6, 6, ""),
+                        R"(, "bodies": [ { "name": "body", "mass": 1, "inertia": [1, 1, 1] } ], "joints": [ )" + joint + " ]" +
+                            optimization),
+                  "bad.json");
+    } catch (const SceneError& e) {
+      return e.field() + ": " + e.reason();
+    }
+    return std::string("accepted");
+  };
+  EXPECT_EQ(error(R"({ "type": "splice", "a": { "rod": "a", "node": 6 }, "b": { "rod": "b", "node": 0 } })"), "accepted");
+  EXPECT_EQ(error(R"({ "type": "splice", "a": { "rod": "a", "node": 5 }, "b": { "rod": "b", "node": 0 } })")
+                .rfind("joints[0].a.node: must be the last node of a rod (6 for rod \"a\")", 0),
+            0u);
+  EXPECT_EQ(error(R"({ "type": "splice", "a": { "rod": "a", "node": 6 }, "b": { "rod": "b", "node": 6 } })")
+                .rfind("joints[0].b.node: must be the first node of a rod (0 for rod \"b\")", 0),
+            0u);
+  EXPECT_EQ(error(R"({ "type": "splice", "a": { "body": "body" }, "b": { "rod": "b", "node": 0 } })")
+                .rfind("joints[0].a: a splice joins the last node of one rod (a) to the first node of another (b)", 0),
+            0u);
+  EXPECT_EQ(error(R"({ "type": "splice", "a": { "rod": "a", "edge": 5 }, "b": { "rod": "b", "node": 0 } })")
+                .rfind("joints[0].a: a splice joins", 0),
+            0u);
+  EXPECT_EQ(error(R"({ "type": "splice", "a": { "rod": "a", "node": 6 } })").rfind("joints[0].b: a splice joins", 0), 0u);
+  EXPECT_EQ(error(R"({ "type": "splice", "compliance_rotation": 1, "a": { "rod": "a", "node": 6 }, "b": { "rod": "b", "node": 0 } })")
+                .rfind("joints[0].compliance_rotation: a splice bends and twists as the rods do", 0),
+            0u);
+  EXPECT_EQ(error(R"({ "type": "splice", "a": { "rod": "a", "node": 6 }, "b": { "rod": "b", "node": 0 }, "limits": [-1, 1] })")
+                .rfind("joints[0].limits: only a hinge", 0),
+            0u);
+  EXPECT_NE(error(R"({ "type": "splice", "a": { "rod": "a", "node": 6 }, "b": { "rod": "b", "node": 0 } })",
+                  R"(, "optimization": { "parameters": [ { "kind": "bending_stiffness", "rod": "b" } ],
+                       "objective": [ { "term": "point_targets", "rod": "b", "frame": -1, "polyline": [[0, 0, 0], [1, 0, 0]] } ] })")
+                .find("is spliced (joints[0])"),
+            std::string::npos);
+}
+
+}  // namespace
+}  // namespace liedyn
