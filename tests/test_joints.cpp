@@ -499,7 +499,7 @@ TEST(Joints, BadJointsNameTheirField) {
             0u);
   EXPECT_EQ(error(R"({ "type": "slider", "a": { "body": "a", "axis": [1, 0, 0] } })"), "accepted");
   EXPECT_EQ(error(R"({ "type": "twist", "compliance": 1, "a": { "body": "a" } })")
-                .rfind("joints[0].type: unknown joint type \"twist\" (expected \"ball\", \"hinge\", \"slider\" or \"weld\")", 0),
+                .rfind("joints[0].type: unknown joint type \"twist\" (expected \"ball\", \"hinge\", \"slider\", \"weld\" or \"splice\")", 0),
             0u);
   EXPECT_EQ(error(R"({ "type": "ball", "compliance": 1, "a": { "body": "a" }, "b": { "rod": "x", "node": 0 } })")
                 .rfind("joints[0].b.rod: names no rod \"x\"", 0),
