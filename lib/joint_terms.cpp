@@ -41,6 +41,29 @@ double lagrangian(const Term& t, const State& q, LocalGradient<Term::kBlocks>* g
   return t.multiplier.dot(c) + 0.5 * t.stiffness * c.squaredNorm();
 }
 
+// A motor's value and derivatives: the sum of its ends' loads (a ConstantTorque or
+// ConstantForce each, over its own blocks: the two do not couple), end a's blocks first, then
+// end b's (zero for the world, load_b null).
+template <class Load, int B>
+double sum_of_end_loads(const Load& load_a, const Load* load_b, const State& q, LocalGradient<B>* g,
+                        LocalHessian<B>* H) {
+  constexpr int E = Load::kBlocks;
+  static_assert(B == 2 * E);
+  if (g != nullptr) g->setZero();
+  if (H != nullptr) H->setZero();
+  LocalGradient<E> g_end;
+  LocalHessian<E> H_end;
+  double value = 0.0;
+  for (int end = 0; end < 2; ++end) {
+    const Load* load = end == 0 ? &load_a : load_b;
+    if (load == nullptr) break;
+    value += load->evaluate(q, g != nullptr ? &g_end : nullptr, H != nullptr ? &H_end : nullptr);
+    if (g != nullptr) g->template segment<3 * E>(3 * E * end) = g_end;
+    if (H != nullptr) H->template block<3 * E, 3 * E>(3 * E * end, 3 * E * end) = H_end;
+  }
+  return value;
+}
+
 }  // namespace
 
 AttachedPoint JointPoint::shifted_a() const {
@@ -315,21 +338,8 @@ ConstantTorque JointMotor::end_torque(int end) const {
 }
 
 double JointMotor::evaluate(const State& q, LocalGradient<2>* g, LocalHessian<2>* H) const {
-  if (H != nullptr) H->setZero();  // the ends' torques do not couple
-  LocalGradient<1> g_end;
-  LocalHessian<1> H_end;
-  double value = 0.0;
-  for (int end = 0; end < 2; ++end) {
-    if (end == 1 && rotation_b < 0) {
-      if (g != nullptr) g->segment<3>(3).setZero();
-      break;
-    }
-    value += end_torque(end).evaluate(q, g != nullptr ? &g_end : nullptr,
-                                      H != nullptr ? &H_end : nullptr);
-    if (g != nullptr) g->segment<3>(3 * end) = g_end;
-    if (H != nullptr) H->block<3, 3>(3 * end, 3 * end) = H_end;
-  }
-  return value;
+  const ConstantTorque on_b = rotation_b >= 0 ? end_torque(1) : ConstantTorque{};
+  return sum_of_end_loads<ConstantTorque, kBlocks>(end_torque(0), rotation_b >= 0 ? &on_b : nullptr, q, g, H);
 }
 
 void JointMotor::add_step_adjoint(const State& q, const State&, const Step&,
@@ -374,16 +384,8 @@ ConstantForce JointForceMotor::end_force(int end) const {
 }
 
 double JointForceMotor::evaluate(const State& q, LocalGradient<4>* g, LocalHessian<4>* H) const {
-  if (H != nullptr) H->setZero();  // the ends' forces do not couple
-  LocalGradient<2> g_end;
-  LocalHessian<2> H_end;
-  double value = 0.0;
-  for (int end = 0; end < 2; ++end) {
-    value += end_force(end).evaluate(q, g != nullptr ? &g_end : nullptr, H != nullptr ? &H_end : nullptr);
-    if (g != nullptr) g->segment<6>(6 * end) = g_end;
-    if (H != nullptr) H->block<6, 6>(6 * end, 6 * end) = H_end;
-  }
-  return value;
+  const ConstantForce on_b = end_force(1);
+  return sum_of_end_loads<ConstantForce, kBlocks>(end_force(0), &on_b, q, g, H);
 }
 
 void JointForceMotor::add_step_adjoint(const State& q, const State&, const Step&,

@@ -438,6 +438,68 @@ TEST(AdjointTermJointMotor, ValueGradientAndHessianMatchFiniteDifferences) {
   EXPECT_EQ(checked, 6 * static_cast<int>(kAngles.size() * kAngles.size()));
 }
 
+// Helpers of the two motors' adjoint checks (they differ in their ends' loads only).
+// ∂C/∂(R_{k−1}) of the first `rotations` previous rotations, row by row from add_step_adjoint
+// with unit z; a motor reads nothing else of the previous state or step (asserted).
+template <class T>
+Eigen::MatrixXd previous_rotations_jacobian(const T& term, const State& q, const State& previous,
+                                            int rotations) {
+  constexpr int n = 3 * T::kBlocks;
+  Eigen::MatrixXd J(n, 3 * rotations);
+  for (int i = 0; i < n; ++i) {
+    LocalGradient<T::kBlocks> z = LocalGradient<T::kBlocks>::Zero();
+    z(i) = 1.0;
+    Eigen::VectorXd a_previous = Eigen::VectorXd::Zero(tangent_size(q));
+    Eigen::VectorXd da_previous = Eigen::VectorXd::Zero(tangent_size(q));
+    term.add_step_adjoint(q, previous, Step{}, z, a_previous, da_previous);
+    EXPECT_EQ(da_previous.squaredNorm(), 0.0);  // no dependence on the previous step
+    J.row(i) = a_previous.segment(tangent_rotation(q, 0), 3 * rotations).transpose();
+    a_previous.segment(tangent_rotation(q, 0), 3 * rotations).setZero();
+    EXPECT_EQ(a_previous.squaredNorm(), 0.0);
+  }
+  return J;
+}
+
+// C as a function of the previous state (begin_step again, C at the same q).
+template <class T>
+fd::VectorFunction gradient_of_previous(const T& term, const State& q) {
+  return [term, &q](const State& s) {
+    T t = term;
+    t.begin_step(s, Step{});
+    LocalGradient<T::kBlocks> g;
+    t.evaluate(q, &g, nullptr);
+    return Eigen::VectorXd(g);
+  };
+}
+
+// ∂C/∂(the scheduled effort), from add_parameter_adjoint with unit z (slot 0 for frame 1).
+template <class T>
+Eigen::MatrixXd effort_jacobian(T term, const State& q) {
+  constexpr int n = 3 * T::kBlocks;
+  term.control.slot = 0;
+  Eigen::MatrixXd J(n, 1);
+  for (int i = 0; i < n; ++i) {
+    LocalGradient<T::kBlocks> z = LocalGradient<T::kBlocks>::Zero();
+    z(i) = 1.0;
+    Eigen::VectorXd dgamma = Eigen::VectorXd::Zero(1);
+    term.add_parameter_adjoint(q, 1, z, dgamma);
+    J(i, 0) = dgamma(0);
+  }
+  return J;
+}
+
+// C as a function of the effort (a torque or force member `effort` of T).
+template <class T>
+ParameterFunction gradient_of_effort(const T& term, const State& q, double T::*effort) {
+  return [term, &q, effort](const Eigen::VectorXd& value) {
+    T t = term;
+    t.*effort = value(0);
+    LocalGradient<T::kBlocks> g;
+    t.evaluate(q, &g, nullptr);
+    return Eigen::VectorXd(g);
+  };
+}
+
 TEST(AdjointTermJointMotor, PreviousStepAndTorqueJacobiansMatchFiniteDifferences) {
   std::mt19937 rng(1032);
   int checked = 0;
@@ -449,50 +511,18 @@ TEST(AdjointTermJointMotor, PreviousStepAndTorqueJacobiansMatchFiniteDifferences
             SCOPED_TRACE(trace("world b, |τ|, scale", world_b, magnitude, scale));
             SCOPED_TRACE(trace("angles R_{k-1}, R", a_prev, a));
             const MotorCase c = motor_case(magnitude, scale, a_prev, a, world_b, rng);
-            // ∂C/∂(R_{a,k−1}, R_{b,k−1}), row by row from add_step_adjoint with unit z.
-            Eigen::MatrixXd J(6, 6);
-            for (int i = 0; i < 6; ++i) {
-              LocalGradient<2> z = LocalGradient<2>::Zero();
-              z(i) = 1.0;
-              Eigen::VectorXd a_previous = Eigen::VectorXd::Zero(tangent_size(c.q));
-              Eigen::VectorXd da_previous = Eigen::VectorXd::Zero(tangent_size(c.q));
-              c.term.add_step_adjoint(c.q, c.previous, Step{}, z, a_previous, da_previous);
-              EXPECT_EQ(da_previous.squaredNorm(), 0.0);  // no dependence on the previous step
-              J.row(i) = a_previous.segment<6>(tangent_rotation(c.q, 0)).transpose();
-            }
-            const fd::VectorFunction of_previous = [&](const State& s) {
-              JointMotor t = c.term;
-              t.begin_step(s, Step{});
-              LocalGradient<2> g;
-              t.evaluate(c.q, &g, nullptr);
-              return Eigen::VectorXd(g);
-            };
+            // ∂C/∂(R_{a,k−1}, R_{b,k−1}). The world's (b's) previous rotation is not a DOF.
+            Eigen::MatrixXd J = previous_rotations_jacobian(c.term, c.q, c.previous, world_b ? 1 : 2);
+            if (world_b) J.conservativeResize(Eigen::NoChange, 6), J.rightCols<3>().setZero();
             // C is built from P and ê (entries ≤ 1) times s|τ|.
-            if (world_b) J.rightCols<3>().setZero();
             EXPECT_TRUE(fd::check_vector_jacobian(
-                of_previous, c.previous,
+                gradient_of_previous(c.term, c.q), c.previous,
                 {fd::rotation_dof(0), world_b ? fd::no_dof() : fd::rotation_dof(1)}, J, {},
                 scale * magnitude));
-            // ∂C/∂τ, from add_parameter_adjoint with unit z (slot 0 for frame 1).
-            JointMotor with_slot = c.term;
-            with_slot.control.slot = 0;
-            Eigen::MatrixXd dtau(6, 1);
-            for (int i = 0; i < 6; ++i) {
-              LocalGradient<2> z = LocalGradient<2>::Zero();
-              z(i) = 1.0;
-              Eigen::VectorXd dgamma = Eigen::VectorXd::Zero(1);
-              with_slot.add_parameter_adjoint(c.q, 1, z, dgamma);
-              dtau(i, 0) = dgamma(0);
-            }
-            const ParameterFunction of_torque = [&](const Eigen::VectorXd& tau) {
-              JointMotor t = c.term;
-              t.torque = tau(0);
-              LocalGradient<2> g;
-              t.evaluate(c.q, &g, nullptr);
-              return Eigen::VectorXd(g);
-            };
-            EXPECT_TRUE(check_parameter_jacobian(of_torque, Eigen::VectorXd::Constant(1, c.term.torque),
-                                                 Eigen::VectorXd::Constant(1, unit_of(magnitude)), dtau));
+            EXPECT_TRUE(check_parameter_jacobian(gradient_of_effort(c.term, c.q, &JointMotor::torque),
+                                                 Eigen::VectorXd::Constant(1, c.term.torque),
+                                                 Eigen::VectorXd::Constant(1, unit_of(magnitude)),
+                                                 effort_jacobian(c.term, c.q)));
             ++checked;
           }
         }
@@ -571,48 +601,14 @@ TEST(AdjointTermJointForceMotor, PreviousStepAndForceJacobiansMatchFiniteDiffere
             SCOPED_TRACE(trace("world b, |f|, scale", world_b, magnitude, scale));
             SCOPED_TRACE(trace("angles R_{a,k-1}, R_a", a_prev, a));
             const ForceMotorCase c = force_motor_case(magnitude, scale, a_prev, a, world_b, rng);
-            // ∂C/∂R_{a,k−1}, row by row from add_step_adjoint with unit z; nothing else of
-            // the previous state or step is read.
-            Eigen::MatrixXd J(12, 3);
-            for (int i = 0; i < 12; ++i) {
-              LocalGradient<4> z = LocalGradient<4>::Zero();
-              z(i) = 1.0;
-              Eigen::VectorXd a_previous = Eigen::VectorXd::Zero(tangent_size(c.q));
-              Eigen::VectorXd da_previous = Eigen::VectorXd::Zero(tangent_size(c.q));
-              c.term.add_step_adjoint(c.q, c.previous, Step{}, z, a_previous, da_previous);
-              EXPECT_EQ(da_previous.squaredNorm(), 0.0);
-              J.row(i) = a_previous.segment<3>(tangent_rotation(c.q, 0)).transpose();
-              a_previous.segment<3>(tangent_rotation(c.q, 0)).setZero();
-              EXPECT_EQ(a_previous.squaredNorm(), 0.0);
-            }
-            const fd::VectorFunction of_previous = [&](const State& s) {
-              JointForceMotor t = c.term;
-              t.begin_step(s, Step{});
-              LocalGradient<4> g;
-              t.evaluate(c.q, &g, nullptr);
-              return Eigen::VectorXd(g);
-            };
-            EXPECT_TRUE(fd::check_vector_jacobian(of_previous, c.previous, {fd::rotation_dof(0)}, J));
-            // ∂C/∂f, from add_parameter_adjoint with unit z (slot 0 for frame 1).
-            JointForceMotor with_slot = c.term;
-            with_slot.control.slot = 0;
-            Eigen::MatrixXd df(12, 1);
-            for (int i = 0; i < 12; ++i) {
-              LocalGradient<4> z = LocalGradient<4>::Zero();
-              z(i) = 1.0;
-              Eigen::VectorXd dgamma = Eigen::VectorXd::Zero(1);
-              with_slot.add_parameter_adjoint(c.q, 1, z, dgamma);
-              df(i, 0) = dgamma(0);
-            }
-            const ParameterFunction of_force = [&](const Eigen::VectorXd& f) {
-              JointForceMotor t = c.term;
-              t.force = f(0);
-              LocalGradient<4> g;
-              t.evaluate(c.q, &g, nullptr);
-              return Eigen::VectorXd(g);
-            };
-            EXPECT_TRUE(check_parameter_jacobian(of_force, Eigen::VectorXd::Constant(1, c.term.force),
-                                                 Eigen::VectorXd::Constant(1, unit_of(magnitude)), df));
+            // ∂C/∂R_{a,k−1} (only a's previous rotation is read: the lagged axis).
+            EXPECT_TRUE(fd::check_vector_jacobian(gradient_of_previous(c.term, c.q), c.previous,
+                                                  {fd::rotation_dof(0)},
+                                                  previous_rotations_jacobian(c.term, c.q, c.previous, 1)));
+            EXPECT_TRUE(check_parameter_jacobian(gradient_of_effort(c.term, c.q, &JointForceMotor::force),
+                                                 Eigen::VectorXd::Constant(1, c.term.force),
+                                                 Eigen::VectorXd::Constant(1, unit_of(magnitude)),
+                                                 effort_jacobian(c.term, c.q)));
             ++checked;
           }
         }
