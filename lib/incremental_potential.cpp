@@ -95,7 +95,9 @@ void IncrementalPotential::scale_penalties(double factor) {
 }
 
 void IncrementalPotential::exact_forces(const State& q, std::vector<Vector3>& out) const {
-  for_each_exact_constraint(*this, [&](const auto& t) { out.push_back(t.force(q)); });
+  for_each_exact_constraint(*this, [&](const auto& t) {
+    out.push_back(t.adjoint ? t.multiplier : t.force(q));
+  });
 }
 
 void IncrementalPotential::set_adjoint_multipliers(const Vector3* multipliers) {
@@ -103,6 +105,12 @@ void IncrementalPotential::set_adjoint_multipliers(const Vector3* multipliers) {
     t.adjoint = true;
     t.multiplier = *multipliers++;
   });
+}
+
+int IncrementalPotential::exact_equalities() const {
+  int count = 0;
+  for_each_exact_equality([&](const auto&) { ++count; });
+  return count;
 }
 
 void IncrementalPotential::constraint_jacobian(const State& q, Eigen::MatrixXd& J) const {

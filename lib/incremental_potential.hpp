@@ -160,11 +160,37 @@ class IncrementalPotential {
   // to the Lagrangian λᵀc + ½ρ‖c‖² with λ from `multipliers` (exact_constraints() of them);
   // and c(q) with J = ∂c/∂q, 3 rows per exact term, in the component's tangent layout
   // (J sized by the caller: 3·exact_constraints() × dofs).
+  // (A term already in the Lagrangian form gives its `multiplier` as λ: the Ipopt back-end's.)
   void exact_forces(const State& q, std::vector<Vector3>& out) const;
   void set_adjoint_multipliers(const Vector3* multipliers);
   void constraint_jacobian(const State& q, Eigen::MatrixXd& J) const;
 
+  // ---- Exact equalities as a solver's own constraints (solvers/ipopt_step.hpp) ----------
+  // f(t) for every exact term that is an equality (Constraint, not Inequality; term.hpp), in
+  // the order of the terms: 3 rows c = t.constraint(q, J) each (kConstraintRank of them
+  // independent), and how many there are.
+  template <class Function>
+  void for_each_exact_equality(Function&& f) const {
+    exact_equalities_of(*this, f);
+  }
+  template <class Function>
+  void for_each_exact_equality(Function&& f) {
+    exact_equalities_of(*this, f);
+  }
+  int exact_equalities() const;
+
  private:
+  template <class Self, class Function>
+  static void exact_equalities_of(Self& self, Function& f) {
+    self.for_each_term_vector([&](auto& terms) {
+      using T = typename std::decay_t<decltype(terms)>::value_type;
+      if constexpr (Constraint<T> && !Inequality<T>) {
+        for (auto& t : terms) {
+          if (t.exact) f(t);
+        }
+      }
+    });
+  }
   template <class Tuple>
   struct VectorsOf;
   template <class... Ts>

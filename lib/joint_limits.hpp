@@ -84,6 +84,7 @@ struct JointLimit {
   static constexpr int kBlocks = Coordinate::kBlocks;
   static constexpr const char* kName = Coordinate::kName;
   static constexpr bool kEnergyOfState = true;
+  static constexpr bool kInequality = true;
   static constexpr int kResiduals = 1;
   using Residual = LocalResidual<1>;
   using ResidualJacobian = LocalResidualJacobian<1, kBlocks>;

@@ -140,6 +140,7 @@ struct JointLine : JointConstraintState<Vector3, 4> {
   static constexpr int kBlocks = 4;
   static constexpr const char* kName = "joint_line";
   static constexpr bool kEnergyOfState = true;
+  static constexpr int kConstraintRank = 2;  // c ⊥ n to first order (term.hpp)
   std::array<int, kBlocks> offsets{-1, -1, -1, -1};  // x_a, θ_a, x_b, θ_b
   AttachedPoint a, b;                                // a: a point with a rotation
   Vector3 axis_a = Vector3::UnitX();                 // â, unit, in a's body coordinates
@@ -167,6 +168,7 @@ struct JointAlignment : JointConstraintState<Vector3, 2> {
   static constexpr int kBlocks = 2;
   static constexpr const char* kName = "joint_alignment";
   static constexpr bool kEnergyOfState = true;
+  static constexpr int kConstraintRank = 2;  // c ⊥ a to first order (term.hpp)
   std::array<int, kBlocks> offsets{-1, -1};  // θ_a, θ_b
   int rotation_a = -1, rotation_b = -1;      // State::rotations, −1: the world (identity)
   Vector3 axis_a = Vector3::UnitZ();         // â, b̂: unit, in each end's body coordinates

@@ -54,7 +54,15 @@
 //                         and, for the adjoint (joint_terms.hpp): bool adjoint; Vector3
 //                         multiplier; Vector3 force(q) (λ); Vector3 constraint(q, J*) (c, ∂c).
 //                         An exact term is not an energy of the state (EnergyOfState is then
-//                         ignored): a constraint does no work.
+//                         ignored): a constraint does no work. With `adjoint` set the term is
+//                         the Lagrangian λᵀc + ½ρ‖c‖² with λ = `multiplier` (the adjoint's
+//                         backward solve, and the Ipopt back-end's equality constraints).
+//                         `static constexpr int kConstraintRank` (optional, default 3): how
+//                         many independent constraints c's 3 rows hold (a hinge's alignment
+//                         and a slider's line: 2, c being perpendicular to an axis).
+//   Inequality        — `static constexpr bool kInequality = true`: a Constraint that is one
+//                         sided, c = g ≤ 0 in row 0 (joint_limits.hpp); the others are
+//                         equalities c = 0 in all three rows.
 //
 // Least-squares form (HasResidual; inertia, springs, rod elasticity, contact; not the
 // linear loads):
@@ -151,6 +159,18 @@ concept Constraint = requires(T& t, const T& ct, const State& q,
   { ct.force(q) } -> std::same_as<Vector3>;
   { ct.constraint(q, J) } -> std::same_as<Vector3>;
 };
+
+template <class T>
+concept Inequality = Constraint<T> && requires { requires T::kInequality; };
+
+template <class T>
+constexpr int constraint_rank() {
+  if constexpr (requires { T::kConstraintRank; }) {
+    return T::kConstraintRank;
+  } else {
+    return 3;
+  }
+}
 
 // add_parameter_adjoint of a term whose value is proportional to its scalar `stiffness` k
 // (Ψ_t = k φ(q), so C = k ∇φ): ∂C/∂k = ∇φ, the term's gradient at k = 1. Adds nothing when

@@ -2,6 +2,7 @@
 #include "ipopt_status.hpp"
 
 #include <Eigen/Core>
+#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -152,11 +153,21 @@ class StepNlp final : public Ipopt::TNLP {
         measure_time_(options.measure_time),
         chart_(component),
         sink_(options.ipopt.hessian_approximation != "exact"),
+        lagrangian_sink_(options.ipopt.hessian_approximation != "exact"),
+        equalities_(component.potential.exact_equalities()),
+        no_multipliers_(static_cast<std::size_t>(equalities_), Vector3::Zero()),
+        multipliers_(no_multipliers_),
+        penalties_(static_cast<std::size_t>(equalities_), 0.0),
+        bases_(static_cast<std::size_t>(equalities_)),
+        ranks_(static_cast<std::size_t>(equalities_), 0),
         g_(component.dofs),
+        g_lagrangian_(component.dofs),
         x0_(component.dofs),
         x_state_(component.dofs),
         x_assembled_(component.dofs),
-        x_final_(component.dofs) {}
+        x_final_(component.dofs) {
+    record_constraint_rows();
+  }
 
   // Per step: clears the counters below.
   void begin_step() {
@@ -169,6 +180,11 @@ class StepNlp final : public Ipopt::TNLP {
   // θ = 0; rotvec: R₀ = I, θ = log R, and R ← exp(θ) so that both agree exactly).
   void start(State& q) {
     q_ = &q;
+    // The objective: Ψ without the exact equalities (λ = 0, ρ = 0; header); their ρ are kept
+    // for the shared test.
+    int i = 0;
+    component_.potential.for_each_exact_equality([&](const auto& t) { penalties_[i++] = t.stiffness; });
+    set_lagrangian(no_multipliers_, false);
     for (const DofBlock& b : component_.points) x0_.segment<3>(b.offset) = q.points[b.index];
     for (std::size_t i = 0; i < component_.rotations.size(); ++i) {
       const DofBlock& b = component_.rotations[i];
@@ -181,11 +197,18 @@ class StepNlp final : public Ipopt::TNLP {
         x0_.segment<3>(b.offset).setZero();
       }
     }
+    choose_constraint_rows(q);
     x_state_ = x0_;
     state_valid_ = true;
     assembled_valid_ = false;
     has_final_ = false;
     iterations_ = 0;
+  }
+
+  // At the end of a step without a final point from Ipopt: the exact equalities get their ρ
+  // back (λ = 0), as every consumer outside a solve expects.
+  void leave() {
+    if (penalties_out_) set_lagrangian(no_multipliers_, true);
   }
 
   // Assembles at the starting point (the pattern too, the first time); false if Ψ, g or H
@@ -195,10 +218,13 @@ class StepNlp final : public Ipopt::TNLP {
     return assembled_finite_;
   }
 
-  // Writes Ipopt's final point into q (lie: rotations re-orthonormalised, docs/design.md §2.3);
-  // false if Ipopt returned none.
+  // Writes Ipopt's final point into q (lie: rotations re-orthonormalised, docs/design.md §2.3)
+  // and its multipliers into the exact equalities, with their ρ back: the Lagrangian
+  // λᵀc + ½ρ‖c‖² the shared test sees, and the forces the adjoint reads. False if Ipopt
+  // returned none.
   bool write_final() {
     if (!has_final_) return false;
+    set_lagrangian(multipliers_, true);
     set_point(x_final_.data());
     if (!rotation_vectors_) {
       for (const DofBlock& b : component_.rotations) {
@@ -220,24 +246,28 @@ class StepNlp final : public Ipopt::TNLP {
   bool get_nlp_info(Ipopt::Index& n, Ipopt::Index& m, Ipopt::Index& nnz_jac_g,
                     Ipopt::Index& nnz_h_lag, IndexStyleEnum& index_style) override {
     n = component_.dofs;
-    m = 0;
-    nnz_jac_g = 0;
+    m = constraint_rows_;
+    nnz_jac_g = static_cast<Ipopt::Index>(jacobian_rows_.size());
     nnz_h_lag = sink_.nonzeros();
     index_style = C_STYLE;
     return true;
   }
 
-  bool get_bounds_info(Ipopt::Index n, Ipopt::Number* x_l, Ipopt::Number* x_u, Ipopt::Index,
-                       Ipopt::Number*, Ipopt::Number*) override {
-    // Beyond ±nlp_lower/upper_bound_inf (±1e19): no bounds.
+  bool get_bounds_info(Ipopt::Index n, Ipopt::Number* x_l, Ipopt::Number* x_u, Ipopt::Index m,
+                       Ipopt::Number* g_l, Ipopt::Number* g_u) override {
+    // Beyond ±nlp_lower/upper_bound_inf (±1e19): no bounds. The equalities: c = 0.
     std::fill(x_l, x_l + n, -1e20);
     std::fill(x_u, x_u + n, 1e20);
+    std::fill(g_l, g_l + m, 0.0);
+    std::fill(g_u, g_u + m, 0.0);
     return true;
   }
 
   bool get_starting_point(Ipopt::Index n, bool init_x, Ipopt::Number* x, bool, Ipopt::Number*,
-                          Ipopt::Number*, Ipopt::Index, bool, Ipopt::Number*) override {
+                          Ipopt::Number*, Ipopt::Index m, bool init_lambda,
+                          Ipopt::Number* lambda) override {
     if (init_x) std::copy(x0_.data(), x0_.data() + n, x);
+    if (init_lambda) std::fill(lambda, lambda + m, 0.0);
     return true;
   }
 
@@ -262,18 +292,46 @@ class StepNlp final : public Ipopt::TNLP {
     return assembled_finite_;
   }
 
-  bool eval_g(Ipopt::Index, const Ipopt::Number*, bool, Ipopt::Index, Ipopt::Number*) override {
-    return true;  // m = 0
+  // Pᵀc of every exact equality (its r rows, choose_constraint_rows).
+  bool eval_g(Ipopt::Index, const Ipopt::Number* x, bool, Ipopt::Index m, Ipopt::Number* g) override {
+    set_point(x);
+    int i = 0;
+    component_.potential.for_each_exact_equality([&](const auto& t) {
+      const Vector3 c = t.constraint(*q_, nullptr);
+      for (int k = 0; k < ranks_[i]; ++k) *g++ = bases_[i].col(k).dot(c);
+      ++i;
+    });
+    return std::all_of(g - m, g, [](double v) { return std::isfinite(v); });
   }
 
-  bool eval_jac_g(Ipopt::Index, const Ipopt::Number*, bool, Ipopt::Index, Ipopt::Index,
-                  Ipopt::Index*, Ipopt::Index*, Ipopt::Number*) override {
-    return true;  // m = 0
+  // ∂(Pᵀc)/∂(x, θ): Pᵀ times the terms' Lie Jacobian blocks, times J_l(θ) in a rotation's
+  // columns (a change ε of θ is the left perturbation J_l(θ) ε); r × 3 entries per block.
+  bool eval_jac_g(Ipopt::Index, const Ipopt::Number* x, bool, Ipopt::Index, Ipopt::Index nele_jac,
+                  Ipopt::Index* iRow, Ipopt::Index* jCol, Ipopt::Number* values) override {
+    if (nele_jac != static_cast<Ipopt::Index>(jacobian_rows_.size())) return false;
+    if (values == nullptr) {
+      std::copy(jacobian_rows_.begin(), jacobian_rows_.end(), iRow);
+      std::copy(jacobian_columns_.begin(), jacobian_columns_.end(), jCol);
+      return true;
+    }
+    set_point(x);
+    Ipopt::Number* v = values;
+    for_each_jacobian_block(*q_, [&](int i, int offset, const Matrix3& lie) {
+      const Matrix3* J_l = chart_.jacobian_at(offset);
+      const Matrix3 block = bases_[i].transpose() * (J_l == nullptr ? lie : Matrix3(lie * *J_l));
+      for (int k = 0; k < ranks_[i]; ++k) {
+        for (int j = 0; j < 3; ++j) *v++ = block(k, j);
+      }
+    });
+    return std::all_of(values, v, [](double e) { return std::isfinite(e); });
   }
 
-  // obj_factor · ∇²f, lower triangle: [H_xx, H_xθ J_l; ·, J_lᵀ H_θθ J_l + C(θ, g)].
+  // Lower triangle of obj_factor · ∇²f + Σ λᵀ∇²c, with f's charted Hessian
+  // [H_xx, H_xθ J_l; ·, J_lᵀ H_θθ J_l + C(θ, g)] and the constraints' part as the difference of
+  // two assemblies, with the multipliers λ and with none: the exact equalities' Lagrangian
+  // blocks ∇²(λᵀc) and the chart's C(θ, Jᵀλ), whatever obj_factor (0 in Ipopt's restoration).
   bool eval_h(Ipopt::Index, const Ipopt::Number* x, bool, Ipopt::Number obj_factor, Ipopt::Index,
-              const Ipopt::Number*, bool, Ipopt::Index nele_hess, Ipopt::Index* iRow,
+              const Ipopt::Number* lambda, bool, Ipopt::Index nele_hess, Ipopt::Index* iRow,
               Ipopt::Index* jCol, Ipopt::Number* values) override {
     if (nele_hess != sink_.nonzeros()) return false;
     if (values == nullptr) {
@@ -285,15 +343,31 @@ class StepNlp final : public Ipopt::TNLP {
     if (!assembled_finite_ || sink_.order_broken()) return false;
     const std::vector<double>& h = sink_.values();
     for (std::size_t k = 0; k < h.size(); ++k) values[k] = obj_factor * h[k];
-    return true;
+    if (equalities_ == 0) return true;
+    const auto t0 = measure_time_ ? Clock::now() : Clock::time_point{};
+    world_multipliers(lambda);
+    set_lagrangian(multipliers_, false);
+    const double value =
+        assemble_charted(component_.potential, *q_, g_lagrangian_, lagrangian_sink_, nullptr, &chart_);
+    set_lagrangian(no_multipliers_, false);
+    lagrangian_sink_.finish_recording();  // the first time only: the same calls as sink_'s
+    if (measure_time_) evaluation_seconds_ += seconds_since(t0);
+    const std::vector<double>& hl = lagrangian_sink_.values();
+    if (lagrangian_sink_.order_broken() || hl.size() != h.size() ||
+        !std::isfinite(value + g_lagrangian_.sum())) {
+      return false;
+    }
+    for (std::size_t k = 0; k < h.size(); ++k) values[k] += hl[k] - h[k];
+    return std::all_of(values, values + h.size(), [](double e) { return std::isfinite(e); });
   }
 
   void finalize_solution(Ipopt::SolverReturn, Ipopt::Index n, const Ipopt::Number* x,
                          const Ipopt::Number*, const Ipopt::Number*, Ipopt::Index,
-                         const Ipopt::Number*, const Ipopt::Number*, Ipopt::Number,
+                         const Ipopt::Number*, const Ipopt::Number* lambda, Ipopt::Number,
                          const Ipopt::IpoptData*, Ipopt::IpoptCalculatedQuantities*) override {
-    if (x == nullptr) return;
+    if (x == nullptr || (equalities_ > 0 && lambda == nullptr)) return;
     std::copy(x, x + n, x_final_.data());
+    world_multipliers(lambda);
     has_final_ = true;
   }
 
@@ -309,6 +383,85 @@ class StepNlp final : public Ipopt::TNLP {
   }
 
  private:
+  // f(i, offset, J_block) for every DOF block of every exact equality i's Lie Jacobian (its
+  // columns at `offset`), in a fixed order.
+  template <class Function>
+  void for_each_jacobian_block(const State& q, Function&& f) const {
+    int i = 0;
+    component_.potential.for_each_exact_equality([&](const auto& t) {
+      using T = std::decay_t<decltype(t)>;
+      typename T::ConstraintJacobian J;
+      t.constraint(q, &J);
+      for (int b = 0; b < T::kBlocks; ++b) {
+        if (t.offsets[b] >= 0) f(i, t.offsets[b], Matrix3(J.template block<3, 3>(0, 3 * b)));
+      }
+      ++i;
+    });
+  }
+
+  // The rows Ipopt sees (header): per exact equality, r = kConstraintRank rows Pᵀc (term.hpp;
+  // 2 for a hinge's alignment c = a − b and a slider's line c = n × d, whose 3 numbers hold 2
+  // constraints: 3 rows would make a rank-deficient Jacobian that Ipopt takes for a square
+  // system), and the Jacobian's pattern, in for_each_jacobian_block's order: r × 3 per DOF
+  // block.
+  void record_constraint_rows() {
+    std::vector<int> first_row;
+    component_.potential.for_each_exact_equality([&](const auto& t) {
+      first_row.push_back(constraint_rows_);
+      ranks_[first_row.size() - 1] = constraint_rank<std::decay_t<decltype(t)>>();
+      constraint_rows_ += ranks_[first_row.size() - 1];
+    });
+    int i = 0;
+    component_.potential.for_each_exact_equality([&](const auto& t) {
+      for (const int offset : t.offsets) {
+        if (offset < 0) continue;
+        for (int k = 0; k < ranks_[i]; ++k) {
+          for (int j = 0; j < 3; ++j) {
+            jacobian_rows_.push_back(first_row[i] + k);
+            jacobian_columns_.push_back(offset + j);
+          }
+        }
+      }
+      ++i;
+    });
+  }
+
+  // P per exact equality at the start of a solve: the r leading eigenvectors of J Jᵀ (J its
+  // Lie Jacobian over the DOF blocks), the directions c moves in; for r = 2 the one dropped
+  // is along the axis (a + b for the alignment, n for the line), in which c is second order.
+  // P is constant within a solve, so the rows' derivatives are Pᵀ times the terms', and
+  // Pᵀc = 0 is c = 0 near the start.
+  void choose_constraint_rows(const State& q) {
+    if (equalities_ == 0) return;
+    std::vector<Matrix3> JJt(static_cast<std::size_t>(equalities_), Matrix3::Zero());
+    for_each_jacobian_block(q, [&](int i, int, const Matrix3& J) { JJt[i] += J * J.transpose(); });
+    for (int i = 0; i < equalities_; ++i) {
+      const Eigen::SelfAdjointEigenSolver<Matrix3> eigen(JJt[i]);  // ascending eigenvalues
+      for (int k = 0; k < 3; ++k) bases_[i].col(k) = eigen.eigenvectors().col(2 - k);
+    }
+  }
+
+  // Every exact equality as the Lagrangian λᵀc + ½ρ‖c‖² (term.hpp, Constraint) with λ from
+  // `multipliers` and ρ its own (with_penalties) or 0.
+  void set_lagrangian(const std::vector<Vector3>& multipliers, bool with_penalties) {
+    int i = 0;
+    component_.potential.for_each_exact_equality([&](auto& t) {
+      t.adjoint = true;
+      t.multiplier = multipliers[i];
+      t.stiffness = with_penalties ? penalties_[i] : 0.0;
+      ++i;
+    });
+    penalties_out_ = !with_penalties && equalities_ > 0;
+  }
+
+  // λ = P λ̃ (world) of every exact equality from Ipopt's λ̃ of its rows.
+  void world_multipliers(const Ipopt::Number* lambda) {
+    for (int i = 0; i < equalities_; ++i) {
+      multipliers_[i].setZero();
+      for (int k = 0; k < ranks_[i]; ++k) multipliers_[i] += *lambda++ * bases_[i].col(k);
+    }
+  }
+
   bool same_point(const Ipopt::Number* x, const Eigen::VectorXd& y) const {
     return std::equal(x, x + component_.dofs, y.data());
   }
@@ -356,8 +509,19 @@ class StepNlp final : public Ipopt::TNLP {
   double tolerance_;
   bool measure_time_;
   RotationVectorChart chart_;
-  LowerTriangleSink sink_;
+  LowerTriangleSink sink_;             // f's Hessian (the exact equalities at λ = 0)
+  LowerTriangleSink lagrangian_sink_;  // the same assembly at Ipopt's λ (eval_h)
+  int equalities_;                     // exact equality terms
+  std::vector<Vector3> no_multipliers_;
+  std::vector<Vector3> multipliers_;  // P λ̃ per equality (eval_h, then the final one)
+  std::vector<double> penalties_;     // per equality: its ρ, while Ipopt sees ρ = 0
+  bool penalties_out_ = false;        // the terms hold ρ = 0 (during a solve)
+  std::vector<Matrix3> bases_;        // per equality: P in its leading ranks_ columns
+  std::vector<int> ranks_;            // per equality: r, its rows in Ipopt's problem
+  int constraint_rows_ = 0;           // Σ r
+  std::vector<Ipopt::Index> jacobian_rows_, jacobian_columns_;
   Eigen::VectorXd g_;            // charted gradient at x_assembled_
+  Eigen::VectorXd g_lagrangian_;  // the Lagrangian assembly's (unused but for finiteness)
   Eigen::VectorXd x0_;           // starting point
   Eigen::VectorXd x_state_;      // the point *q_ holds (if state_valid_)
   Eigen::VectorXd x_assembled_;  // the point of value_, g_ and the sink (if assembled_valid_)
@@ -466,6 +630,7 @@ class IpoptStepSolver final : public StepSolver {
         report.assembly_seconds = nlp_->evaluation_seconds() + test_assembly_seconds;
         report.solve_seconds = ipopt_seconds + test_solve_seconds;
       }
+      nlp_->leave();
       if (!report.state_updated()) entry_.restore(c, q);
       return report;
     };

@@ -60,6 +60,53 @@ Model small_rod() {
   return model;
 }
 
+// Four links under gravity, all oriented far from the identity, joined by exact joints of
+// every equality type: link 0 hinged to the world (point + axis alignment), link 1 on a ball
+// joint to it, link 2 welded to link 1, link 3 on a slider along link 2's x axis (line +
+// weld). Each link has its own initial velocity, so the predicted start of the step violates
+// every joint (Ipopt starts infeasible). With weld_compliance > 0 the welds' rotational parts
+// (the weld's, the slider's) are elastic, of that compliance (rad/(N·m)).
+Model jointed_links(double weld_compliance = 0.0) {
+  Model model;
+  model.time_step = 0.01;
+  model.gravity = Vector3(0.0, 0.0, -9.81);
+  const Matrix3 R0 = so3::exp(Vector3(0.3, -2.0, 1.0));
+  for (int i = 0; i < 4; ++i) {
+    RigidBody body;
+    body.name = "link" + std::to_string(i);
+    body.mass = 0.5;
+    body.inertia = Vector3(0.01, 0.02, 0.025).asDiagonal();
+    body.position = Vector3(0.25 + 0.5 * i, 0.0, 0.0);
+    body.orientation = R0;
+    body.linear_velocity = Vector3(0.1 * i, 0.3, -0.2);
+    body.angular_velocity = Vector3(1.0, -2.0, 0.5) * (0.5 + 0.3 * i);
+    model.bodies.push_back(body);
+  }
+  // The joint between links i − 1 (b; the world for i = 0) and i (a) at world x = 0.5 i.
+  const auto joint = [&](JointSpec::Type type, int i) {
+    JointSpec j;
+    j.type = type;
+    const Vector3 w(0.5 * i, 0.0, 0.0);
+    j.a = JointEnd::body(i, R0.transpose() * (w - model.bodies[i].position));
+    j.b = i == 0 ? JointEnd::world(w)
+                 : JointEnd::body(i - 1, R0.transpose() * (w - model.bodies[i - 1].position));
+    return j;
+  };
+  JointSpec hinge = joint(JointSpec::Type::kHinge, 0);
+  hinge.axis_a = R0.transpose() * Vector3::UnitY();
+  hinge.axis_b = Vector3::UnitY();
+  model.joints.push_back(hinge);
+  model.joints.push_back(joint(JointSpec::Type::kBall, 1));
+  JointSpec weld = joint(JointSpec::Type::kWeld, 2);
+  weld.compliance_rotation = weld_compliance;
+  model.joints.push_back(weld);
+  JointSpec slider = joint(JointSpec::Type::kSlider, 3);
+  slider.axis_a = R0.transpose() * Vector3::UnitX();
+  slider.compliance_rotation = weld_compliance;
+  model.joints.push_back(slider);
+  return model;
+}
+
 struct NamedModel {
   const char* name;
   Model (*make)();
@@ -207,6 +254,92 @@ TEST(IpoptStep, MatchesNewtonsStep) {
         EXPECT_LT((R.transpose() * R - Matrix3::Identity()).cwiseAbs().maxCoeff(), 1e-14);
       }
     }
+  }
+}
+
+// One step of `model` under Ipopt from the perturbed start (which violates every joint), its
+// derivative checker at `level` writing into `log`; the solver's exact forces after it.
+StepReport ipopt_step_with_checker(const Model& model, RotationParameterization rotation,
+                                   const std::string& level, const std::filesystem::path& log,
+                                   State& q, std::vector<Vector3>& forces) {
+  SolverOptions options = ipopt_options(rotation);
+  options.ipopt.derivative_test = level;
+  options.ipopt.output_file = log.string();
+  Started s = started(model, /*perturbed=*/true);
+  EXPECT_GT(s.component.potential.constraint_violation(s.q), 1e-3);
+  auto ipopt = make_ipopt_step_solver(std::move(s.component), options);
+  const StepReport report = ipopt->solve(s.q);
+  forces.clear();
+  ipopt->component().potential.exact_forces(s.q, forces);
+  q = s.q;
+  return report;  // the solver closes its output file
+}
+
+::testing::AssertionResult checker_found_no_errors(const std::filesystem::path& log,
+                                                   const std::string& level) {
+  const std::string text = read_file(log);
+  const std::string started =
+      level == "second-order" ? "Starting derivative checker for second derivatives."
+                              : "Starting derivative checker for first derivatives.";
+  const int runs = count(text, started);
+  if (runs < 1 || count(text, "No errors detected by derivative checker.") != runs ||
+      count(text, "Derivative checker detected") != 0) {
+    return ::testing::AssertionFailure() << text.substr(0, 6000);
+  }
+  return ::testing::AssertionSuccess();
+}
+
+TEST(IpoptStep, ExactJointsAreItsEqualityConstraints) {
+  // Ipopt's checker on the constraints' Jacobian (first order, every exact joint part) and on
+  // the Lagrangian's Hessian (second order: the multipliers' part ∇²(λᵀc) of the points, the
+  // slider's line and the hinge's alignment, exact; with the welds' rotations elastic, since
+  // the weld's ∇²(λᵀc) is taken at E = I, joint_terms.hpp), from a start that violates every
+  // joint. Then the step Ipopt ends with (no multiplier update: its own constraints) against
+  // Newton's augmented Lagrangian from the same start, and the joints' forces: Ipopt's P λ̃
+  // against ρ(c + s), as the generalised forces Jᵀλ they exert (the alignment's and the
+  // line's λ along their axis, where c is second order, exert none and differ).
+  const TemporaryDirectory dir;
+  for (const RotationParameterization rotation : kRotations) {
+    SCOPED_TRACE(to_string(rotation));
+    const std::string name = to_string(rotation);
+    State q;
+    std::vector<Vector3> forces_ipopt, forces_newton;
+    const StepReport elastic_welds = ipopt_step_with_checker(
+        jointed_links(1e-3), rotation, "second-order", dir.path / (name + "_2.txt"), q, forces_ipopt);
+    EXPECT_TRUE(elastic_welds.converged()) << elastic_welds.message;
+    EXPECT_TRUE(checker_found_no_errors(dir.path / (name + "_2.txt"), "second-order"));
+
+    const Model model = jointed_links();
+    const StepReport ri = ipopt_step_with_checker(model, rotation, "first-order",
+                                                  dir.path / (name + "_1.txt"), q, forces_ipopt);
+    EXPECT_TRUE(checker_found_no_errors(dir.path / (name + "_1.txt"), "first-order"));
+    Started b = started(model, /*perturbed=*/true);
+    const State start = b.q;
+    ASSERT_EQ(b.component.potential.exact_equalities(), 7);  // hinge 2, ball 1, weld 2, slider 2
+    SolverOptions newton_options = ipopt_options(rotation);
+    newton_options.backend = Backend::kNewton;
+    auto newton = make_newton(std::move(b.component), newton_options);
+    const StepReport rn = newton->solve(b.q);
+    newton->component().potential.exact_forces(b.q, forces_newton);
+    ASSERT_TRUE(ri.converged()) << to_string(ri.status) << ": " << ri.message;
+    ASSERT_TRUE(rn.converged()) << rn.message;
+    EXPECT_EQ(ri.multiplier_updates, 0);
+    EXPECT_GT(rn.multiplier_updates, 0);
+    EXPECT_LE(ri.constraint_violation, newton_options.tolerance);
+    const Component& c = newton->component();
+    EXPECT_GT(max_difference(c, q, start), 1e-3);
+    EXPECT_LT(max_difference(c, q, b.q), 10.0 * newton_options.tolerance);
+    ASSERT_EQ(forces_ipopt.size(), forces_newton.size());
+    Eigen::MatrixXd J(3 * static_cast<Eigen::Index>(forces_newton.size()), c.dofs);
+    c.potential.constraint_jacobian(b.q, J);
+    Eigen::VectorXd li(J.rows()), ln(J.rows());
+    for (std::size_t i = 0; i < forces_newton.size(); ++i) {
+      li.segment<3>(3 * static_cast<Eigen::Index>(i)) = forces_ipopt[i];
+      ln.segment<3>(3 * static_cast<Eigen::Index>(i)) = forces_newton[i];
+    }
+    const double generalised = (J.transpose() * ln).norm();
+    EXPECT_GT(generalised, 1.0);
+    EXPECT_LT((J.transpose() * (li - ln)).norm(), 1e-6 * generalised);
   }
 }
 
