@@ -1,7 +1,7 @@
 #pragma once
-// The backward-Euler step as an unconstrained NLP for Ipopt 3.11 (docs/design.md §9.4): minimise
-// the component's incremental potential Ψ (paper §4.2) over n = component.dofs variables,
-// with no constraints (m = 0) and no bounds. Ipopt has no manifolds, so each rotation is
+// The backward-Euler step as an NLP for Ipopt 3.11 (docs/design.md §9.4): minimise the
+// component's incremental potential Ψ (paper §4.2) over n = component.dofs variables, with no
+// bounds, subject to its exact joints (below) as equality constraints. Ipopt has no manifolds, so each rotation is
 // written in a chart around a reference R₀ (manifolds/rotation_chart.hpp):
 //   positions   x            (the variables themselves),
 //   rotations   R = exp(θ) R₀,   θ ∈ R³ the variables.
@@ -10,6 +10,24 @@
 //   * rotvec: R₀ = I and θ = log R (‖θ‖ ≤ π at the start) — global rotation vectors, the
 //     unknowns of Newton's rotation-vector parameterisation (solvers/newton.hpp).
 // (quat is rejected by SolverOptions::validate: it would need the unit-norm constraint.)
+//
+// Exact joints (term.hpp, Constraint; joint_terms.hpp) are Ipopt's own equalities, not the
+// augmented Lagrangian the other back-ends run: f is Ψ without them (each held at λ = 0,
+// ρ = 0 while Ipopt evaluates), and each exact joint part gives r = kConstraintRank rows
+// Pᵀc(q) = 0, P the r leading eigenvectors of J Jᵀ at the start of the solve (J = ∂c, the
+// part's Lie Jacobian; 3 rows for a point or a weld, 2 for a hinge's alignment and a slider's
+// line, whose third direction, along the axis, is second order in c and would make the
+// Jacobian rank-deficient). Their Jacobian is Pᵀ J with J_l(θ) in rotation columns; the
+// Lagrangian's Hessian obj_factor ∇²f + Σ λ̃ᵀ∇²(Pᵀc) comes from a second assembly with each
+// part at λ = P λ̃ (its Lagrangian form λᵀc: the points', the line's and the alignment's
+// ∇²(λᵀc) exact, the weld's taken at E = I, exact where it holds), less the first. When Ipopt
+// stops, each part is left in its Lagrangian form with Ipopt's λ = P λ̃ and its own ρ:
+// λᵀc + ½ρ‖c‖², whose Newton step is the shared test below, and whose λ is the joint's force
+// (IncrementalPotential::exact_forces, read by the adjoint). A λ along a dropped axis does no
+// work (Jᵀ of it is second order), so P λ̃ and the augmented Lagrangian's ρ(c + s) differ
+// there and only there. Joint limits (inequalities) stay in f as their augmented-Lagrangian
+// penalties, updated by StepSolver::solve (an interior-point barrier would have to be driven
+// to μ → 0 within every step to hold a stop to the tolerance).
 //
 // Derivatives (manifolds/rotation_vector.hpp), exact, from the Lie gradient g and Lie
 // Hessian H that the terms provide (docs/design.md §1.4):
