@@ -419,6 +419,32 @@ TEST(IpoptStep, NonFinitePotentialFailsWithoutMovingTheState) {
   }
 }
 
+TEST(IpoptStep, AFailedStepGivesTheExactJointsTheirPenaltiesBack) {
+  // While Ipopt evaluates, the exact joints are held at ρ = 0 (ipopt_step.hpp); a step that
+  // fails without a final point must leave them with their own ρ and no multiplier, as every
+  // consumer outside a solve (the shared test, the next step, the forces) expects.
+  Started s = started(jointed_links(), /*perturbed=*/true);
+  std::vector<double> penalties;
+  s.component.potential.for_each_exact_equality([&](const auto& t) { penalties.push_back(t.stiffness); });
+  ASSERT_EQ(penalties.size(), 7u);
+  Gravity huge;  // as in IpoptErrorIsSolverFailedAndNamesTheStatus below
+  huge.offsets = {s.component.points.front().offset};
+  huge.point = s.component.points.front().index;
+  huge.weight = Vector3(1e300, 0.0, 0.0);
+  s.component.potential.terms<Gravity>().push_back(huge);
+  auto solver = make_ipopt_step_solver(std::move(s.component), ipopt_options(RotationParameterization::kLie));
+  const StepReport report = solver->solve(s.q);
+  ASSERT_EQ(report.status, StepStatus::kSolverFailed) << report.message;
+  std::size_t i = 0;
+  solver->component().potential.for_each_exact_equality([&](const auto& t) {
+    EXPECT_EQ(t.stiffness, penalties[i++]);
+    EXPECT_EQ(t.multiplier, Vector3::Zero());
+  });
+  std::vector<Vector3> forces;
+  solver->component().potential.exact_forces(s.q, forces);
+  for (const Vector3& f : forces) EXPECT_EQ(f, Vector3::Zero());
+}
+
 TEST(IpoptStep, IpoptErrorIsSolverFailedAndNamesTheStatus) {
   for (const RotationParameterization rotation : kRotations) {
     SCOPED_TRACE(to_string(rotation));
