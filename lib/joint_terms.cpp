@@ -22,6 +22,16 @@ double weld_curvature_coefficient(double t) {
   return 1.0 / (t * t) - 1.0 / (2.0 * t * std::tan(0.5 * t));
 }
 
+// c'(t)/t for the derivative of J_l⁻¹ (the weld's Lagrangian, header), with its series below
+// t = 0.25, where the closed form −2/t⁴ + csc²(t/2)/(4t²) + cot(t/2)/(2t³) loses digits to
+// cancellation (720 eps/t⁴ relative); the series' first omitted term is below 1e-10 there.
+double weld_curvature_slope(double t) {
+  const double t2 = t * t;
+  if (t < 0.25) return 1.0 / 360.0 + t2 / 7560.0 + t2 * t2 / 201600.0 + t2 * t2 * t2 / 5987520.0;
+  const double s = std::sin(0.5 * t);
+  return -2.0 / (t2 * t2) + 1.0 / (4.0 * t2 * s * s) + 1.0 / (2.0 * t2 * t * std::tan(0.5 * t));
+}
+
 // R_aᵀ v: a world vector in the body coordinates of end a (v itself without a rotation).
 Vector3 in_body_a(const State& q, int rotation_a, const Vector3& v) {
   return rotation_a < 0 ? v : Vector3(q.rotations[rotation_a].transpose() * v);
@@ -267,12 +277,28 @@ void JointWeld::update_multiplier(const State& q) {
 }
 
 double JointWeld::evaluate(const State& q, LocalGradient<2>* g, LocalHessian<2>* H) const {
-  if (adjoint) {  // + ∇²(λᵀφ) at E = I (header): the mixed blocks ½ hat(λ) E
+  if (adjoint) {  // + ∇²(λᵀφ) (header)
     const double value = lagrangian(*this, q, g, H);
     if (H != nullptr) {
       const Matrix3 E = end_rotation(q, rotation_a) * frame_a *
                         (end_rotation(q, rotation_b) * frame_b).transpose();
-      const Matrix3 mixed = 0.5 * so3::hat(multiplier) * E;
+      const Vector3 phi = so3::log(E);
+      const Matrix3 J_inverse = so3::left_jacobian_inverse(phi);
+      const double t = phi.norm();
+      const double c = weld_curvature_coefficient(t), slope = weld_curvature_slope(t);
+      const Matrix3 P = so3::hat(phi);
+      // M = sym(M̃), row i of M̃ = λᵀ D(J_l⁻¹)(φ)[J_l⁻¹ e_i].
+      Matrix3 M;
+      for (int i = 0; i < 3; ++i) {
+        const Vector3 w = J_inverse.col(i);
+        const Matrix3 W = so3::hat(w);
+        const Matrix3 D = -0.5 * W + slope * phi.dot(w) * P * P + c * (W * P + P * W);
+        M.row(i) = multiplier.transpose() * D;
+      }
+      M = (0.5 * (M + M.transpose())).eval();
+      const Matrix3 mixed = -M * E + 0.5 * so3::hat(J_inverse.transpose() * multiplier) * E;
+      H->block<3, 3>(0, 0) += M;
+      H->block<3, 3>(3, 3) += E.transpose() * M * E;
       H->block<3, 3>(0, 3) += mixed;
       H->block<3, 3>(3, 0) += mixed.transpose();
     }

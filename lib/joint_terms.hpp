@@ -20,7 +20,7 @@
 // with ρ its `stiffness`: H_adj is V_adj's Hessian at c = 0 (at the converged step c is at the
 // tolerance), and the M = K + ρ JᵀJ the adjoint's bordered solve needs (any ρ > 0 that
 // keeps M positive definite gives the same adjoint, docs/design.md §8.6). ∇²(λᵀc) is exact
-// for the point and the hinge axis; for the weld it is taken at E = I (below).
+// for the point, the hinge axis and the weld (below).
 //
 // Translation (JointPoint). c = p_b − p_a with p = x + R p̄ (AttachedPoint); shift s:
 //   V = ½ k ‖p_b − (p_a − R_a s)‖²,   s ← s + R_aᵀ c,
@@ -58,10 +58,16 @@
 // are k {0, 2, τ ± √(τ² + t²/4) (twice each)} — ½ dist(F_a, F_b)² is not jointly convex on
 // SO(3) × SO(3), which is curved — so Newton regularises away from rest (solvers/newton.hpp).
 // Residual form: r = √k φ, J = √k [J_l⁻¹(φ), −J_l⁻¹(φ) E] (Jᵀ r = k [φ, −φ]).
-// Adjoint: ∇²(μᵀφ) at E = I. There log(exp(θ_a) exp(−θ_b)) = θ_a − θ_b − ½ θ_a × θ_b + O(3),
-// so μᵀφ has no diagonal curvature and the mixed blocks D²/Dθ_a Dθ_b = ½ hat(μ),
-// D²/Dθ_b Dθ_a = −½ hat(μ); off E = I they are first order in ‖φ‖ (the exact joint holds to
-// the tolerance at every converged step).
+// Adjoint (and Ipopt's Lagrangian): ∇²(λᵀφ), exact at every E. With w as above,
+// log(exp(w) exp(φ)) = φ + J_l⁻¹(φ) w + ½ D(J_l⁻¹)(φ)[J_l⁻¹(φ) w] w + O(3) (the derivative of
+// u ↦ log(exp(u) exp(φ)) is J_l⁻¹(L(u)) J_l(u), and J_l(u) = I + ½ hat(u) + …, whose part
+// ½ hat(w) w vanishes), and
+//   D(J_l⁻¹)(φ)[v] = −½ hat(v) + (c'(t)/t)(φ·v) hat(φ)² + c(t) (hat(v) hat(φ) + hat(φ) hat(v)).
+// So with M = sym(M̃), M̃'s row i = λᵀ D(J_l⁻¹)(φ)[J_l⁻¹(φ) e_i], and μ = J_l⁻¹(φ)ᵀ λ:
+//   D²/Dθ_a² = M,   D²/Dθ_b² = Eᵀ M E,   D²/Dθ_a Dθ_b = −M E + ½ hat(μ) E,
+// the last term from the BCH part −½ θ_a × (E θ_b) of w. At E = I, M = 0 and μ = λ.
+// (For λ = kφ this is k(H_φ − J_l⁻ᵀ J_l⁻¹) on the diagonal: V's Hessian less its Gauss–Newton
+// part, a check.)
 // Exact: the shift is a rotation S of frame a, E = R_a A S Bᵀ R_bᵀ (A S in place of A), and
 // c = log(F_a F_bᵀ) with the joint's own A. The update S ← (F_bᵀ F_a) S is s ← s + c to first
 // order: once the joint holds (F_a = F_b = F) the shifted E becomes F S' Fᵀ, which keeps the

@@ -19,8 +19,8 @@
 // line, whose third direction, along the axis, is second order in c and would make the
 // Jacobian rank-deficient). Their Jacobian is Pᵀ J with J_l(θ) in rotation columns; the
 // Lagrangian's Hessian obj_factor ∇²f + Σ λ̃ᵀ∇²(Pᵀc) comes from a second assembly with each
-// part at λ = P λ̃ (its Lagrangian form λᵀc: the points', the line's and the alignment's
-// ∇²(λᵀc) exact, the weld's taken at E = I, exact where it holds), less the first. When Ipopt
+// part at λ = P λ̃ (its Lagrangian form λᵀc, whose ∇²(λᵀc) is exact for every part), less
+// the first. When Ipopt
 // stops, each part is left in its Lagrangian form with Ipopt's λ = P λ̃ and its own ρ:
 // λᵀc + ½ρ‖c‖², whose Newton step is the shared test below, and whose λ is the joint's force
 // (IncrementalPotential::exact_forces, read by the adjoint). A λ along a dropped axis does no

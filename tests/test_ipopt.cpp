@@ -292,8 +292,8 @@ StepReport ipopt_step_with_checker(const Model& model, RotationParameterization 
 TEST(IpoptStep, ExactJointsAreItsEqualityConstraints) {
   // Ipopt's checker on the constraints' Jacobian (first order, every exact joint part) and on
   // the Lagrangian's Hessian (second order: the multipliers' part ∇²(λᵀc) of the points, the
-  // slider's line and the hinge's alignment, exact; with the welds' rotations elastic, since
-  // the weld's ∇²(λᵀc) is taken at E = I, joint_terms.hpp), from a start that violates every
+  // slider's line and the hinge's alignment, with the welds' rotations elastic here; the
+  // weld's own ∇²(λᵀc) is FD-tested off E = I in test_joint_adjoint.cpp), from a start that violates every
   // joint. Then the step Ipopt ends with (no multiplier update: its own constraints) against
   // Newton's augmented Lagrangian from the same start, and the joints' forces: Ipopt's P λ̃
   // against ρ(c + s), as the generalised forces Jᵀλ they exert (the alignment's and the

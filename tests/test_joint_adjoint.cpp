@@ -17,6 +17,7 @@
 #include <limits>
 #include <numbers>
 #include <random>
+#include <vector>
 
 #include "fd_check.hpp"
 #include "lib/joint_terms.hpp"
@@ -205,6 +206,67 @@ TEST(JointAdjoint, LagrangiansMatchFiniteDifferencesWhereTheJointHolds) {
 // 1e-3, the penalty's gradient is Jᵀ force — although the shifted term's Jacobian J_s differs
 // from J (the point's lever is moved by R_a s, the axis is R_a (â + s)), the difference
 // meets a force parallel to R_a s (the point) or a cross product with a = b (the axis).
+TEST(JointAdjoint, TheWeldsLagrangianIsExactWhereTheWeldDoesNotHold) {
+  // λᵀφ (ρ = 0: the multipliers' part Ipopt's Lagrangian Hessian takes from it) at relative
+  // angles of E = R_a A Bᵀ R_bᵀ from 1e-9 to π − 1e-3 (J_l⁻¹ grows as cot(t/2) towards π),
+  // body rotations over the angle list, end b a body or the world, |λ| 1 and 1e3: value,
+  // Lie gradient and Hessian by central differences. And, with λ = kφ and ρ = k, the
+  // Lagrangian's Hessian ρJᵀJ + ∇²(λᵀφ) is the elastic weld's k(JᵀJ + ∇²φ·φ), to round-off.
+  std::mt19937 rng(977);
+  const std::vector<double> relative = {1e-9, 1e-4, 0.1, 0.3, 1.0, 2.5, std::numbers::pi - 1e-3};
+  int checked = 0;
+  for (const bool world_b : {false, true}) {
+    for (std::size_t i = 0; i < relative.size(); ++i) {
+      for (const double size : {1.0, 1e3}) {
+        const double angle_a = kAngles[i % kAngles.size()], angle_b = kAngles[(i + 4) % kAngles.size()];
+        SCOPED_TRACE(trace("relative angle, |λ|, world b", relative[i], size, world_b));
+        SCOPED_TRACE(trace("angles a, b", angle_a, angle_b));
+        Ends e = ends(angle_a, angle_b, world_b, rng);
+        JointWeld t = weld_term(e, world_b, rng);
+        const Matrix3 R_b = world_b ? Matrix3::Identity() : e.q.rotations[1];
+        const Vector3 n = random_unit(rng);
+        t.frame_b = so3::orthonormalize(R_b.transpose() * so3::exp(-relative[i] * n) *
+                                        e.q.rotations[0] * t.frame_a);
+        ASSERT_NEAR(t.constraint(e.q, nullptr).norm(), relative[i], 1e-12);
+        t.exact = true;
+        t.adjoint = true;
+        t.stiffness = 0.0;
+        t.multiplier = size * random_unit(rng);
+        // λᵀφ carries the absolute round-off eps·|λ| of log(E) (entries of size 1); near π
+        // J_l⁻¹ magnifies it by up to |cot(t/2)|·t/2 ~ 2/(π − t).
+        fd::TermCheckOptions opt;
+        const double roundoff = 16.0 * std::numeric_limits<double>::epsilon() * size *
+                                (relative[i] > 3.0 ? 2.0 / (std::numbers::pi - relative[i]) : 1.0);
+        opt.gradient.abs_floor = roundoff / opt.gradient.step;
+        opt.hessian.abs_floor = roundoff / opt.hessian.step;  // the gradient's round-off, /ε
+        // With b the world only θ_a's block is compared, and there ∇²(λᵀφ) = M = O(|λ| t):
+        // negligible at the smallest angles, where the check shows it is (near) zero.
+        if (world_b && relative[i] < 1e-3) opt.hessian.require_nonzero = fd::NonZero::kNone;
+        opt.hessian_from_value.abs_floor =
+            roundoff / (opt.hessian_from_value.step * opt.hessian_from_value.step);
+        opt.hessian_from_value.require_nonzero = fd::NonZero::kNone;
+        EXPECT_TRUE(fd::check_term(t, e.q, e.rotations, opt));
+
+        const double k = 7.0;
+        JointWeld elastic = t;
+        elastic.exact = false;
+        elastic.adjoint = false;
+        elastic.stiffness = k;
+        JointWeld lagrangian = t;
+        lagrangian.stiffness = k;
+        lagrangian.multiplier = k * t.constraint(e.q, nullptr);
+        LocalHessian<2> He, Hl;
+        elastic.evaluate(e.q, nullptr, &He);
+        lagrangian.evaluate(e.q, nullptr, &Hl);
+        EXPECT_LE((He - Hl).cwiseAbs().maxCoeff(), 1e-12 * k * (1.0 + He.cwiseAbs().maxCoeff()))
+            << He << "\n\n" << Hl;
+        ++checked;
+      }
+    }
+  }
+  EXPECT_EQ(checked, 2 * 7 * 2);
+}
+
 TEST(JointAdjoint, ThePenaltysGradientIsJTransposeTimesItsForce) {
   std::mt19937 rng(2103);
   const auto check = [](const auto& t, const State& q) {
