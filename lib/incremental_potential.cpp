@@ -55,53 +55,36 @@ double IncrementalPotential::potential_energy(const State& q) const {
   return energy;
 }
 
-namespace {
-
-// Calls f(t) for every exact constraint term t of p (term.hpp, Constraint).
-template <class Potential, class Function>
-void for_each_exact_constraint(Potential& p, Function&& f) {
-  p.for_each_term_vector([&](auto& terms) {
-    using T = typename std::decay_t<decltype(terms)>::value_type;
-    if constexpr (Constraint<T>) {
-      for (auto& t : terms) {
-        if (t.exact) f(t);
-      }
-    }
-  });
-}
-
-}  // namespace
-
 int IncrementalPotential::exact_constraints() const {
   int count = 0;
-  for_each_exact_constraint(*this, [&](const auto&) { ++count; });
+  exact_constraints_of<false>(*this, [&](const auto&) { ++count; });
   return count;
 }
 
 double IncrementalPotential::constraint_violation(const State& q) const {
   double violation = 0.0;
-  for_each_exact_constraint(*this, [&](const auto& t) {
+  exact_constraints_of<false>(*this, [&](const auto& t) {
     violation = std::max(violation, t.violation(q));
   });
   return violation;
 }
 
 void IncrementalPotential::update_multipliers(const State& q) {
-  for_each_exact_constraint(*this, [&](auto& t) { t.update_multiplier(q); });
+  exact_constraints_of<false>(*this, [&](auto& t) { t.update_multiplier(q); });
 }
 
 void IncrementalPotential::scale_penalties(double factor) {
-  for_each_exact_constraint(*this, [&](auto& t) { t.stiffness *= factor; });
+  exact_constraints_of<false>(*this, [&](auto& t) { t.stiffness *= factor; });
 }
 
 void IncrementalPotential::exact_forces(const State& q, std::vector<Vector3>& out) const {
-  for_each_exact_constraint(*this, [&](const auto& t) {
+  exact_constraints_of<false>(*this, [&](const auto& t) {
     out.push_back(t.adjoint ? t.multiplier : t.force(q));
   });
 }
 
 void IncrementalPotential::set_adjoint_multipliers(const Vector3* multipliers) {
-  for_each_exact_constraint(*this, [&](auto& t) {
+  exact_constraints_of<false>(*this, [&](auto& t) {
     t.adjoint = true;
     t.multiplier = *multipliers++;
   });
@@ -116,7 +99,7 @@ int IncrementalPotential::exact_equalities() const {
 void IncrementalPotential::constraint_jacobian(const State& q, Eigen::MatrixXd& J) const {
   J.setZero();
   int row = 0;
-  for_each_exact_constraint(*this, [&](const auto& t) {
+  exact_constraints_of<false>(*this, [&](const auto& t) {
     using T = std::decay_t<decltype(t)>;
     typename T::ConstraintJacobian local;
     t.constraint(q, &local);

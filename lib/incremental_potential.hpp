@@ -171,20 +171,22 @@ class IncrementalPotential {
   // independent), and how many there are.
   template <class Function>
   void for_each_exact_equality(Function&& f) const {
-    exact_equalities_of(*this, f);
+    exact_constraints_of<true>(*this, f);
   }
   template <class Function>
   void for_each_exact_equality(Function&& f) {
-    exact_equalities_of(*this, f);
+    exact_constraints_of<true>(*this, f);
   }
   int exact_equalities() const;
 
  private:
-  template <class Self, class Function>
-  static void exact_equalities_of(Self& self, Function& f) {
+  // f(t) for every exact constraint term t of self (term.hpp, Constraint), or only the
+  // equalities (not Inequality).
+  template <bool kEqualitiesOnly, class Self, class Function>
+  static void exact_constraints_of(Self& self, Function&& f) {
     self.for_each_term_vector([&](auto& terms) {
       using T = typename std::decay_t<decltype(terms)>::value_type;
-      if constexpr (Constraint<T> && !Inequality<T>) {
+      if constexpr (Constraint<T> && !(kEqualitiesOnly && Inequality<T>)) {
         for (auto& t : terms) {
           if (t.exact) f(t);
         }

@@ -433,7 +433,8 @@ class StepNlp final : public Ipopt::TNLP {
   // Pᵀc = 0 is c = 0 near the start.
   void choose_constraint_rows(const State& q) {
     if (equalities_ == 0) return;
-    std::vector<Matrix3> JJt(static_cast<std::size_t>(equalities_), Matrix3::Zero());
+    std::vector<Matrix3>& JJt = bases_;  // J Jᵀ first, then its eigenvectors in place
+    std::fill(JJt.begin(), JJt.end(), Matrix3::Zero());
     for_each_jacobian_block(q, [&](int i, int, const Matrix3& J) { JJt[i] += J * J.transpose(); });
     for (int i = 0; i < equalities_; ++i) {
       const Eigen::SelfAdjointEigenSolver<Matrix3> eigen(JJt[i]);  // ascending eigenvalues
