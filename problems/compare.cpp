@@ -65,20 +65,13 @@ void deviation(const std::vector<State>& reference, const std::vector<State>& st
   }
 }
 
-// One row: the timed runs and the diagnostics run of `solver`, or a failed row if the
-// back-end does not support its options. `trajectory` receives the first timed run's states.
+// One row: the timed runs and the diagnostics run of `solver` (a failed row if a step fails).
+// `trajectory` receives the first timed run's states.
 CompareRow run_row(const Scene& scene, SolverOptions solver, int repeats, int condition_every,
                    std::vector<State>& trajectory) {
   CompareRow row;
   row.backend = solver.backend;
   row.rotation = solver.rotation;
-  try {
-    solver.validate();
-  } catch (const ModelError& e) {
-    row.failed = true;
-    row.failure = e.what();
-    return row;
-  }
   const TimedRun run =
       time_scene(scene, solver, [&](const Simulator& sim) { trajectory.push_back(sim.state()); });
   std::vector<double> assembly{run.assembly_us()}, solve{run.solve_us()},

@@ -4,9 +4,9 @@
 // (lie, rotvec, quat; solvers/newton.hpp), side by side (paper §4.4, Fig. 4, Table 1).
 //
 // The rows are the (backend, rotation) pairs of the two lists, backends outer. The first row
-// is the reference: every row's deviations are measured from its trajectory. A pair the
-// back-end does not support (ipopt + quat: SolverOptions::validate throws ModelError) is a
-// row marked failed with the ModelError's message, and the other rows still run.
+// is the reference: every row's deviations are measured from its trajectory. Every back-end
+// takes every parameterisation; a row whose step fails is marked failed with the step's
+// message, and the other rows still run.
 //
 // Each row is run `repeats` times timed (SolverOptions::measure_time; medians, the first
 // run's trajectory), then once more for the diagnostics: per-frame iterations and gradient
@@ -84,7 +84,7 @@ struct CompareRow {
 };
 
 // Runs the comparison: one row per (backend, rotation) pair, in the order above. Numerical
-// failures and unsupported pairs are reported in their rows, never thrown.
+// failures are reported in their rows, never thrown.
 std::vector<CompareRow> compare_solvers(const Scene& scene, const CompareOptions& options);
 
 // The same fields three ways: a table for reading, one CSV row per pair, one JSON object.

@@ -6,7 +6,7 @@
 //                  (one row per backend × rotation, backends outer; the first row is the
 //                  reference for deviations; without --backends the scene's back-end, without
 //                  --rotations the scene's parameterisation if --backends is given, else all
-//                  three; an unsupported pair such as ipopt + quat is a failed row)
+//                  three; a row whose step fails is marked failed, the others still run)
 //   liedyn exp-jacobian --out FILE [--samples N]   (paper Fig. 3 data: σ of ∂vec(exp r)/∂r)
 //   liedyn gradcheck SCENE.json [--sample N] [--seed S] [--tolerance T] [--step E] [--verbose]
 //                  [--parameters DIR/parameters.csv]
@@ -23,7 +23,7 @@
 //                  short of it, 4 failed)
 // Exit status: 0 success; 2 bad input (scene or options), nothing written; 3 some steps ended
 // at max_iterations (outputs written; --allow-unconverged makes this 0); 4 a step failed
-// (outputs written up to it; compare: a row failed or is unsupported, all rows printed); 1
+// (outputs written up to it; compare: a row failed, all rows printed); 1
 // other errors (I/O).
 
 #include <CLI/CLI.hpp>

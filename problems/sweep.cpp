@@ -134,21 +134,7 @@ GridScene make_scene(const json& base, const std::string& source,
   GridScene g;
   g.settings = values;
   g.label = describe(paths, values);
-  try {
-    g.scene = parse_scene(root.dump(), source + " [" + g.label + "]");
-  } catch (const SceneError& e) {
-    // A rotation the back-end lacks (ipopt with quat) is a failed run (record), not bad
-    // input: parse with lie, then restore the rotation for the Simulator to refuse.
-    const auto rotation =
-        e.field() == "solver.rotation" && root["solver"]["rotation"].is_string()
-            ? parse_rotation(root["solver"]["rotation"].get<std::string>())
-            : std::nullopt;
-    if (!rotation) throw;
-    json lie = root;
-    lie["solver"]["rotation"] = "lie";
-    g.scene = parse_scene(lie.dump(), source + " [" + g.label + "]");
-    g.scene.solver.rotation = *rotation;
-  }
+  g.scene = parse_scene(root.dump(), source + " [" + g.label + "]");
   return g;
 }
 
@@ -181,7 +167,7 @@ Recording record(const Scene& scene, int repeats) {
       seconds.push_back(time_scene(scene, scene.solver).total_seconds);
     }
     r.run.total_seconds = median(seconds);
-  } catch (const std::exception& e) {  // ModelError: e.g. a back-end that lacks the rotation
+  } catch (const std::exception& e) {  // ModelError: options the Simulator refuses
     r.run.failed = true;
     r.run.failure = e.what();
   }
@@ -197,7 +183,7 @@ void fill_cost(const Scene& scene, const Recording& r, SweepRun& run) {
   run.unconverged_steps = r.run.unconverged_steps;
   run.failed = r.run.failed;
   run.failure = r.run.failure;
-  if (scene.model.static_equilibrium || r.energy.empty()) return;
+  if (scene.model.static_equilibrium || r.run.frames == 0) return;
   run.energy_drift = run.momentum_drift = 0.0;
   for (std::size_t k = 0; k < r.energy.size(); ++k) {
     run.energy_drift = std::max(run.energy_drift, std::abs(r.energy[k] - r.energy[0]));
@@ -548,12 +534,13 @@ SweepResult run_sweep(const std::string& scene_text, const std::string& source,
     run.settings = g.settings;
     const Recording r = record(g.scene, options.repeats);
     fill_cost(g.scene, r, run);
+    // Errors over the frames the run completed: none (NaN) when its first step failed.
     if (analytic) {
       run.reference = std::string("analytic ") + to_string(base_scene.analytic);
-      against_analytic(g.scene, r, run);
+      if (r.run.frames > 0) against_analytic(g.scene, r, run);
     } else {
       run.reference = ref.scene.label.empty() ? "the scene's settings" : ref.scene.label;
-      against_reference(g.scene, r, ref.scene.scene, ref.recording, run);
+      if (r.run.frames > 0) against_reference(g.scene, r, ref.scene.scene, ref.recording, run);
     }
     if (optimization) gradient_error(g.scene, ref.gradient, run);
     progress.finish(what, std::chrono::duration<double>(Clock::now() - start).count());

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <compare>
 #include <coin/IpIpoptApplication.hpp>
 #include <coin/IpTNLP.hpp>
 #include <cstddef>
@@ -16,6 +17,7 @@
 #include <vector>
 
 #include "../lib/so3.hpp"
+#include "../manifolds/quaternion_chart.hpp"
 #include "../manifolds/rotation_chart.hpp"
 #include "newton.hpp"
 
@@ -26,14 +28,15 @@ namespace {
 using Clock = std::chrono::steady_clock;
 
 // ---------------------------------------------------------------------------------------
-// The lower triangle of the charted Hessian in Ipopt's triplet form.
+// The lower triangle of the NLP's Hessian in Ipopt's triplet form.
 //
-// IncrementalPotential::assemble_into (and RotationVectorChart::finish after it) call
-// add(row, column, block) in the same order for every assembly of a potential. The first
-// assembly records that order (and the blocks); finish_recording() then builds the pattern:
-// one slot per distinct block of the lower block triangle (row > column: 9 entries; row =
-// column: the 6 entries of its lower triangle), and for every call the start of its slot —
-// or −1 for a block above the diagonal, the transpose of one below (every term's local
+// IncrementalPotential::assemble_into (and the coordinates' finish after it) call
+// add(row, column, block) in the same order for every assembly of a potential, with blocks of
+// 3 or 4 rows and columns (a position's 3 coordinates, a quaternion's 4) at the coordinates'
+// offsets. The first assembly records that order (and the blocks); finish_recording() then
+// builds the pattern: one slot per distinct block of the lower block triangle (row > column:
+// all its entries; row = column: its lower triangle), and for every call the start of its
+// slot — or −1 for a block above the diagonal, the transpose of one below (every term's local
 // Hessian is symmetric, and so is J_rowᵀ B J_column under transposition). Later assemblies
 // scatter each call into its slot by call number: no search, no allocation.
 class LowerTriangleSink {
@@ -50,28 +53,25 @@ class LowerTriangleSink {
   template <class Block>
   void add(int row, int column, const Block& block) {
     if (discard_) return;
+    const int rows = static_cast<int>(block.rows()), columns = static_cast<int>(block.cols());
     if (!recorded_) {
-      calls_.emplace_back(row, column);
+      calls_.push_back(Call{row, column, rows, columns});
       recorded_blocks_.emplace_back(block);
       return;
     }
-    // The contract of assemble_into, checked at the cost of two integer comparisons.
-    if (next_call_ >= calls_.size() || calls_[next_call_].first != row ||
-        calls_[next_call_].second != column) {
+    // The contract of assemble_into, checked at the cost of a few integer comparisons.
+    if (next_call_ >= calls_.size() || calls_[next_call_].row != row ||
+        calls_[next_call_].column != column || calls_[next_call_].rows != rows ||
+        calls_[next_call_].columns != columns) {
       order_broken_ = true;
       return;
     }
     const int start = slot_of_call_[next_call_++];
     if (start < 0) return;
     double* v = values_.data() + start;
-    if (row == column) {
-      for (int i = 0; i < 3; ++i) {
-        for (int j = 0; j <= i; ++j) *v++ += block(i, j);
-      }
-    } else {
-      for (int i = 0; i < 3; ++i) {
-        for (int j = 0; j < 3; ++j) *v++ += block(i, j);
-      }
+    for (int i = 0; i < rows; ++i) {
+      const int last = row == column ? i + 1 : columns;
+      for (int j = 0; j < last; ++j) *v++ += block(i, j);
     }
   }
 
@@ -80,28 +80,26 @@ class LowerTriangleSink {
   // After the first assembly: the pattern, and the values of that assembly.
   void finish_recording() {
     if (recorded()) return;
-    std::vector<std::pair<int, int>> lower;  // distinct blocks with row ≥ column
-    for (const auto& [row, column] : calls_) {
-      if (row >= column) lower.emplace_back(row, column);
+    std::vector<Call> lower;  // distinct blocks with row ≥ column
+    for (const Call& c : calls_) {
+      if (c.row >= c.column) lower.push_back(c);
     }
     std::sort(lower.begin(), lower.end());
     lower.erase(std::unique(lower.begin(), lower.end()), lower.end());
     std::vector<int> start_of_block(lower.size());
     for (std::size_t b = 0; b < lower.size(); ++b) {
-      const auto [row, column] = lower[b];
+      const Call& c = lower[b];
       start_of_block[b] = static_cast<int>(rows_.size());
-      for (int i = 0; i < 3; ++i) {
-        for (int j = 0; j < 3; ++j) {
-          if (row == column && j > i) continue;
-          rows_.push_back(row + i);
-          columns_.push_back(column + j);
+      for (int i = 0; i < c.rows; ++i) {
+        for (int j = 0; j < (c.row == c.column ? i + 1 : c.columns); ++j) {
+          rows_.push_back(c.row + i);
+          columns_.push_back(c.column + j);
         }
       }
     }
     slot_of_call_.resize(calls_.size());
     for (std::size_t k = 0; k < calls_.size(); ++k) {
-      const auto [row, column] = calls_[k];
-      if (row < column) {
+      if (calls_[k].row < calls_[k].column) {
         slot_of_call_[k] = -1;
         continue;
       }
@@ -112,7 +110,7 @@ class LowerTriangleSink {
     recorded_ = true;
     // Scatter the recorded first assembly.
     for (std::size_t k = 0; k < calls_.size(); ++k) {
-      add(calls_[k].first, calls_[k].second, recorded_blocks_[k]);
+      add(calls_[k].row, calls_[k].column, recorded_blocks_[k]);
     }
     recorded_blocks_.clear();
     recorded_blocks_.shrink_to_fit();
@@ -130,28 +128,142 @@ class LowerTriangleSink {
   }
 
  private:
+  struct Call {
+    int row, column, rows, columns;
+    auto operator<=>(const Call&) const = default;
+  };
+  using Block = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, 4, 4>;
   bool discard_ = false;
   bool recorded_ = false;
   bool order_broken_ = false;
-  std::vector<std::pair<int, int>> calls_;  // (row, column) of every add, in call order
-  std::vector<Matrix3> recorded_blocks_;    // the first assembly's blocks (until recorded)
-  std::vector<int> slot_of_call_;           // per call: start in values_, −1 if skipped
-  std::vector<int> rows_, columns_;         // per entry (Ipopt's iRow, jCol; 0-based)
+  std::vector<Call> calls_;              // every add, in call order
+  std::vector<Block> recorded_blocks_;   // the first assembly's blocks (until recorded)
+  std::vector<int> slot_of_call_;        // per call: start in values_, −1 if skipped
+  std::vector<int> rows_, columns_;      // per entry (Ipopt's iRow, jCol; 0-based)
   std::vector<double> values_;
   std::size_t next_call_ = 0;
 };
 
 // ---------------------------------------------------------------------------------------
-// The NLP of one step: variables [x, θ] in the component's tangent order, R = exp(θ) R₀
-// (ipopt_step.hpp). Evaluations write the point into the state being solved.
+// The NLP's variables (ipopt_step.hpp), in the component's tangent order: a position's 3, and
+// per rotation its 3 chart coordinates θ (lie, rotvec: RotationVectorChart, n = dofs) or its
+// 4 quaternion numbers (quat: QuaternionCoordinates, n = dofs + rotations, with a row
+// qᵀq − 1 = 0 per rotation after the joints' rows).
+class Coordinates {
+ public:
+  Coordinates(const Component& component, RotationParameterization rotation)
+      : rotation_(rotation), chart_(component) {
+    if (rotation_ == RotationParameterization::kQuaternion) quaternions_ = QuaternionCoordinates(component);
+  }
+
+  bool quaternions() const { return rotation_ == RotationParameterization::kQuaternion; }
+  int size(const Component& component) const {
+    return quaternions() ? quaternions_.size() : component.dofs;
+  }
+  // The norm rows: one per rotation under quat, else none.
+  int norm_rows() const { return quaternions() ? static_cast<int>(quaternions_.rotations()) : 0; }
+  // First variable and number of variables of the tangent block at `offset`.
+  int variable(int offset) const { return quaternions() ? quaternions_.variable(offset) : offset; }
+  int width(int offset) const {
+    return quaternions() && quaternions_.jacobian_at(offset) != nullptr ? 4 : 3;
+  }
+
+  // The starting point of a solve at q, and the chart around it (lie: R₀ = R, θ = 0; rotvec:
+  // R₀ = I, θ = log R, and R ← exp(θ) so that both agree exactly; quat: q of R, s ≥ 0).
+  void start(const Component& component, State& q, Eigen::VectorXd& x) {
+    if (quaternions()) {
+      quaternions_.get(component, q, x.data());
+      quaternions_.set(component, x.data(), q);  // R(q) exactly
+      return;
+    }
+    for (const DofBlock& b : component.points) x.segment<3>(b.offset) = q.points[b.index];
+    for (std::size_t i = 0; i < component.rotations.size(); ++i) {
+      const DofBlock& b = component.rotations[i];
+      Matrix3& R = q.rotations[b.index];
+      if (rotation_ == RotationParameterization::kRotationVector) {
+        x.segment<3>(b.offset) = so3::log(R);
+        R = chart_.set(i, x.segment<3>(b.offset));
+      } else {
+        chart_.set_reference(i, R);
+        x.segment<3>(b.offset).setZero();
+      }
+    }
+  }
+
+  // Writes the point x into q.
+  void set(const Component& component, const Ipopt::Number* x, State& q) {
+    if (quaternions()) {
+      quaternions_.set(component, x, q);
+      return;
+    }
+    const Eigen::Map<const Eigen::VectorXd> xv(x, component.dofs);
+    for (const DofBlock& b : component.points) q.points[b.index] = xv.segment<3>(b.offset);
+    for (std::size_t i = 0; i < component.rotations.size(); ++i) {
+      const DofBlock& b = component.rotations[i];
+      q.rotations[b.index] = chart_.set(i, xv.segment<3>(b.offset));
+    }
+  }
+
+  // Ψ at q (as last set), its gradient in the variables and their Hessian through `sink`; a
+  // norm row's multiplier μ_i adds 2 μ_i I to its quaternion's diagonal block (when non-null).
+  template <class Sink>
+  double assemble(const IncrementalPotential& potential, const State& q, Eigen::VectorXd& lie,
+                  Eigen::VectorXd& g, Sink& sink, const double* norm_multipliers) const {
+    if (quaternions()) {
+      return assemble_in_quaternions(potential, q, quaternions_, lie, g, sink, norm_multipliers);
+    }
+    return assemble_charted(potential, q, g, sink, nullptr, &chart_);
+  }
+
+  // A constraint's Lie Jacobian block (r × 3, at the tangent `offset`) in the variables:
+  // times J_l(θ) (a change ε of θ is the left perturbation J_l(θ) ε) or E(q) (r × 4).
+  Eigen::Matrix<double, 3, Eigen::Dynamic, 0, 3, 4> in_variables(int offset, const Matrix3& lie) const {
+    if (quaternions()) {
+      const Matrix34* E = quaternions_.jacobian_at(offset);
+      if (E != nullptr) return lie * *E;
+      return lie;
+    }
+    const Matrix3* J_l = chart_.jacobian_at(offset);
+    if (J_l != nullptr) return lie * *J_l;
+    return lie;
+  }
+
+  // qᵀq − 1 per rotation, and its gradient 2qᵀ (4 entries per row, at rotation_variable).
+  void norms(Ipopt::Number* g) const {
+    for (std::size_t i = 0; i < quaternions_.rotations(); ++i) {
+      g[i] = quaternions_.quaternion(i).squaredNorm() - 1.0;
+    }
+  }
+  void norm_gradients(Ipopt::Number* v) const {
+    for (std::size_t i = 0; i < quaternions_.rotations(); ++i) {
+      for (int j = 0; j < 4; ++j) *v++ = 2.0 * quaternions_.quaternion(i)(j);
+    }
+  }
+  int rotation_variable(std::size_t i) const { return quaternions_.rotation_variable(i); }
+
+  // Lie's rotations exp(θ) R₀ drift from SO(3) by round-off with every re-centring: they are
+  // re-orthonormalised at the end of a solve (docs/design.md §2.3); rotvec's exp(θ) and
+  // quat's R(q) are rotations to round-off of their own.
+  bool reorthonormalize() const { return rotation_ == RotationParameterization::kLie; }
+
+ private:
+  RotationParameterization rotation_;
+  RotationVectorChart chart_;
+  QuaternionCoordinates quaternions_;
+};
+
+// ---------------------------------------------------------------------------------------
+// The NLP of one step: Coordinates' variables, rows for the exact equalities, then (quat)
+// the quaternions' norms (ipopt_step.hpp). Evaluations write the point into the state being
+// solved.
 class StepNlp final : public Ipopt::TNLP {
  public:
   StepNlp(Component& component, const SolverOptions& options)
       : component_(component),
-        rotation_vectors_(options.rotation == RotationParameterization::kRotationVector),
         tolerance_(options.tolerance),
         measure_time_(options.measure_time),
-        chart_(component),
+        coordinates_(component, options.rotation),
+        n_(coordinates_.size(component)),
         sink_(options.ipopt.hessian_approximation != "exact"),
         lagrangian_sink_(options.ipopt.hessian_approximation != "exact"),
         equalities_(component.potential.exact_equalities()),
@@ -160,12 +272,14 @@ class StepNlp final : public Ipopt::TNLP {
         penalties_(static_cast<std::size_t>(equalities_), 0.0),
         bases_(static_cast<std::size_t>(equalities_)),
         ranks_(static_cast<std::size_t>(equalities_), 0),
-        g_(component.dofs),
-        g_lagrangian_(component.dofs),
-        x0_(component.dofs),
-        x_state_(component.dofs),
-        x_assembled_(component.dofs),
-        x_final_(component.dofs) {
+        norm_multipliers_(static_cast<std::size_t>(coordinates_.norm_rows()), 0.0),
+        lie_(component.dofs),
+        g_(n_),
+        g_lagrangian_(n_),
+        x0_(n_),
+        x_state_(n_),
+        x_assembled_(n_),
+        x_final_(n_) {
     record_constraint_rows();
   }
 
@@ -176,8 +290,7 @@ class StepNlp final : public Ipopt::TNLP {
     first_gradient_norm_ = second_gradient_norm_ = std::numeric_limits<double>::quiet_NaN();
   }
 
-  // Per Ipopt solve: the chart around q's rotations and the starting point (lie: R₀ = R,
-  // θ = 0; rotvec: R₀ = I, θ = log R, and R ← exp(θ) so that both agree exactly).
+  // Per Ipopt solve: the starting point at q and the chart around it (Coordinates::start).
   void start(State& q) {
     q_ = &q;
     // The objective: Ψ without the exact equalities (λ = 0, ρ = 0; header); their ρ are kept
@@ -185,18 +298,7 @@ class StepNlp final : public Ipopt::TNLP {
     int i = 0;
     component_.potential.for_each_exact_equality([&](const auto& t) { penalties_[i++] = t.stiffness; });
     set_lagrangian(no_multipliers_, false);
-    for (const DofBlock& b : component_.points) x0_.segment<3>(b.offset) = q.points[b.index];
-    for (std::size_t i = 0; i < component_.rotations.size(); ++i) {
-      const DofBlock& b = component_.rotations[i];
-      Matrix3& R = q.rotations[b.index];
-      if (rotation_vectors_) {
-        x0_.segment<3>(b.offset) = so3::log(R);
-        R = chart_.set(i, x0_.segment<3>(b.offset));
-      } else {
-        chart_.set_reference(i, R);
-        x0_.segment<3>(b.offset).setZero();
-      }
-    }
+    coordinates_.start(component_, q, x0_);
     choose_constraint_rows(q);
     x_state_ = x0_;
     state_valid_ = true;
@@ -218,15 +320,14 @@ class StepNlp final : public Ipopt::TNLP {
     return assembled_finite_;
   }
 
-  // Writes Ipopt's final point into q (lie: rotations re-orthonormalised, docs/design.md §2.3)
-  // and its multipliers into the exact equalities, with their ρ back: the Lagrangian
+  // Writes Ipopt's final point into q (Coordinates::reorthonormalize) and its multipliers into the exact equalities, with their ρ back: the Lagrangian
   // λᵀc + ½ρ‖c‖² the shared test sees, and the forces the adjoint reads. False if Ipopt
   // returned none.
   bool write_final() {
     if (!has_final_) return false;
     set_lagrangian(multipliers_, true);
     set_point(x_final_.data());
-    if (!rotation_vectors_) {
+    if (coordinates_.reorthonormalize()) {
       for (const DofBlock& b : component_.rotations) {
         q_->rotations[b.index] = so3::orthonormalize(q_->rotations[b.index]);
       }
@@ -245,8 +346,8 @@ class StepNlp final : public Ipopt::TNLP {
   // --- Ipopt::TNLP --------------------------------------------------------------------
   bool get_nlp_info(Ipopt::Index& n, Ipopt::Index& m, Ipopt::Index& nnz_jac_g,
                     Ipopt::Index& nnz_h_lag, IndexStyleEnum& index_style) override {
-    n = component_.dofs;
-    m = constraint_rows_;
+    n = n_;
+    m = constraint_rows_ + coordinates_.norm_rows();
     nnz_jac_g = static_cast<Ipopt::Index>(jacobian_rows_.size());
     nnz_h_lag = sink_.nonzeros();
     index_style = C_STYLE;
@@ -285,27 +386,30 @@ class StepNlp final : public Ipopt::TNLP {
     return std::isfinite(obj_value);
   }
 
-  // ∇f = [g_x, J_l(θ)ᵀ g_θ].
+  // ∇f: [g_x, J_l(θ)ᵀ g_θ] in a chart, [g_x, E(q)ᵀ g_θ] in quaternions.
   bool eval_grad_f(Ipopt::Index n, const Ipopt::Number* x, bool, Ipopt::Number* grad_f) override {
     assemble(x);
     std::copy(g_.data(), g_.data() + n, grad_f);
     return assembled_finite_;
   }
 
-  // Pᵀc of every exact equality (its r rows, choose_constraint_rows).
+  // Pᵀc of every exact equality (its r rows, choose_constraint_rows), then (quat) qᵀq − 1.
   bool eval_g(Ipopt::Index, const Ipopt::Number* x, bool, Ipopt::Index m, Ipopt::Number* g) override {
     set_point(x);
+    Ipopt::Number* row = g;
     int i = 0;
     component_.potential.for_each_exact_equality([&](const auto& t) {
       const Vector3 c = t.constraint(*q_, nullptr);
-      for (int k = 0; k < ranks_[i]; ++k) *g++ = bases_[i].col(k).dot(c);
+      for (int k = 0; k < ranks_[i]; ++k) *row++ = bases_[i].col(k).dot(c);
       ++i;
     });
-    return std::all_of(g - m, g, [](double v) { return std::isfinite(v); });
+    coordinates_.norms(row);
+    return std::all_of(g, g + m, [](double v) { return std::isfinite(v); });
   }
 
-  // ∂(Pᵀc)/∂(x, θ): Pᵀ times the terms' Lie Jacobian blocks, times J_l(θ) in a rotation's
-  // columns (a change ε of θ is the left perturbation J_l(θ) ε); r × 3 entries per block.
+  // ∂(Pᵀc)/∂x: Pᵀ times the terms' Lie Jacobian blocks in the variables
+  // (Coordinates::in_variables); r × 3 entries per block (r × 4 for a quaternion). Then
+  // (quat) 2qᵀ per norm row.
   bool eval_jac_g(Ipopt::Index, const Ipopt::Number* x, bool, Ipopt::Index, Ipopt::Index nele_jac,
                   Ipopt::Index* iRow, Ipopt::Index* jCol, Ipopt::Number* values) override {
     if (nele_jac != static_cast<Ipopt::Index>(jacobian_rows_.size())) return false;
@@ -317,19 +421,21 @@ class StepNlp final : public Ipopt::TNLP {
     set_point(x);
     Ipopt::Number* v = values;
     for_each_jacobian_block(*q_, [&](int i, int offset, const Matrix3& lie) {
-      const Matrix3* J_l = chart_.jacobian_at(offset);
-      const Matrix3 block = bases_[i].transpose() * (J_l == nullptr ? lie : Matrix3(lie * *J_l));
+      const auto block = (bases_[i].transpose() * coordinates_.in_variables(offset, lie)).eval();
       for (int k = 0; k < ranks_[i]; ++k) {
-        for (int j = 0; j < 3; ++j) *v++ = block(k, j);
+        for (int j = 0; j < block.cols(); ++j) *v++ = block(k, j);
       }
     });
+    coordinates_.norm_gradients(v);
+    v += 4 * coordinates_.norm_rows();
     return std::all_of(values, v, [](double e) { return std::isfinite(e); });
   }
 
-  // Lower triangle of obj_factor · ∇²f + Σ λᵀ∇²c, with f's charted Hessian
-  // [H_xx, H_xθ J_l; ·, J_lᵀ H_θθ J_l + C(θ, g)] and the constraints' part as the difference of
-  // two assemblies, with the multipliers λ and with none: the exact equalities' Lagrangian
-  // blocks ∇²(λᵀc) and the chart's C(θ, Jᵀλ), whatever obj_factor (0 in Ipopt's restoration).
+  // Lower triangle of obj_factor · ∇²f + Σ λᵀ∇²c, with f's Hessian in the variables (charted:
+  // [H_xx, H_xθ J_l; ·, J_lᵀ H_θθ J_l + C(θ, g)]; quaternions: quaternion_chart.hpp) and the
+  // constraints' part as the difference of two assemblies, with the multipliers λ and with
+  // none: the exact equalities' Lagrangian blocks ∇²(λᵀc), the coordinates' correction from
+  // Jᵀλ and the norms' 2μ I, whatever obj_factor (0 in Ipopt's restoration).
   bool eval_h(Ipopt::Index, const Ipopt::Number* x, bool, Ipopt::Number obj_factor, Ipopt::Index,
               const Ipopt::Number* lambda, bool, Ipopt::Index nele_hess, Ipopt::Index* iRow,
               Ipopt::Index* jCol, Ipopt::Number* values) override {
@@ -343,12 +449,15 @@ class StepNlp final : public Ipopt::TNLP {
     if (!assembled_finite_ || sink_.order_broken()) return false;
     const std::vector<double>& h = sink_.values();
     for (std::size_t k = 0; k < h.size(); ++k) values[k] = obj_factor * h[k];
-    if (equalities_ == 0) return true;
+    if (equalities_ == 0 && coordinates_.norm_rows() == 0) return true;
     const auto t0 = measure_time_ ? Clock::now() : Clock::time_point{};
     world_multipliers(lambda);
+    std::copy(lambda + constraint_rows_, lambda + constraint_rows_ + coordinates_.norm_rows(),
+              norm_multipliers_.begin());
     set_lagrangian(multipliers_, false);
-    const double value =
-        assemble_charted(component_.potential, *q_, g_lagrangian_, lagrangian_sink_, nullptr, &chart_);
+    set_point(x);  // assemble(x) may have found its values without moving the state there
+    const double value = coordinates_.assemble(component_.potential, *q_, lie_, g_lagrangian_,
+                                               lagrangian_sink_, norm_multipliers_.data());
     set_lagrangian(no_multipliers_, false);
     lagrangian_sink_.finish_recording();  // the first time only: the same calls as sink_'s
     if (measure_time_) evaluation_seconds_ += seconds_since(t0);
@@ -365,7 +474,7 @@ class StepNlp final : public Ipopt::TNLP {
                          const Ipopt::Number*, const Ipopt::Number*, Ipopt::Index,
                          const Ipopt::Number*, const Ipopt::Number* lambda, Ipopt::Number,
                          const Ipopt::IpoptData*, Ipopt::IpoptCalculatedQuantities*) override {
-    if (x == nullptr || (equalities_ > 0 && lambda == nullptr)) return;
+    if (x == nullptr || (constraint_rows_ + coordinates_.norm_rows() > 0 && lambda == nullptr)) return;
     std::copy(x, x + n, x_final_.data());
     world_multipliers(lambda);
     has_final_ = true;
@@ -402,8 +511,8 @@ class StepNlp final : public Ipopt::TNLP {
   // The rows Ipopt sees (header): per exact equality, r = kConstraintRank rows Pᵀc (term.hpp;
   // 2 for a hinge's alignment c = a − b and a slider's line c = n × d, whose 3 numbers hold 2
   // constraints: 3 rows would make a rank-deficient Jacobian that Ipopt takes for a square
-  // system), and the Jacobian's pattern, in for_each_jacobian_block's order: r × 3 per DOF
-  // block.
+  // system), then (quat) a norm row per rotation; and the Jacobian's pattern, in eval_jac_g's
+  // order: r × (3 or 4) per DOF block, then 4 per norm row.
   void record_constraint_rows() {
     std::vector<int> first_row;
     component_.potential.for_each_exact_equality([&](const auto& t) {
@@ -416,14 +525,20 @@ class StepNlp final : public Ipopt::TNLP {
       for (const int offset : t.offsets) {
         if (offset < 0) continue;
         for (int k = 0; k < ranks_[i]; ++k) {
-          for (int j = 0; j < 3; ++j) {
+          for (int j = 0; j < coordinates_.width(offset); ++j) {
             jacobian_rows_.push_back(first_row[i] + k);
-            jacobian_columns_.push_back(offset + j);
+            jacobian_columns_.push_back(coordinates_.variable(offset) + j);
           }
         }
       }
       ++i;
     });
+    for (int r = 0; r < coordinates_.norm_rows(); ++r) {
+      for (int j = 0; j < 4; ++j) {
+        jacobian_rows_.push_back(constraint_rows_ + r);
+        jacobian_columns_.push_back(coordinates_.rotation_variable(static_cast<std::size_t>(r)) + j);
+      }
+    }
   }
 
   // P per exact equality at the start of a solve: the r leading eigenvectors of J Jᵀ (J its
@@ -464,22 +579,17 @@ class StepNlp final : public Ipopt::TNLP {
   }
 
   bool same_point(const Ipopt::Number* x, const Eigen::VectorXd& y) const {
-    return std::equal(x, x + component_.dofs, y.data());
+    return std::equal(x, x + n_, y.data());
   }
   bool assembled_at(const Ipopt::Number* x) const {
     return assembled_valid_ && same_point(x, x_assembled_);
   }
 
-  // Writes the point x into the state (and the chart's r and J_l(r)).
+  // Writes the point x into the state (and the coordinates' J_l(θ) or E(q)).
   void set_point(const Ipopt::Number* x) {
     if (state_valid_ && same_point(x, x_state_)) return;
-    const Eigen::Map<const Eigen::VectorXd> xv(x, component_.dofs);
-    for (const DofBlock& b : component_.points) q_->points[b.index] = xv.segment<3>(b.offset);
-    for (std::size_t i = 0; i < component_.rotations.size(); ++i) {
-      const DofBlock& b = component_.rotations[i];
-      q_->rotations[b.index] = chart_.set(i, xv.segment<3>(b.offset));
-    }
-    x_state_ = xv;
+    coordinates_.set(component_, x, *q_);
+    x_state_ = Eigen::Map<const Eigen::VectorXd>(x, n_);
     state_valid_ = true;
   }
 
@@ -488,7 +598,7 @@ class StepNlp final : public Ipopt::TNLP {
     if (assembled_at(x)) return;
     const auto t0 = measure_time_ ? Clock::now() : Clock::time_point{};
     set_point(x);
-    value_ = assemble_charted(component_.potential, *q_, g_, sink_, nullptr, &chart_);
+    value_ = coordinates_.assemble(component_.potential, *q_, lie_, g_, sink_, nullptr);
     sink_.finish_recording();  // the first time only
     if (measure_time_) evaluation_seconds_ += seconds_since(t0);
     double h_sum = 0.0;
@@ -506,10 +616,10 @@ class StepNlp final : public Ipopt::TNLP {
   }
 
   Component& component_;
-  bool rotation_vectors_;  // rotvec (else lie)
   double tolerance_;
   bool measure_time_;
-  RotationVectorChart chart_;
+  Coordinates coordinates_;
+  int n_;                              // variables
   LowerTriangleSink sink_;             // f's Hessian (the exact equalities at λ = 0)
   LowerTriangleSink lagrangian_sink_;  // the same assembly at Ipopt's λ (eval_h)
   int equalities_;                     // exact equality terms
@@ -521,7 +631,9 @@ class StepNlp final : public Ipopt::TNLP {
   std::vector<int> ranks_;            // per equality: r, its rows in Ipopt's problem
   int constraint_rows_ = 0;           // Σ r
   std::vector<Ipopt::Index> jacobian_rows_, jacobian_columns_;
-  Eigen::VectorXd g_;            // charted gradient at x_assembled_
+  std::vector<double> norm_multipliers_;  // quat: Ipopt's λ of the norm rows (eval_h)
+  Eigen::VectorXd lie_;          // quat: the Lie gradient, in tangent order (work space)
+  Eigen::VectorXd g_;            // gradient in the variables at x_assembled_
   Eigen::VectorXd g_lagrangian_;  // the Lagrangian assembly's (unused but for finiteness)
   Eigen::VectorXd x0_;           // starting point
   Eigen::VectorXd x_state_;      // the point *q_ holds (if state_valid_)
@@ -561,10 +673,6 @@ class IpoptStepSolver final : public StepSolver {
       : StepSolver(options),
         options_(options),
         entry_(component) {
-    if (options.rotation == RotationParameterization::kQuaternion) {
-      throw ModelError("solver.rotation",
-                       "\"quat\" is not available with the ipopt backend; use lie or rotvec");
-    }
     // The shared convergence test: Newton on the Lie parameterisation, owning the component.
     SolverOptions lie = options;
     lie.backend = Backend::kNewton;

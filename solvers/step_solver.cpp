@@ -65,11 +65,6 @@ void SolverOptions::validate() const {
   if (ipopt.max_recentrings < 0) {
     throw ModelError("solver.ipopt.max_recentrings", "must be at least 0");
   }
-  if (backend == Backend::kIpopt && rotation == RotationParameterization::kQuaternion) {
-    throw ModelError("solver.rotation",
-                     "\"quat\" is not available with the ipopt backend (it would need the "
-                     "unit-norm equality constraint, not implemented); use lie or rotvec");
-  }
 }
 
 const char* to_string(Backend backend) {

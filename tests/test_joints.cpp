@@ -386,7 +386,7 @@ TEST(Joints, HingedChainNeverGainsEnergyAndItsHingesAreSpringsOfTheirCompliance)
   EXPECT_NEAR(stiffer / early, 0.1, 0.02) << early << " against " << stiffer;
 }
 
-// Every back-end and parameterisation (Ipopt has no quat) gives the Newton/Lie trajectory of the chain (the
+// Every back-end and parameterisation gives the Newton/Lie trajectory of the chain (the
 // hinges between bodies and to the world) to within the step tolerance's effect, with
 // elastic hinges (the bundled chain) and exact ones (each back-end inside the same augmented
 // Lagrangian loop, holding them to the tolerance).
@@ -418,7 +418,8 @@ TEST_P(JointsChain, BackEndsAndParameterisationsAgree) {
                {Backend::kCeres, RotationParameterization::kRotationVector},
                {Backend::kCeres, RotationParameterization::kQuaternion},
                {Backend::kIpopt, RotationParameterization::kLie},
-               {Backend::kIpopt, RotationParameterization::kRotationVector}};
+               {Backend::kIpopt, RotationParameterization::kRotationVector},
+               {Backend::kIpopt, RotationParameterization::kQuaternion}};
   for (const auto& c : cases) {
     const State q = run(c.backend, c.rotation);
     for (int i = 0; i < 4; ++i) {
@@ -716,8 +717,7 @@ TEST_F(JointsCli, FramesReportTheExactJointsViolation) {
 }
 
 // Every joint scene (and the arm) under the three back-ends and the three parameterisations,
-// over its first 100 frames: eight rows follow the Newton/Lie run to 1e-5 (m, rad), and the
-// pair Ipopt does not support (quat) is a failed row that says why.
+// over its first 100 frames: all nine rows follow the Newton/Lie run to 1e-5 (m, rad).
 TEST_F(JointsCli, EveryJointSceneRunsUnderEveryBackEndAndParameterisation) {
   for (const char* name : {"joints/pendulum.json", "joints/double_pendulum.json", "joints/chain.json",
                            "joints/gripper_rod.json", "joints/stops.json", "optimization/arm_reach.json"}) {
@@ -732,25 +732,19 @@ TEST_F(JointsCli, EveryJointSceneRunsUnderEveryBackEndAndParameterisation) {
     std::string line;
     std::getline(rows, line);  // header: backend,rotation,…,max_position_deviation (9),
                                // max_rotation_deviation (10), …, failed (16), failure (17)
-    int ran = 0, failed = 0;
+    int ran = 0;
     while (std::getline(rows, line)) {
       std::vector<std::string> f;
       std::stringstream fields(line);
       for (std::string field; std::getline(fields, field, ',');) f.push_back(field);
       ASSERT_GE(f.size(), 17u) << line;
-      if (f[16] == "1") {
-        ++failed;
-        EXPECT_EQ(f[0] + "/" + f[1], "ipopt/quat");
-        EXPECT_NE(line.find("not available with the ipopt backend"), std::string::npos) << line;
-        continue;
-      }
+      EXPECT_EQ(f[16], "0") << line;
       ++ran;
       EXPECT_EQ(f[3], "100") << line;
       EXPECT_LT(std::stod(f[9]), 1e-5) << line;
       EXPECT_LT(std::stod(f[10]), 1e-5) << line;
     }
-    EXPECT_EQ(ran, 8);
-    EXPECT_EQ(failed, 1);
+    EXPECT_EQ(ran, 9);
   }
 }
 

@@ -483,8 +483,6 @@ TEST(SceneErrors, BackendOptions) {
                   "solver.ipopt.derivative_test", "unknown test");
   expect_rejected(scene(kBody, R"("solver": {"ipopt": {"max_recentrings": -1}}, )"),
                   "solver.ipopt.max_recentrings");
-  expect_rejected(scene(kBody, R"("solver": {"backend": "ipopt", "rotation": "quat"}, )"),
-                  "solver.rotation", "not available with the ipopt backend");
 }
 
 TEST(Scene, RotationParameterisations) {
@@ -497,6 +495,13 @@ TEST(Scene, RotationParameterisations) {
         parse_scene(scene(kBody, std::string(R"("solver": {"rotation": ")") + name + "\"}, "),
                     "inline.json");
     EXPECT_EQ(s.solver.rotation, rotation) << name;
+    // Every back-end takes every parameterisation.
+    for (const char* backend : {"newton", "ceres", "ipopt"}) {
+      const Scene b = parse_scene(scene(kBody, std::string(R"("solver": {"backend": ")") + backend +
+                                                   R"(", "rotation": ")" + name + "\"}, "),
+                                  "inline.json");
+      EXPECT_EQ(b.solver.rotation, rotation) << backend << "/" << name;
+    }
   }
 }
 

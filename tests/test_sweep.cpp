@@ -374,23 +374,26 @@ TEST(SweepReference, AnalyticSceneIsComparedWithItsSolution) {
   }));
 }
 
-// ipopt cannot take quat: that run fails with the reason, the three others complete.
-TEST(SweepReference, AnUnsupportedPairIsAFailedRun) {
+// A run whose first step fails (a weight of 1e300 N overflows Ψ at the first Newton step) is
+// kept as a failed run, with the step's reason, beside the two that complete.
+TEST(SweepReference, AFailedStepIsAFailedRun) {
   const SweepResult r =
-      sweep(kPendulum, {"solver.backend=newton,ipopt", "solver.rotation=lie,quat", "frames=3"});
+      sweep(kPendulum, {"solver.backend=newton,ipopt", "gravity.0=0,1e300", "frames=3"});
   ASSERT_EQ(r.runs.size(), 4u);
-  for (std::size_t i = 0; i < 3; ++i) {
+  for (const std::size_t i : {0u, 2u}) {
     expect_completed(r.runs[i]);
     EXPECT_TRUE(std::isfinite(r.runs[i].position_error)) << i;
   }
-  const SweepRun& bad = r.runs[3];
-  EXPECT_EQ(bad.settings, (std::vector<std::string>{"ipopt", "quat", "3"}));
-  EXPECT_TRUE(bad.failed);
-  EXPECT_NE(bad.failure.find("not available with the ipopt backend"), std::string::npos)
-      << bad.failure;
-  EXPECT_EQ(bad.frames_completed, 0);
-  EXPECT_TRUE(std::isnan(bad.position_error));
-  // newton/lie is the reference's own setting: identical to it.
+  for (const std::size_t i : {1u, 3u}) {
+    const SweepRun& bad = r.runs[i];
+    EXPECT_EQ(bad.settings[1], "1e300");
+    EXPECT_TRUE(bad.failed);
+    EXPECT_NE(bad.failure.find("step 1 (t = 0.02 s) failed"), std::string::npos) << bad.failure;
+    EXPECT_EQ(bad.frames_completed, 0);
+    EXPECT_TRUE(std::isnan(bad.position_error));
+  }
+  EXPECT_NE(r.runs[3].failure.find("Ipopt: "), std::string::npos) << r.runs[3].failure;
+  // newton with gravity.0 = 0 is the reference's own setting: identical to it.
   EXPECT_EQ(r.runs[0].position_error, 0.0);
 }
 
@@ -632,14 +635,14 @@ TEST_F(SweepCli, BadSetExits2AndCreatesNothing) {
 }
 
 TEST_F(SweepCli, AFailedRunExits4AndStillWritesTheCsv) {
-  const Result r =
-      sweep({"--backends", "newton,ipopt", "--rotations", "quat", "--out", "out", "--quiet"});
+  const Result r = sweep({"--set", "gravity.0=0,1e300", "--backends", "newton", "--rotations",
+                          "quat", "--out", "out", "--quiet"});
   EXPECT_EQ(r.exit_code, 4) << r.out << r.err;
   const std::vector<std::string> csv = lines(test::read_file(dir_ / "out" / "sweep.csv"));
   ASSERT_EQ(csv.size(), 3u);
-  EXPECT_EQ(csv[0], std::string("solver.backend,solver.rotation,") + kColumns);
-  EXPECT_EQ(csv[1].rfind("newton,quat,10,10,", 0), 0u) << csv[1];
-  EXPECT_NE(csv[2].find("not available with the ipopt backend"), std::string::npos) << csv[2];
+  EXPECT_EQ(csv[0], std::string("gravity.0,solver.backend,solver.rotation,") + kColumns);
+  EXPECT_EQ(csv[1].rfind("0,newton,quat,10,10,", 0), 0u) << csv[1];
+  EXPECT_NE(csv[2].find("line_search_failed"), std::string::npos) << csv[2];
   EXPECT_NE(r.out.find("FAILED"), std::string::npos) << r.out;
 }
 
