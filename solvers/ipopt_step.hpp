@@ -8,8 +8,12 @@
 // SolverOptions::rotation chooses the chart:
 //   * lie (default): R₀ = R at the start of the solve and θ = 0 — tangent increments;
 //   * rotvec: R₀ = I and θ = log R (‖θ‖ ≤ π at the start) — global rotation vectors, the
-//     unknowns of Newton's rotation-vector parameterisation (solvers/newton.hpp).
-// (quat is rejected by SolverOptions::validate: it would need the unit-norm constraint.)
+//     unknowns of Newton's rotation-vector parameterisation (solvers/newton.hpp);
+//   * quat: no chart: 4 variables q per rotation, R = A.21(q)/qᵀq, with qᵀq − 1 = 0 as one
+//     more equality row per rotation after the joints' (manifolds/quaternion_chart.hpp has
+//     the derivatives; docs/design.md §10.3). Its rows' Jacobians and Hessian blocks take
+//     E(q) = 4 Q(q)ᵀ/qᵀq where the charts take J_l(θ); q starts at the unit quaternion of
+//     R (s ≥ 0) at every solve.
 //
 // Exact joints (term.hpp, Constraint; joint_terms.hpp) are Ipopt's own equalities, not the
 // augmented Lagrangian the other back-ends run: f is Ψ without them (each held at λ = 0,
@@ -102,8 +106,9 @@
 // SolverOptions::measure_time, assembly_seconds = time in our evaluation callbacks (Ψ and
 // assemblies) + the tests' assemblies, solve_seconds = the rest of Ipopt's wall time (its
 // linear algebra and bookkeeping) + the tests' factorisations and solves.
-// first_gradient_norm and second_gradient_norm are ‖∂Ψ/∂(x, θ)‖₂ of the first two charted
-// assemblies (Lie gradients when θ = 0). measure_condition is ignored.
+// first_gradient_norm and second_gradient_norm are the gradient norms in the NLP's variables
+// of its first two assemblies (Lie gradients when θ = 0; under quat a rotation's entries are
+// E(q)ᵀ g, of twice the Lie norm at unit q). measure_condition is ignored.
 
 #include <memory>
 
@@ -112,7 +117,7 @@
 namespace liedyn {
 
 // The Ipopt back-end for `component` (options validated by the caller; backend is not read,
-// rotation must be lie or rotvec). Throws ModelError("solver.ipopt.output_file", …) if
+// any rotation parameterisation). Throws ModelError("solver.ipopt.output_file", …) if
 // IpoptOptions::output_file cannot be opened for writing.
 std::unique_ptr<StepSolver> make_ipopt_step_solver(Component component,
                                                    const SolverOptions& options);

@@ -791,13 +791,16 @@ TEST_F(JointsCli, GradcheckPassesThroughEveryJointTypeElasticAndExact) {
       put("AXIS", slider ? R"(, "axis": [1, 0.2, 0])" : "");
       put("MOTOR", slider ? motor : "");
       put("PARAMETER", slider ? motor_parameter : "");
-      // Exact joints also under Ipopt, which holds them as its own constraints: the adjoint
-      // then reads Ipopt's multipliers as the joints' forces.
-      for (const char* backend : {"newton", "ipopt"}) {
+      // Exact joints also under Ipopt, which holds them as its own constraints (and, under
+      // quat, the quaternions' norms): the adjoint then reads Ipopt's multipliers as the
+      // joints' forces.
+      for (const auto& [backend, rotation] : {std::pair{"newton", "lie"}, std::pair{"ipopt", "lie"},
+                                              std::pair{"ipopt", "quat"}}) {
         if (!exact && std::string(backend) == "ipopt") continue;
-        SCOPED_TRACE(backend);
+        SCOPED_TRACE(std::string(backend) + "/" + rotation);
         std::string scene = text;
-        scene.replace(scene.find("BACKEND"), 7, std::string(R"("backend": ")") + backend + R"(", )");
+        scene.replace(scene.find("BACKEND"), 7,
+                      std::string(R"("backend": ")") + backend + R"(", "rotation": ")" + rotation + R"(", )");
         std::ofstream(dir_ / "scene.json") << scene;
         // Step 1e-5: at the default 1e-6 the differences' round-off reaches 1.5e-5 of the
         // slider chain's smallest gradient entry (it falls as the step grows: the adjoint is
