@@ -168,7 +168,7 @@ constexpr double kExactPenalty = 1e4;
 // The joints' terms (JointSpec), added to the component of the ends once every body and rod
 // has its place: where a point or rotation of the state is, as (component, offset), −1 if it
 // is not a DOF.
-void add_joint_terms(const Model& model, std::vector<Component>& components) {
+void add_joint_terms(const Model& model, int frame, std::vector<Component>& components) {
   if (model.joints.empty()) return;
   std::vector<std::array<int, 2>> point_dof(model.point_count(), {-1, -1});
   std::vector<std::array<int, 2>> rotation_dof(model.rod_rotation(static_cast<int>(model.rods.size()), 0),
@@ -206,6 +206,7 @@ void add_joint_terms(const Model& model, std::vector<Component>& components) {
     term.stiffness = term.exact ? kExactPenalty * inertia * inv_h2 : 1.0 / compliance;
   };
   for (const JointSpec& j : model.joints) {
+    if (!j.active_at(frame)) continue;
     const AttachedPoint pa = model.attached_point(j.a), pb = model.attached_point(j.b);
     // (point, rotation) offsets of each end, and the component of the first DOF among them
     // (Model::validate: one end moves).
@@ -342,13 +343,13 @@ int find_root(std::vector<int>& parent, int i) {
 
 }  // namespace
 
-std::vector<Component> build_components(const Model& model) {
+std::vector<Component> build_components(const Model& model, int frame) {
   // Union–find over objects: bodies 0 … n − 1, then rod r as n + r.
   const int n = static_cast<int>(model.bodies.size());
   const int objects = n + static_cast<int>(model.rods.size());
   std::vector<int> parent(objects);
   std::iota(parent.begin(), parent.end(), 0);
-  for (const auto& [a, b] : model.couplings()) {
+  for (const auto& [a, b] : model.couplings(frame)) {
     if (a >= 0 && b >= 0) parent[find_root(parent, a)] = find_root(parent, b);
   }
 
@@ -450,7 +451,7 @@ std::vector<Component> build_components(const Model& model) {
       components.push_back(std::move(c));
     }
   }
-  add_joint_terms(model, components);
+  add_joint_terms(model, frame, components);
   return components;
 }
 

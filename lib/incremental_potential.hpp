@@ -216,11 +216,14 @@ struct Component {
   IncrementalPotential potential;
 };
 
-// Splits a validated model into independent components (bodies joined by springs or joints
-// share one; each rod is one) and builds each component's terms with their scatter offsets.
-// Body order is kept; within a component each body contributes [x, θ] in that order. A rod
-// whose nodes and edges are all clamped has no DOFs and no component.
-std::vector<Component> build_components(const Model& model);
+// Splits a validated model into the independent components of step `frame` (the islands:
+// bodies and rods joined by springs or by joints active at that step share one, each rod
+// alone is one; JointSpec::active_at) and builds each component's terms with their scatter
+// offsets. Body order is kept; within a component each body contributes [x, θ] in that
+// order. A rod whose nodes and edges are all clamped has no DOFs and no component. The
+// components differ between steps only where a joint's active_frames say so
+// (solvers/islands.hpp caches them by the set of active joints).
+std::vector<Component> build_components(const Model& model, int frame = 1);
 
 // The component of rod r: lumped inertia, gravity, stretch, shear, bend–twist and node
 // forces over its free nodes and edges (docs/design.md §6).

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <functional>
+#include <limits>
 #include <numeric>
 #include <numbers>
 #include <sstream>
@@ -224,6 +225,14 @@ void Model::validate() const {
         }
       }
     }
+    if (j.first_frame < 1 || j.last_frame < j.first_frame) {
+      throw ModelError(field("active_frames"), "must be steps [first, last] with 1 <= first <= last (got [" +
+                                                   std::to_string(j.first_frame) + ", " +
+                                                   std::to_string(j.last_frame) + "])");
+    }
+    if (j.type == JointSpec::Type::kSplice && (j.first_frame != 1 || j.last_frame != std::numeric_limits<int>::max())) {
+      throw ModelError(field("active_frames"), "a splice makes two rods one for the whole run");
+    }
     // 0: exact; else 1/compliance is the stiffness of the terms: it must be finite too.
     for (const auto& [value, member] : {std::pair{j.compliance, "compliance"},
                                         std::pair{j.compliance_rotation, "compliance_rotation"}}) {
@@ -321,10 +330,12 @@ void Model::validate_motion_speeds() const {
   }
 }
 
-std::vector<std::pair<int, int>> Model::couplings() const {
+std::vector<std::pair<int, int>> Model::couplings(int frame) const {
   std::vector<std::pair<int, int>> out;
   for (const SpringSpec& s : springs) out.emplace_back(s.a.body, s.b.body);
-  for (const JointSpec& j : joints) out.emplace_back(object_of(j.a), object_of(j.b));
+  for (const JointSpec& j : joints) {
+    if (frame == 0 || j.active_at(frame)) out.emplace_back(object_of(j.a), object_of(j.b));
+  }
   return out;
 }
 

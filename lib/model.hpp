@@ -7,6 +7,7 @@
 #include <stdexcept>
 #include <string>
 #include <utility>
+#include <limits>
 #include <vector>
 
 #include "contact.hpp"
@@ -108,6 +109,13 @@ struct JointSpec {
   // position (m), ξ = 0 at the start; as exact or as elastic as the joint.
   bool has_limits = false;
   double lower_limit = 0.0, upper_limit = 0.0;
+  // The steps k (1, 2, …) in which the joint holds, first_frame ≤ k ≤ last_frame: every step
+  // by default. Outside them it exerts nothing, and what only it joined falls apart into
+  // separate islands (a gripper that lets go, a hook that catches). It holds its ends where
+  // its anchors say, wherever they are when it starts to hold.
+  int first_frame = 1;
+  int last_frame = std::numeric_limits<int>::max();
+  bool active_at(int frame) const { return first_frame <= frame && frame <= last_frame; }
 };
 
 struct ForceSpec {
@@ -143,9 +151,10 @@ struct Model {
   int load_steps = 1;
 
   // The objects that springs and joints couple, as (a, b) pairs: body i is i, rod r is
-  // bodies.size() + r, and −1 the world. What ties objects into one component, and what
-  // anchors them in static mode.
-  std::vector<std::pair<int, int>> couplings() const;
+  // bodies.size() + r, and −1 the world. What ties objects into one component at step
+  // `frame` (the joints active at it, JointSpec::active_at), and with frame 0 (every joint,
+  // whatever its steps) what anchors them in static mode.
+  std::vector<std::pair<int, int>> couplings(int frame = 0) const;
   // The object (as in couplings()) of a joint end, −1 for the world.
   int object_of(const JointEnd& end) const;
 

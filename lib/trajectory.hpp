@@ -23,8 +23,9 @@ struct Trajectory {
   std::vector<State> states;        // q_0 … q_n
   Step initial_step;                // Δq_0
   // Exact joints: per frame k (index k, empty at 0), the multiplier λ of every exact
-  // constraint term at the converged q_k, over the components in build_components order and
-  // within each in term order (IncrementalPotential::exact_forces). Empty without any.
+  // constraint term at the converged q_k, over the components of step k in build_components
+  // order and within each in term order (IncrementalPotential::exact_forces). Empty without
+  // any.
   std::vector<std::vector<Vector3>> multipliers;
 
   int frames() const { return static_cast<int>(states.size()) - 1; }

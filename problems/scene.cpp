@@ -105,7 +105,8 @@ JointSpec parse_joint(const json& value, const std::string& path, const std::str
                       const Model& model, const std::map<std::string, int>& names,
                       const std::set<std::string>& rod_names) {
   ObjectReader j(value, path, source,
-                 {"name", "type", "a", "b", "compliance", "compliance_rotation", "limits", "motor"});
+                 {"name", "type", "a", "b", "compliance", "compliance_rotation", "limits", "motor",
+                  "active_frames"});
   if (j.has("name")) check_printable_name(j, j.string("name"), j.field("name"));
   JointSpec spec;
   const std::string type = j.string("type");
@@ -145,6 +146,19 @@ JointSpec parse_joint(const json& value, const std::string& path, const std::str
     }
     spec.has_motor = true;
     m.finish();
+  }
+  if (j.has("active_frames")) {  // [first, last], last −1: to the end of the run
+    const json& frames = j.get("active_frames");
+    const std::string field = j.field("active_frames");
+    if (!frames.is_array() || frames.size() != 2) {
+      j.fail(field, "must be [first, last]: the steps in which the joint holds (last -1: to the end)");
+    }
+    spec.first_frame = j.to_integer(frames[0], field + "[0]", 1);
+    const int last = j.to_integer(frames[1], field + "[1]", -1);
+    if (last == 0 || (last > 0 && last < spec.first_frame)) {
+      j.fail(field + "[1]", "must be -1 (to the end) or a step >= first (" + std::to_string(spec.first_frame) + ")");
+    }
+    spec.last_frame = last < 0 ? std::numeric_limits<int>::max() : last;
   }
   spec.compliance = j.number("compliance", 0.0);
   spec.compliance_rotation = j.number("compliance_rotation", spec.compliance);

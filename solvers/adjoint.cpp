@@ -112,17 +112,27 @@ DifferentiableSimulation::Result DifferentiableSimulation::evaluate(const Eigen:
 void DifferentiableSimulation::backward(const Model& model, const Eigen::VectorXd& gamma,
                                         const Trajectory& trajectory,
                                         Eigen::VectorXd& gradient) const {
-  std::vector<Component> components = build_components(model);
-  std::vector<std::unique_ptr<HessianSolve>> solves;
-  // Exact joint terms per component, and the first one's place in a frame's multipliers.
-  std::vector<int> exact_terms, first_exact;
-  int exact_total = 0;
-  for (const Component& c : components) {
-    solves.push_back(make_hessian_solve(c));
-    exact_terms.push_back(c.potential.exact_constraints());
-    first_exact.push_back(exact_total);
-    exact_total += exact_terms.back();
-  }
+  // Per set of islands (solvers/islands.hpp; the forward run's, step by step): a Hessian
+  // solve per component, and its exact joint terms with the first one's place in a frame's
+  // multipliers (Trajectory::multipliers, in the same component order).
+  struct Islands {
+    std::vector<Component> components;
+    std::vector<std::unique_ptr<HessianSolve>> solves;
+    std::vector<int> exact_terms, first_exact;
+  };
+  IslandCache<Islands> cache;
+  const auto make = [](std::vector<Component> components) {
+    Islands islands;
+    int exact_total = 0;
+    for (const Component& c : components) {
+      islands.solves.push_back(make_hessian_solve(c));
+      islands.exact_terms.push_back(c.potential.exact_constraints());
+      islands.first_exact.push_back(exact_total);
+      exact_total += islands.exact_terms.back();
+    }
+    islands.components = std::move(components);
+    return islands;
+  };
   Eigen::MatrixXd J, Y;
   Eigen::VectorXd column;
 
@@ -154,6 +164,11 @@ void DifferentiableSimulation::backward(const Model& model, const Eigen::VectorX
     }
     const double load_scale =
         dynamic ? 1.0 : std::min(1.0, double(k) / double(model.load_steps));
+    Islands& islands = cache.at(model, k, make);
+    std::vector<Component>& components = islands.components;
+    const std::vector<std::unique_ptr<HessianSolve>>& solves = islands.solves;
+    const std::vector<int>& exact_terms = islands.exact_terms;
+    const std::vector<int>& first_exact = islands.first_exact;
     for (std::size_t c = 0; c < components.size(); ++c) {
       IncrementalPotential& potential = components[c].potential;
       potential.begin_step(previous, previous_step, k);

@@ -23,18 +23,27 @@ Simulator::Simulator(Model model, const SolverOptions& options)
   }
   previous_ = state_;
   previous_step_ = step_;
-  for (Component& c : build_components(model_)) {
-    solvers_.push_back(make_step_solver(std::move(c), options_));
-  }
-  reports_.resize(solvers_.size());
-  const int islands = static_cast<int>(solvers_.size());
-  island_threads_ = options_.island_threads == 0 ? omp_get_max_threads() : options_.island_threads;
-  island_threads_ = std::max(1, std::min(island_threads_, islands));
-  if (options_.backend == Backend::kIpopt) island_threads_ = 1;  // see SolverOptions
+  current_ = &islands_at(1);
+}
+
+Simulator::StepIslands& Simulator::islands_at(int frame) {
+  return islands_.at(model_, frame, [&](std::vector<Component> components) {
+    StepIslands islands;
+    for (Component& c : components) islands.solvers.push_back(make_step_solver(std::move(c), options_));
+    islands.reports.resize(islands.solvers.size());
+    const int count = static_cast<int>(islands.solvers.size());
+    int threads = options_.island_threads == 0 ? omp_get_max_threads() : options_.island_threads;
+    islands.threads = std::max(1, std::min(threads, count));
+    if (options_.backend == Backend::kIpopt) islands.threads = 1;  // see SolverOptions
+    return islands;
+  });
 }
 
 void Simulator::set_measure_condition(bool on) {
-  for (auto& s : solvers_) s->set_measure_condition(on);
+  options_.measure_condition = on;  // for islands built later
+  islands_.for_each([&](StepIslands& islands) {
+    for (auto& s : islands.solvers) s->set_measure_condition(on);
+  });
 }
 
 StepReport Simulator::step() {
@@ -56,24 +65,28 @@ StepReport Simulator::step() {
   apply_prescribed_motions(load_scale);
 
   // The islands write disjoint entries of state_ and read previous_ and the model only.
+  StepIslands* const before = current_;
+  StepIslands& now = islands_at(frame_ + 1);
+  current_ = &now;
   const auto solve_island = [&](int i) {
-    IncrementalPotential& potential = solvers_[i]->component().potential;
+    IncrementalPotential& potential = now.solvers[i]->component().potential;
     potential.begin_step(previous_, previous_step_, frame_ + 1);
     if (!dynamic) potential.set_load_scale(load_scale);
-    reports_[i] = solvers_[i]->solve(state_);
+    now.reports[i] = now.solvers[i]->solve(state_);
   };
-  const int islands = static_cast<int>(solvers_.size());
-  if (island_threads_ > 1) {
-#pragma omp parallel for num_threads(island_threads_) schedule(dynamic)
+  const int islands = static_cast<int>(now.solvers.size());
+  if (now.threads > 1) {
+#pragma omp parallel for num_threads(now.threads) schedule(dynamic)
     for (int i = 0; i < islands; ++i) solve_island(i);
   } else {  // no parallel region at all: even an inactive one allocates in libgomp
     for (int i = 0; i < islands; ++i) solve_island(i);
   }
   StepReport report;
-  for (const StepReport& r : reports_) report.merge(r);
+  for (const StepReport& r : now.reports) report.merge(r);
 
   if (!report.state_updated()) {
     state_ = previous_;
+    current_ = before;  // the islands of the state kept
     return report;
   }
   // The step; a static sequence of equilibria has none (zero velocities and kinetic energy).
@@ -130,13 +143,13 @@ double Simulator::kinetic_energy() const {
 
 double Simulator::potential_energy() const {
   double energy = 0.0;
-  for (const auto& s : solvers_) energy += s->component().potential.potential_energy(state_);
+  for (const auto& s : current_->solvers) energy += s->component().potential.potential_energy(state_);
   return energy;
 }
 
 double Simulator::max_penetration() const {
   double deepest = 0.0;
-  for (const auto& s : solvers_) {
+  for (const auto& s : current_->solvers) {
     for (const Contact& c : s->component().potential.terms<Contact>()) {
       deepest = std::max(deepest, c.penetration(state_));
     }
@@ -146,7 +159,7 @@ double Simulator::max_penetration() const {
 
 double Simulator::constraint_violation() const {
   double violation = 0.0;
-  for (const auto& s : solvers_) {
+  for (const auto& s : current_->solvers) {
     violation = std::max(violation, s->component().potential.constraint_violation(state_));
   }
   return violation;
@@ -154,12 +167,12 @@ double Simulator::constraint_violation() const {
 
 void Simulator::exact_forces(std::vector<Vector3>& out) const {
   out.clear();
-  for (const auto& s : solvers_) s->component().potential.exact_forces(state_, out);
+  for (const auto& s : current_->solvers) s->component().potential.exact_forces(state_, out);
 }
 
 std::vector<FreeDirection> Simulator::free_directions() const {
   std::vector<FreeDirection> out;
-  for (const auto& s : solvers_) {
+  for (const auto& s : current_->solvers) {
     const std::vector<FreeDirection> free = liedyn::free_directions(model_, s->component(), state_);
     out.insert(out.end(), free.begin(), free.end());
   }

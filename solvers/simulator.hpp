@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "free_directions.hpp"
+#include "islands.hpp"
 #include "step_solver.hpp"
 
 namespace liedyn {
@@ -56,6 +57,10 @@ class Simulator {
   // Directions that nothing holds at the current state (free_directions.hpp), over every
   // component: why a static step cannot meet the tolerance. One assembly per component.
   std::vector<FreeDirection> free_directions() const;
+  // The islands of the last step (of step 1 before any; solvers/islands.hpp), and how many
+  // distinct sets of them the run has built.
+  int islands() const { return static_cast<int>(current_->solvers.size()); }
+  int island_sets() const { return static_cast<int>(islands_.size()); }
 
  private:
   // Calls f(point, mass, rotation, body_inertia) for every lumped mass and rotational
@@ -74,9 +79,15 @@ class Simulator {
   State state_, previous_;
   Step step_, previous_step_;
   int frame_ = 0;
-  std::vector<std::unique_ptr<StepSolver>> solvers_;  // one per component
-  std::vector<StepReport> reports_;                   // per component, for the islands' threads
-  int island_threads_ = 1;                            // SolverOptions::island_threads resolved
+  // The step solvers of one set of islands (one per island) and their threads.
+  struct StepIslands {
+    std::vector<std::unique_ptr<StepSolver>> solvers;
+    std::vector<StepReport> reports;  // per island, for the islands' threads
+    int threads = 1;                  // SolverOptions::island_threads resolved
+  };
+  StepIslands& islands_at(int frame);  // IslandCache::at with this simulator's solvers
+  IslandCache<StepIslands> islands_;
+  StepIslands* current_ = nullptr;     // the islands of the state (last step's, or step 1's)
 };
 
 }  // namespace liedyn

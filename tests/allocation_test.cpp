@@ -491,6 +491,29 @@ TEST(Allocation, IslandsOnTwoThreadsDoNotAllocate) {
   expect_no_allocation(run_counted(sim, kSteps), kSteps);
 }
 
+// Islands that change (solvers/islands.hpp): a ball joint between a link hung on a spring and
+// a free one holds in steps 2–3 only, so the run has two sets of islands (two, then one),
+// each built the first time it holds. From step 4 on the first set holds again: it is not
+// built again, and the steps allocate nothing.
+TEST(Allocation, IslandsThatHoldAgainAreNotBuiltAgain) {
+  Model model = spring_chain(2);
+  model.springs.pop_back();  // the spring between the links
+  liedyn::JointSpec ball;
+  ball.a = liedyn::JointEnd::body(1, Vector3(-0.1, 0.0, 0.0));
+  ball.b = liedyn::JointEnd::body(0, Vector3(0.2, 0.0, 0.0));
+  ball.compliance = ball.compliance_rotation = 1e-5;
+  ball.first_frame = 2;
+  ball.last_frame = 3;
+  model.joints.push_back(ball);
+  Simulator sim(model, SolverOptions{});
+  EXPECT_EQ(sim.islands(), 2);
+  for (int k = 1; k <= 2; ++k) ASSERT_TRUE(sim.step().converged()) << k;
+  EXPECT_EQ(sim.islands(), 1);
+  expect_no_allocation(run_counted(sim, kSteps), kSteps);  // steps 3 (warm) to 103
+  EXPECT_EQ(sim.islands(), 2);
+  EXPECT_EQ(sim.island_sets(), 2);
+}
+
 }  // namespace
 
 // ---------------------------------------------------------------------------------------
