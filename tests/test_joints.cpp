@@ -720,7 +720,8 @@ TEST_F(JointsCli, FramesReportTheExactJointsViolation) {
 // over its first 100 frames: all nine rows follow the Newton/Lie run to 1e-5 (m, rad).
 TEST_F(JointsCli, EveryJointSceneRunsUnderEveryBackEndAndParameterisation) {
   for (const char* name : {"joints/pendulum.json", "joints/double_pendulum.json", "joints/chain.json",
-                           "joints/gripper_rod.json", "joints/stops.json", "optimization/arm_reach.json"}) {
+                           "joints/gripper_rod.json", "joints/release.json", "joints/stops.json",
+                           "optimization/arm_reach.json"}) {
     SCOPED_TRACE(name);
     nlohmann::json scene = nlohmann::json::parse(test::read_file(kScenes / name));
     scene["frames"] = 100;
