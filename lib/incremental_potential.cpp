@@ -6,6 +6,7 @@
 #include <optional>
 
 #include "rod_terms.hpp"
+#include "so3.hpp"
 
 namespace liedyn {
 
@@ -285,17 +286,28 @@ void add_joint_terms(const Model& model, int frame, std::vector<Component>& comp
       // The bending and twist across the junction, as at a rod's interior node between its
       // edges i−1 and i (add_rod_terms): a's last edge and b's first, over their Voronoi
       // length, with the two rods' mean stiffness and the junction's initial curvature at rest.
+      // One rod would carry a's last frame across the junction by parallel transport; b's
+      // own first frame is its own transport from the z axis, and differs from that by a
+      // twist T about b's first edge wherever the rods meet at an angle: the term sees b's
+      // frame times T (RodBendTwist::frame_offset).
       const int ra = j.a.object, rb = j.b.object;
       const int edge_a = model.rods[ra].edge_count() - 1;
       const RodDiscretization& da = rod(ra);
       const RodDiscretization& db = rod(rb);
+      const std::vector<Vector3>& na = model.rods[ra].nodes;
+      const std::vector<Vector3>& nb = model.rods[rb].nodes;
+      const Matrix3 carried = so3::orthonormalize(
+          minimal_rotation((na[edge_a + 1] - na[edge_a]).normalized(), (nb[1] - nb[0]).normalized()) *
+          da.frames[edge_a]);
       RodBendTwist bend;
       bend.edge0 = model.rod_rotation(ra, edge_a);
       bend.edge1 = model.rod_rotation(rb, 0);
       bend.offsets = {rotation_dof[bend.edge0][1], rotation_dof[bend.edge1][1]};
       bend.rest_length = 0.5 * (da.rest_length[edge_a] + db.rest_length[0]);
       bend.stiffness = 0.5 * (model.rods[ra].bending_stiffness + model.rods[rb].bending_stiffness);
-      bend.rest_darboux = darboux_vector(da.frames[edge_a], db.frames[0], bend.rest_length);
+      bend.frame_offset = so3::orthonormalize(db.frames[0].transpose() * carried);
+      bend.has_frame_offset = so3::distance(bend.frame_offset, Matrix3::Identity()) > 0.0;
+      bend.rest_darboux = darboux_vector(da.frames[edge_a], carried, bend.rest_length);
       p.add(bend);
     }
     if (j.has_limits) {  // one term per bound (joint_limits.hpp), as exact or elastic as the joint

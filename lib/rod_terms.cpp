@@ -98,7 +98,8 @@ double RodShear::evaluate(const State& q, LocalGradient<3>* g, LocalHessian<3>* 
 
 double RodBendTwist::evaluate(const State& q, LocalGradient<2>* g, LocalHessian<2>* H) const {
   const Matrix3& Ra = q.rotations[edge0];
-  const Matrix3& Rb = q.rotations[edge1];
+  Matrix3 offset_storage;
+  const Matrix3& Rb = rotation1(q, offset_storage);
   const Vector3 dw = darboux(Ra, Rb, rest_length) - rest_darboux;  // Δω = ω − ω̄
   const Vector3 Kdw = stiffness.cwiseProduct(dw);
   const double value = 0.5 * rest_length * dw.dot(Kdw);
@@ -139,14 +140,16 @@ double RodBendTwist::evaluate(const State& q, LocalGradient<2>* g, LocalHessian<
 void RodBendTwist::parameter_jacobians(const State& q, Eigen::Matrix<double, 6, 3>* d_rest_darboux,
                                        Eigen::Matrix<double, 6, 3>* d_stiffness) const {
   const Matrix3& Ra = q.rotations[edge0];
-  const Matrix3 C = q.rotations[edge1] * Ra.transpose();
+  Matrix3 offset_storage;
+  const Matrix3& Rb = rotation1(q, offset_storage);
+  const Matrix3 C = Rb * Ra.transpose();
   const Matrix3 W = 0.5 * (C.trace() * Matrix3::Identity() - C).transpose() * Ra;  // Gᵀ R_a
   if (d_rest_darboux != nullptr) {
     const Matrix3 WK = W * stiffness.asDiagonal();
     *d_rest_darboux << WK, -WK;
   }
   if (d_stiffness != nullptr) {
-    const Vector3 dw = darboux(Ra, q.rotations[edge1], rest_length) - rest_darboux;
+    const Vector3 dw = darboux(Ra, Rb, rest_length) - rest_darboux;
     const Matrix3 Wdw = W * dw.asDiagonal();
     *d_stiffness << -Wdw, Wdw;
   }
@@ -196,7 +199,8 @@ void RodShear::residual(const State& q, Residual& r, ResidualJacobian* J) const 
 
 void RodBendTwist::residual(const State& q, Residual& r, ResidualJacobian* J) const {
   const Matrix3& Ra = q.rotations[edge0];
-  const Matrix3& Rb = q.rotations[edge1];
+  Matrix3 offset_storage;
+  const Matrix3& Rb = rotation1(q, offset_storage);
   const Vector3 dw = darboux(Ra, Rb, rest_length) - rest_darboux;  // Δω = ω − ω̄
   r = (rest_length * stiffness).cwiseSqrt().cwiseProduct(dw);      // √l K^½ Δω
   if (J != nullptr) {

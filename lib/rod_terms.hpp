@@ -143,6 +143,12 @@ struct RodBendTwist {
   Vector3 rest_darboux = Vector3::Zero();    // ω̄ [1/m], material frame of edge i−1
   ScheduledParameter<3> rest_control;        // per-step ω̄ and its slot in γ (term.hpp)
   int stiffness_slot = -1;                   // γ index of (K₁, K₂, K₃), −1: not a parameter
+  // A splice's junction (lib/incremental_potential.cpp): edge i is b's first edge, whose own
+  // frame differs from a's last frame carried across the junction by a constant twist T
+  // about the edge; the term sees R_i T, the frame one rod through the junction would have.
+  // A left perturbation of R_i is one of R_i T, so the Lie derivatives below are unchanged.
+  bool has_frame_offset = false;
+  Matrix3 frame_offset = Matrix3::Identity();  // T
 
   void begin_frame(int k) { rest_darboux = rest_control.at(k, rest_darboux); }
   double evaluate(const State& q, LocalGradient<2>* g, LocalHessian<2>* H) const;
@@ -159,6 +165,14 @@ struct RodBendTwist {
   using ResidualJacobian = LocalResidualJacobian<kResiduals, kBlocks>;
   // r = √l K^½ Δω; J = [−W, W], W = K^½ R_aᵀ G/√l (see the top). Needs K ≥ 0.
   void residual(const State& q, Residual& r, ResidualJacobian* J) const;
+
+ private:
+  // R_i, or R_i T (in `storage`) with a frame offset.
+  const Matrix3& rotation1(const State& q, Matrix3& storage) const {
+    if (!has_frame_offset) return q.rotations[edge1];
+    storage = q.rotations[edge1] * frame_offset;
+    return storage;
+  }
 };
 
 }  // namespace liedyn

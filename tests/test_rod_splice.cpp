@@ -16,6 +16,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <string>
 #include <vector>
 
@@ -130,6 +131,48 @@ TEST(RodSplice, AFreeSplicedRodFliesAsOneRod) {
   for (std::size_t k = 0; k < one.size(); ++k) worst = std::max(worst, largest_difference(one[k], two[k]));
   EXPECT_LT(worst, kAgreement);
   EXPECT_GT((one.back().nodes[0] - Vector3(0, 0, 0)).norm(), 1e-2);  // it moved
+}
+
+// Two rods meeting at an angle (b turned 40° about z from a, and its end rising): one rod
+// would carry a's last frame across the corner by parallel transport, b's own first frame is
+// its own transport from the z axis, and the two differ by a twist T about b's first edge.
+// The junction's term sees b's frame times T, so the pair is the bent single rod — with an
+// isotropic section (K₁ = K₂: b's own terms do not see the twist; with K₁ ≠ K₂ b's
+// cross-section is its own, turned by T from one rod's). b's frames are compared times T.
+TEST(RodSplice, TwoRodsMeetingAtAnAngleAreOneBentRod) {
+  const auto nodes = [](int first, int last) {
+    std::string text = R"("nodes": [)";
+    for (int i = first; i <= last; ++i) {
+      const Vector3 x = i <= 6 ? Vector3(0.05 * i, 0, 0)
+                               : Vector3(0.3, 0, 0) + 0.05 * (i - 6) * Vector3(std::cos(0.7), std::sin(0.7), 0.2).normalized();
+      text += (i > first ? ", [" : "[") + std::to_string(x.x()) + ", " + std::to_string(x.y()) + ", " + std::to_string(x.z()) + "]";
+    }
+    return text + "]";
+  };
+  const auto bent = [&](const std::string& name, int first, int last, const std::string& extra) {
+    return R"({ "name": ")" + name + R"(", )" + nodes(first, last) + R"(, "mass": )" +
+           std::to_string(0.05 * (last - first) / 12.0) + R"(, "radius": 0.005,
+      "stretch_stiffness": 1000, "shear_stiffness": 1000, "bending_stiffness": [0.005, 0.005, 0.003] )" +
+           extra + " }";
+  };
+  const std::string kTipOfB = R"(, "node_forces": [ { "node": 6, "force": [0, 0.05, -0.2] } ])";
+  for (const char* mode : {"static", "dynamic"}) {
+    SCOPED_TRACE(mode);
+    std::vector<Shape> one, two;
+    run(scene(mode, bent("r", 0, 12, kClamp + kTipOfOne)), &one);
+    run(scene(mode, bent("a", 0, 6, kClamp) + ", " + bent("b", 6, 12, kTipOfB), kSplice), &two);
+    const Scene start = parse_scene(scene(mode, bent("a", 0, 6, kClamp) + ", " + bent("b", 6, 12, kTipOfB), kSplice), "s.json");
+    const Scene start_one = parse_scene(scene(mode, bent("r", 0, 12, kClamp + kTipOfOne)), "r.json");
+    const Matrix3 T = start.model.initial_state().rotations[6].transpose() * start_one.model.initial_state().rotations[6];
+    EXPECT_GT(so3::distance(T, Matrix3::Identity()), 0.05);  // the frames differ: a twist
+    double worst = 0.0;
+    for (std::size_t k = 0; k < one.size(); ++k) {
+      for (int e = 6; e < 12; ++e) two[k].frames[e] = two[k].frames[e] * T;
+      worst = std::max(worst, largest_difference(one[k], two[k]));
+    }
+    EXPECT_LT(worst, kAgreement);
+    EXPECT_GT((one.back().nodes[12] - start_one.model.initial_state().points[12]).norm(), 1e-2);
+  }
 }
 
 TEST(RodSplice, BadSplicesNameTheirField) {

@@ -411,6 +411,49 @@ TEST(RodBendTwistTerm, DerivativesMatchFiniteDifferences) {
                          (2 * static_cast<int>(q_angles.size()) - 1));
 }
 
+// A splice's frame offset T (RodBendTwist::frame_offset): the term at (R_a, R_b) with T is
+// the term without it at (R_a, R_b T), value, gradient and Hessian alike (a left
+// perturbation of R_b is one of R_b T), and passes the FD check with T a twist about the edge
+// and a generic rotation, over relative angles from 0 to π − 1e-6, also in its residual form.
+TEST(RodBendTwistTerm, AFrameOffsetIsAConstantRightFactorOfTheSecondFrame) {
+  std::mt19937 rng(302);
+  for (const Matrix3& T : {so3::exp(0.7 * Vector3::UnitZ()), so3::exp(Vector3(0.4, -1.1, 2.0))}) {
+    for (const double q_angle : {0.0, 1e-4, 1.0, kPi - 1e-6}) {
+      SCOPED_TRACE(trace("angle of Q", q_angle, 0.0, 0.0));
+      const Vector3 rest = darboux_vector(Matrix3::Identity(), rotation_at(0.4, rng), 0.05);
+      BendCase with = make_bend(0.05, 1.0, rotation_at(1.0, rng), so3::exp(q_angle * random_unit(rng)), rest);
+      with.term.has_frame_offset = true;
+      with.term.frame_offset = T;
+      BendCase without = with;
+      without.term.has_frame_offset = false;
+      without.q.rotations[1] = with.q.rotations[1] * T;
+      LocalGradient<2> g1, g2;
+      LocalHessian<2> H1, H2;
+      EXPECT_EQ(with.term.evaluate(with.q, &g1, &H1), without.term.evaluate(without.q, &g2, &H2));
+      EXPECT_EQ(g1, g2);
+      EXPECT_EQ(H1, H2);
+      RodBendTwist::Residual r1, r2;
+      RodBendTwist::ResidualJacobian J1, J2;
+      with.term.residual(with.q, r1, &J1);
+      without.term.residual(without.q, r2, &J2);
+      EXPECT_EQ(r1, r2);
+      EXPECT_EQ(J1, J2);
+      EXPECT_GT((g1 - [&] {
+                   LocalGradient<2> g;
+                   BendCase plain = with;
+                   plain.term.has_frame_offset = false;
+                   plain.term.evaluate(plain.q, &g, nullptr);
+                   return g;
+                 }()).norm(),
+                1e-6);  // the offset matters
+      fd::TermCheckOptions opt;
+      opt.gradient.abs_floor = 16 * kEps * 1.7 * (1.0 / 0.05) / opt.gradient.step;
+      opt.hessian.abs_floor = 16 * kEps * 1.7 * (2.0 / 0.05) / opt.hessian.step;
+      EXPECT_TRUE(check_rod_term(with.term, with.q, with.dofs, 1.0, opt));
+    }
+  }
+}
+
 TEST(RodBendTwistTerm, FdCheckSeesTheMixedBlock) {
   // The mixed block H_ab = −S − ½N + (m·c)I is not symmetric; the FD checks must reject its
   // transpose and a version without the second-order cross terms −AB of exp(−α)exp(β).
