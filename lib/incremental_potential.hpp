@@ -17,6 +17,7 @@
 #include <utility>
 #include <vector>
 
+#include "body_contact.hpp"
 #include "cable.hpp"
 #include "contact.hpp"
 #include "friction.hpp"
@@ -50,7 +51,7 @@ class IncrementalPotential {
                                ConstantTorque, RegionForce, Spring, RodStretch, RodShear,
                                RodBendTwist, CableSegment, JointPoint, JointLine, JointAlignment, JointWeld,
                                JointMotor, JointForceMotor, JointLimit<HingeAngle>,
-                               JointLimit<SliderPosition>, Contact, Friction>;
+                               JointLimit<SliderPosition>, Contact, Friction, BodyContact>;
 
   // The terms of type T (one contiguous vector per type).
   template <class T>

@@ -1,0 +1,65 @@
+#pragma once
+// Penalty contact between two bodies: a sample of body A against the shape of body B
+// (lib/contact.hpp is the same against a static collider; shapes: lib/sdf.hpp).
+//
+// The sample is the point p = x_A + R_A p̄ (lever r = R_A p̄), a sphere of radius ρ; B's shape
+// is an SDF φ_B in B's coordinates, so with w = p − x_B and u = R_Bᵀ w,
+//   φ = φ_B(u),   d = ρ − φ,   V = ½ k max(0, d)².
+// In world terms n = R_B ∇φ_B(u), N = R_B ∇²φ_B(u) R_Bᵀ, f = ∂V/∂p = −k d n and
+// K = k (n nᵀ − d N). A change of the four blocks (x_A, θ_A, x_B, θ_B), each rotation by a
+// left perturbation, moves u by R_Bᵀ J (δx_A, δθ_A, δx_B, δθ_B) to first order, with
+//   J = [I, −hat(r), −I, hat(w)]
+// (B's turn δθ_B moves the field, u = R_Bᵀ exp(−δθ_B) w: the sample seen from B turns by
+// −δθ_B about x_B). So the gradient is Jᵀ f and the Hessian is Jᵀ K J plus the second-order
+// terms of u (paper eq. 23 for both rotated points, and the cross terms of exp(−δθ_B) with
+// the motion of p and x_B), with f in the world:
+//   θ_Aθ_A: C(r, f)          θ_Bθ_B: C(w, f)          (C = rotated_point_curvature)
+//   θ_B x_A: hat(f)          θ_B x_B: −hat(f)         θ_B θ_A: −hat(f) hat(r)
+// and their transposes across the diagonal. As for a collider, K is indefinite where B's
+// surface curves towards the sample, exact, and V is C¹ with a jump of K at d = 0.
+// The internal forces are equal and opposite: the gradient's x_A and x_B parts cancel, and
+// so do the torques about the origin, so contact between bodies conserves linear and angular
+// momentum (tests/test_body_contact.cpp).
+//
+// Least-squares form, 1 residual: r = √k max(0, d), ∂r/∂(x_A, θ_A, x_B, θ_B) = −√k nᵀ J
+// where d > 0, else 0.
+//
+// Reads q_k only: the adjoint needs no mixed block (its Hessian enters H_k). Its stencil
+// spans two bodies: a pair of bodies in contact is a coupling, and joins their islands
+// (solvers/islands.hpp) for the steps in which it is (Model::touching_pairs).
+
+#include <memory>
+
+#include "sdf.hpp"
+#include "state.hpp"
+#include "term.hpp"
+
+namespace liedyn {
+
+struct BodyContact {
+  static constexpr int kBlocks = 4;
+  static constexpr const char* kName = "body_contact";
+  static constexpr bool kEnergyOfState = true;
+
+  std::array<int, kBlocks> offsets{-1, -1, -1, -1};  // x_A, θ_A, x_B, θ_B
+  AttachedPoint at;                                  // the sample, on A
+  int body_b = -1;                                   // B (State::points and ::rotations)
+  std::shared_ptr<const Collider> shape;             // B's shape, in B's coordinates
+  double stiffness = 0.0;                            // k, A's
+  double radius = 0.0;                               // ρ, A's
+
+  // ρ − φ: > 0 when the sample's sphere overlaps B.
+  double penetration(const State& q) const;
+  double evaluate(const State& q, LocalGradient<kBlocks>* g, LocalHessian<kBlocks>* H) const;
+
+  static constexpr int kResiduals = 1;
+  using Residual = LocalResidual<kResiduals>;
+  using ResidualJacobian = LocalResidualJacobian<kResiduals, kBlocks>;
+  void residual(const State& q, Residual& r, ResidualJacobian* J) const;
+
+ private:
+  // φ_B's value and world-frame derivatives at the sample; w = p − x_B.
+  SdfValue field(const State& q, Vector3& w, bool with_hessian) const;
+};
+
+}  // namespace liedyn
