@@ -1,6 +1,8 @@
 #include "body_contact.hpp"
 
 #include <cmath>
+#include <limits>
+#include <variant>
 
 #include "so3.hpp"
 
@@ -74,6 +76,69 @@ void BodyContact::residual(const State& q, Residual& res, ResidualJacobian* J) c
     J->block<1, 3>(0, 6) = root_k * n.transpose();
     J->block<1, 3>(0, 9) = root_k * w.cross(n).transpose();
   }
+}
+
+namespace {
+
+// The radius about the body's origin that the shape fits in.
+double bounding_radius(const Collider& shape) {
+  const double offset = shape.position.norm();
+  if (const auto* s = std::get_if<SphereShape>(&shape.shape)) return offset + s->radius;
+  if (const auto* b = std::get_if<BoxShape>(&shape.shape)) return offset + b->half_extents.norm();
+  if (const auto* c = std::get_if<CapsuleShape>(&shape.shape)) return offset + c->half_length + c->radius;
+  throw ModelError("contact.shape", "a body's shape must be a sphere, a box or a capsule");
+}
+
+}  // namespace
+
+TouchingPairs::TouchingPairs(const Model& model) : pairs_(model.body_pairs()) {
+  for (const RigidBody& body : model.bodies) {
+    Body b;
+    if (body.contact.enabled()) b.samples = body.contact_points;
+    b.radius = body.contact.radius;
+    b.shape = body.shape;
+    double reach = 0.0;
+    for (const Vector3& s : b.samples) reach = std::max(reach, s.norm() + b.radius);
+    if (b.shape != nullptr) reach = std::max(reach, bounding_radius(*b.shape));
+    reach_.push_back(reach);
+    bodies_.push_back(std::move(b));
+  }
+}
+
+double TouchingPairs::overlap(const State& q, int a, int b) const {
+  const Body& sampled = bodies_[a];
+  const Body& solid = bodies_[b];
+  double deepest = -std::numeric_limits<double>::infinity();
+  if (solid.shape == nullptr) return deepest;
+  const Matrix3& R_a = q.rotations[a];
+  const Matrix3& R_b = q.rotations[b];
+  for (const Vector3& s : sampled.samples) {
+    const Vector3 u = R_b.transpose() * (q.points[a] + R_a * s - q.points[b]);
+    deepest = std::max(deepest, sampled.radius - solid.shape->evaluate(u, false).distance);
+  }
+  return deepest;
+}
+
+bool TouchingPairs::near(const State& q, int p, double margin) const {
+  const auto [a, b] = pairs_[p];
+  if ((q.points[a] - q.points[b]).norm() > reach_[a] + reach_[b] + margin) return false;
+  return overlap(q, a, b) > -margin || overlap(q, b, a) > -margin;
+}
+
+void TouchingPairs::find(const State& q, const std::vector<double>& margin,
+                         std::vector<bool>& touching) const {
+  touching.resize(pairs_.size());  // allocates the first time only
+  for (std::size_t p = 0; p < pairs_.size(); ++p) {
+    touching[p] = near(q, static_cast<int>(p), margin[pairs_[p].first] + margin[pairs_[p].second]);
+  }
+}
+
+bool TouchingPairs::add_penetrating(const State& q, std::vector<bool>& touching) const {
+  bool added = false;
+  for (std::size_t p = 0; p < pairs_.size(); ++p) {
+    if (!touching[p] && near(q, static_cast<int>(p), 0.0)) touching[p] = added = true;
+  }
+  return added;
 }
 
 }  // namespace liedyn

@@ -29,7 +29,10 @@
 // (solvers/islands.hpp) for the steps in which it is (Model::touching_pairs).
 
 #include <memory>
+#include <utility>
+#include <vector>
 
+#include "model.hpp"
 #include "sdf.hpp"
 #include "state.hpp"
 #include "term.hpp"
@@ -60,6 +63,42 @@ struct BodyContact {
  private:
   // φ_B's value and world-frame derivatives at the sample; w = p − x_B.
   SdfValue field(const State& q, Vector3& w, bool with_hessian) const;
+};
+
+// Which pairs of bodies touch at a state (Model::body_pairs: the candidates), for the
+// couplings of a step. A pair touches when a sample of one body comes within its radius plus
+// a margin of the other's shape (the margins of its two bodies added: how far each may move
+// in the step). A bounding sphere about each body's centre of mass (its samples' spheres and
+// its shape) rules most pairs out first. Allocation-free after construction. Body shapes are
+// spheres, boxes and capsules (whose bounding spheres are known).
+class TouchingPairs {
+ public:
+  TouchingPairs() = default;
+  explicit TouchingPairs(const Model& model);
+
+  std::size_t size() const { return pairs_.size(); }
+  // The radius about body i's centre of mass that its samples' spheres and its shape fit in.
+  double reach(int body) const { return reach_[body]; }
+  // touching[p] for every candidate pair p at q, with margin[i] (m) per body.
+  void find(const State& q, const std::vector<double>& margin, std::vector<bool>& touching) const;
+  // Marks the pairs that penetrate at q (a sample deeper than its radius) but are not yet in
+  // `touching`; true if there were any.
+  bool add_penetrating(const State& q, std::vector<bool>& touching) const;
+
+ private:
+  struct Body {
+    std::vector<Vector3> samples;  // none: contact disabled
+    double radius = 0.0;
+    std::shared_ptr<const Collider> shape;
+  };
+  // The deepest reach of a sample of `a` into b's shape, ρ − φ (−∞ without one): > −margin
+  // when they are within `margin` of touching.
+  double overlap(const State& q, int a, int b) const;
+  bool near(const State& q, int p, double margin) const;
+
+  std::vector<std::pair<int, int>> pairs_;
+  std::vector<Body> bodies_;
+  std::vector<double> reach_;
 };
 
 }  // namespace liedyn

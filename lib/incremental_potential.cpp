@@ -70,6 +70,16 @@ double IncrementalPotential::constraint_violation(const State& q) const {
   return violation;
 }
 
+double IncrementalPotential::max_penetration(const State& q) const {
+  double deepest = 0.0;
+  for_each_term_vector([&](const auto& terms) {
+    for (const auto& t : terms) {
+      if constexpr (requires { t.penetration(q); }) deepest = std::max(deepest, t.penetration(q));
+    }
+  });
+  return deepest;
+}
+
 void IncrementalPotential::update_multipliers(const State& q) {
   exact_constraints_of<false>(*this, [&](auto& t) { t.update_multiplier(q); });
 }
@@ -139,6 +149,33 @@ void add_contact_terms(const Model& model,
   }
 }
 
+// Every sample of A against B's shape and of B against A's, for each pair of bodies that
+// touches under `key` (Model::coupling_key); A's and B's blocks are in one component.
+void add_body_contact_terms(const Model& model, const std::vector<bool>& key,
+                            const std::vector<int>& point_offset, const std::vector<int>& rotation_offset,
+                            const std::vector<int>& component_of, std::vector<Component>& components) {
+  if (key.size() <= model.joints.size()) return;
+  const std::vector<std::pair<int, int>> pairs = model.body_pairs();
+  for (std::size_t p = 0; p < pairs.size(); ++p) {
+    if (!key[model.joints.size() + p]) continue;
+    for (const auto& [a, b] : {pairs[p], std::pair{pairs[p].second, pairs[p].first}}) {
+      const RigidBody& sampled = model.bodies[a];
+      const RigidBody& solid = model.bodies[b];
+      if (!sampled.contact.enabled() || solid.shape == nullptr) continue;
+      for (const Vector3& sample : sampled.contact_points) {
+        BodyContact term;
+        term.offsets = {point_offset[a], rotation_offset[a], point_offset[b], rotation_offset[b]};
+        term.at = {a, a, sample};
+        term.body_b = b;
+        term.shape = solid.shape;
+        term.stiffness = sampled.contact.stiffness;
+        term.radius = sampled.contact.radius;
+        components[component_of[a]].potential.add(term);
+      }
+    }
+  }
+}
+
 // A body point as an attached point: x + R p̄ of the body, or a world anchor (body −1).
 AttachedPoint attach(const BodyPoint& bp) { return {bp.body, bp.body, bp.point}; }
 
@@ -169,7 +206,7 @@ constexpr double kExactPenalty = 1e4;
 // The joints' terms (JointSpec), added to the component of the ends once every body and rod
 // has its place: where a point or rotation of the state is, as (component, offset), −1 if it
 // is not a DOF.
-void add_joint_terms(const Model& model, int frame, std::vector<Component>& components) {
+void add_joint_terms(const Model& model, const std::vector<bool>& key, std::vector<Component>& components) {
   if (model.joints.empty()) return;
   std::vector<std::array<int, 2>> point_dof(model.point_count(), {-1, -1});
   std::vector<std::array<int, 2>> rotation_dof(model.rod_rotation(static_cast<int>(model.rods.size()), 0),
@@ -206,8 +243,9 @@ void add_joint_terms(const Model& model, int frame, std::vector<Component>& comp
     term.exact = compliance == 0.0;
     term.stiffness = term.exact ? kExactPenalty * inertia * inv_h2 : 1.0 / compliance;
   };
-  for (const JointSpec& j : model.joints) {
-    if (!j.active_at(frame)) continue;
+  for (std::size_t index = 0; index < model.joints.size(); ++index) {
+    if (!key[index]) continue;
+    const JointSpec& j = model.joints[index];
     const AttachedPoint pa = model.attached_point(j.a), pb = model.attached_point(j.b);
     // (point, rotation) offsets of each end, and the component of the first DOF among them
     // (Model::validate: one end moves).
@@ -356,12 +394,18 @@ int find_root(std::vector<int>& parent, int i) {
 }  // namespace
 
 std::vector<Component> build_components(const Model& model, int frame) {
+  std::vector<bool> key;
+  model.coupling_key(frame, {}, key);
+  return build_components(model, key);
+}
+
+std::vector<Component> build_components(const Model& model, const std::vector<bool>& key) {
   // Union–find over objects: bodies 0 … n − 1, then rod r as n + r.
   const int n = static_cast<int>(model.bodies.size());
   const int objects = n + static_cast<int>(model.rods.size());
   std::vector<int> parent(objects);
   std::iota(parent.begin(), parent.end(), 0);
-  for (const auto& [a, b] : model.couplings(frame)) {
+  for (const auto& [a, b] : model.couplings(&key)) {
     if (a >= 0 && b >= 0) parent[find_root(parent, a)] = find_root(parent, b);
   }
 
@@ -463,7 +507,8 @@ std::vector<Component> build_components(const Model& model, int frame) {
       components.push_back(std::move(c));
     }
   }
-  add_joint_terms(model, frame, components);
+  add_joint_terms(model, key, components);
+  add_body_contact_terms(model, key, point_offset, rotation_offset, component_of, components);
   return components;
 }
 

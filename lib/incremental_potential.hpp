@@ -154,6 +154,9 @@ class IncrementalPotential {
   // the multiplier update s ← s + c(q) of each, and ρ ← factor·ρ for each.
   int exact_constraints() const;
   double constraint_violation(const State& q) const;
+  // The deepest penetration ρ − φ of a contact sample (into a collider or another body: every
+  // term with a `penetration`), 0 when none overlaps.
+  double max_penetration(const State& q) const;
   void update_multipliers(const State& q);
   void scale_penalties(double factor);
   // For the adjoint (joint_terms.hpp, solvers/adjoint.cpp), in the order of the terms:
@@ -217,13 +220,14 @@ struct Component {
   IncrementalPotential potential;
 };
 
-// Splits a validated model into the independent components of step `frame` (the islands:
-// bodies and rods joined by springs or by joints active at that step share one, each rod
-// alone is one; JointSpec::active_at) and builds each component's terms with their scatter
-// offsets. Body order is kept; within a component each body contributes [x, θ] in that
-// order. A rod whose nodes and edges are all clamped has no DOFs and no component. The
-// components differ between steps only where a joint's active_frames say so
-// (solvers/islands.hpp caches them by the set of active joints).
+// Splits a validated model into the independent components of a step (its islands: bodies
+// and rods joined by springs, by the joints and touching body pairs that `key` says hold —
+// Model::coupling_key — share one, each rod alone is one) and builds each component's terms
+// with their scatter offsets. Body order is kept; within a component each body contributes
+// [x, θ] in that order. A rod whose nodes and edges are all clamped has no DOFs and no
+// component. solvers/islands.hpp caches the components by key.
+std::vector<Component> build_components(const Model& model, const std::vector<bool>& key);
+// The components of step `frame` with no bodies touching.
 std::vector<Component> build_components(const Model& model, int frame = 1);
 
 // The component of rod r: lumped inertia, gravity, stretch, shear, bend–twist and node

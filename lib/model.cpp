@@ -330,11 +330,36 @@ void Model::validate_motion_speeds() const {
   }
 }
 
-std::vector<std::pair<int, int>> Model::couplings(int frame) const {
+std::vector<std::pair<int, int>> Model::body_pairs() const {
+  std::vector<std::pair<int, int>> out;
+  const auto faces = [&](const RigidBody& sampled, const RigidBody& solid) {
+    return sampled.contact.enabled() && !sampled.contact_points.empty() && solid.shape != nullptr;
+  };
+  for (int a = 0; a < static_cast<int>(bodies.size()); ++a) {
+    for (int b = a + 1; b < static_cast<int>(bodies.size()); ++b) {
+      if (faces(bodies[a], bodies[b]) || faces(bodies[b], bodies[a])) out.emplace_back(a, b);
+    }
+  }
+  return out;
+}
+
+void Model::coupling_key(int frame, const std::vector<bool>& touching, std::vector<bool>& key) const {
+  key.resize(joints.size() + touching.size());  // allocates the first time only
+  for (std::size_t j = 0; j < joints.size(); ++j) key[j] = joints[j].active_at(frame);
+  std::copy(touching.begin(), touching.end(), key.begin() + static_cast<std::ptrdiff_t>(joints.size()));
+}
+
+std::vector<std::pair<int, int>> Model::couplings(const std::vector<bool>* key) const {
   std::vector<std::pair<int, int>> out;
   for (const SpringSpec& s : springs) out.emplace_back(s.a.body, s.b.body);
-  for (const JointSpec& j : joints) {
-    if (frame == 0 || j.active_at(frame)) out.emplace_back(object_of(j.a), object_of(j.b));
+  for (std::size_t j = 0; j < joints.size(); ++j) {
+    if (key == nullptr || (*key)[j]) out.emplace_back(object_of(joints[j].a), object_of(joints[j].b));
+  }
+  if (key != nullptr && key->size() > joints.size()) {
+    const std::vector<std::pair<int, int>> pairs = body_pairs();
+    for (std::size_t p = 0; p < pairs.size(); ++p) {
+      if ((*key)[joints.size() + p]) out.push_back(pairs[p]);
+    }
   }
   return out;
 }

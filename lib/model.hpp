@@ -40,6 +40,9 @@ struct RigidBody {
   // of contact.radius (lib/contact.hpp); none: the body never touches anything.
   std::vector<Vector3> contact_points;
   ContactMaterial contact;
+  // The body's solid for other bodies' samples (lib/body_contact.hpp): an SDF in body
+  // coordinates (the collider's pose within the body), or none: other bodies pass through it.
+  std::shared_ptr<const Collider> shape;
 };
 
 // End of a spring or point of application of a force: a body point given in body
@@ -150,11 +153,18 @@ struct Model {
   bool static_equilibrium = false;
   int load_steps = 1;
 
-  // The objects that springs and joints couple, as (a, b) pairs: body i is i, rod r is
-  // bodies.size() + r, and −1 the world. What ties objects into one component at step
-  // `frame` (the joints active at it, JointSpec::active_at), and with frame 0 (every joint,
-  // whatever its steps) what anchors them in static mode.
-  std::vector<std::pair<int, int>> couplings(int frame = 0) const;
+  // The pairs of bodies (a < b) that can touch each other: both with contact enabled, and a
+  // sample of one facing the other's shape (RigidBody::shape).
+  std::vector<std::pair<int, int>> body_pairs() const;
+  // Which couplings hold at a step, as the key of its islands (solvers/islands.hpp): one
+  // entry per joint (active at `frame`, JointSpec::active_at), then one per body pair
+  // (`touching`, indexed as body_pairs(); all false when empty). Written into `key`.
+  void coupling_key(int frame, const std::vector<bool>& touching, std::vector<bool>& key) const;
+  // The objects that springs, joints and touching bodies couple, as (a, b) pairs: body i is
+  // i, rod r is bodies.size() + r, and −1 the world. What ties objects into one island under
+  // `key` (coupling_key), and without one (every joint, whatever its steps, and no contact)
+  // what anchors them in static mode.
+  std::vector<std::pair<int, int>> couplings(const std::vector<bool>* key = nullptr) const;
   // The object (as in couplings()) of a joint end, −1 for the world.
   int object_of(const JointEnd& end) const;
 

@@ -27,6 +27,9 @@ struct Trajectory {
   // order and within each in term order (IncrementalPotential::exact_forces). Empty without
   // any.
   std::vector<std::vector<Vector3>> multipliers;
+  // Per frame k (index k, empty at 0): the couplings that held in step k (Model::coupling_key:
+  // its joints, and its bodies in contact), the key of its islands for the backward pass.
+  std::vector<std::vector<bool>> couplings;
 
   int frames() const { return static_cast<int>(states.size()) - 1; }
 

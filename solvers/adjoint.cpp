@@ -84,6 +84,8 @@ Trajectory DifferentiableSimulation::simulate(const Model& model, Result& result
     t.states.push_back(simulator.state());
     if (k == 1) t.multipliers.resize(static_cast<std::size_t>(frames()) + 1);
     simulator.exact_forces(t.multipliers[k]);
+    if (k == 1) t.couplings.resize(static_cast<std::size_t>(frames()) + 1);
+    t.couplings[k] = simulator.coupling_key();
   }
   return t;
 }
@@ -112,7 +114,8 @@ DifferentiableSimulation::Result DifferentiableSimulation::evaluate(const Eigen:
 void DifferentiableSimulation::backward(const Model& model, const Eigen::VectorXd& gamma,
                                         const Trajectory& trajectory,
                                         Eigen::VectorXd& gradient) const {
-  // Per set of islands (solvers/islands.hpp; the forward run's, step by step): a Hessian
+  // Per set of islands (solvers/islands.hpp; the forward run's, step by step, from the
+  // couplings it recorded — its joints and its bodies in contact): a Hessian
   // solve per component, and its exact joint terms with the first one's place in a frame's
   // multipliers (Trajectory::multipliers, in the same component order).
   struct Islands {
@@ -164,7 +167,8 @@ void DifferentiableSimulation::backward(const Model& model, const Eigen::VectorX
     }
     const double load_scale =
         dynamic ? 1.0 : std::min(1.0, double(k) / double(model.load_steps));
-    Islands& islands = cache.at(model, k, make);
+    const std::vector<bool>& key = trajectory.couplings[k];
+    Islands& islands = cache.at(key, [&] { return make(build_components(model, key)); });
     std::vector<Component>& components = islands.components;
     const std::vector<std::unique_ptr<HessianSolve>>& solves = islands.solves;
     const std::vector<int>& exact_terms = islands.exact_terms;

@@ -23,11 +23,16 @@ Simulator::Simulator(Model model, const SolverOptions& options)
   }
   previous_ = state_;
   previous_step_ = step_;
-  current_ = &islands_at(1);
+  pairs_ = TouchingPairs(model_);
+  margin_.assign(model_.bodies.size(), 0.0);
+  pairs_.find(state_, margin_, touching_);
+  model_.coupling_key(1, touching_, key_);
+  current_ = &islands_at(key_);
 }
 
-Simulator::StepIslands& Simulator::islands_at(int frame) {
-  return islands_.at(model_, frame, [&](std::vector<Component> components) {
+Simulator::StepIslands& Simulator::islands_at(const std::vector<bool>& key) {
+  return islands_.at(key, [&] {
+    std::vector<Component> components = build_components(model_, key);
     StepIslands islands;
     for (Component& c : components) islands.solvers.push_back(make_step_solver(std::move(c), options_));
     islands.reports.resize(islands.solvers.size());
@@ -64,28 +69,48 @@ StepReport Simulator::step() {
       dynamic ? 1.0 : std::min(1.0, double(frame_ + 1) / double(model_.load_steps));
   apply_prescribed_motions(load_scale);
 
-  // The islands write disjoint entries of state_ and read previous_ and the model only.
-  StepIslands* const before = current_;
-  StepIslands& now = islands_at(frame_ + 1);
-  current_ = &now;
-  const auto solve_island = [&](int i) {
-    IncrementalPotential& potential = now.solvers[i]->component().potential;
-    potential.begin_step(previous_, previous_step_, frame_ + 1);
-    if (!dynamic) potential.set_load_scale(load_scale);
-    now.reports[i] = now.solvers[i]->solve(state_);
-  };
-  const int islands = static_cast<int>(now.solvers.size());
-  if (now.threads > 1) {
-#pragma omp parallel for num_threads(now.threads) schedule(dynamic)
-    for (int i = 0; i < islands; ++i) solve_island(i);
-  } else {  // no parallel region at all: even an inactive one allocates in libgomp
-    for (int i = 0; i < islands; ++i) solve_island(i);
+  // The step's couplings: the joints active at it and the pairs of bodies within reach of
+  // each other at its start, each body's margin the distance it moved in the last step.
+  for (std::size_t i = 0; i < model_.bodies.size() && dynamic; ++i) {
+    margin_[i] = step_.points[i].norm() + so3::log(step_.rotations[i]).norm() * pairs_.reach(static_cast<int>(i));
   }
+  pairs_.find(state_, margin_, touching_);
+  saved_key_ = key_;  // same size: no allocation
+  StepIslands* const before = current_;
+  start_ = state_;
   StepReport report;
-  for (const StepReport& r : now.reports) report.merge(r);
+  for (int round = 0;; ++round) {
+    model_.coupling_key(frame_ + 1, touching_, key_);
+    StepIslands& now = islands_at(key_);
+    current_ = &now;
+    // The islands write disjoint entries of state_ and read previous_ and the model only.
+    const auto solve_island = [&](int i) {
+      IncrementalPotential& potential = now.solvers[i]->component().potential;
+      potential.begin_step(previous_, previous_step_, frame_ + 1);
+      if (!dynamic) potential.set_load_scale(load_scale);
+      now.reports[i] = now.solvers[i]->solve(state_);
+    };
+    const int islands = static_cast<int>(now.solvers.size());
+    if (now.threads > 1) {
+#pragma omp parallel for num_threads(now.threads) schedule(dynamic)
+      for (int i = 0; i < islands; ++i) solve_island(i);
+    } else {  // no parallel region at all: even an inactive one allocates in libgomp
+      for (int i = 0; i < islands; ++i) solve_island(i);
+    }
+    const int earlier_iterations = report.iterations;
+    report = StepReport{};
+    for (const StepReport& r : now.reports) report.merge(r);
+    report.iterations += earlier_iterations;
+    if (!report.state_updated()) break;
+    // Two bodies that reached each other only within the step: solve it again with them
+    // coupled, from the same start (a few rounds at most: each adds pairs).
+    if (round == kMaxContactRounds || !pairs_.add_penetrating(state_, touching_)) break;
+    state_ = start_;
+  }
 
   if (!report.state_updated()) {
     state_ = previous_;
+    key_ = saved_key_;
     current_ = before;  // the islands of the state kept
     return report;
   }
@@ -150,11 +175,13 @@ double Simulator::potential_energy() const {
 double Simulator::max_penetration() const {
   double deepest = 0.0;
   for (const auto& s : current_->solvers) {
-    for (const Contact& c : s->component().potential.terms<Contact>()) {
-      deepest = std::max(deepest, c.penetration(state_));
-    }
+    deepest = std::max(deepest, s->component().potential.max_penetration(state_));
   }
   return deepest;
+}
+
+int Simulator::contact_pairs() const {
+  return static_cast<int>(std::count(touching_.begin(), touching_.end(), true));
 }
 
 double Simulator::constraint_violation() const {

@@ -61,6 +61,10 @@ class Simulator {
   // distinct sets of them the run has built.
   int islands() const { return static_cast<int>(current_->solvers.size()); }
   int island_sets() const { return static_cast<int>(islands_.size()); }
+  // Which couplings held in the last step (Model::coupling_key: the joints, then the body
+  // pairs of Model::body_pairs in contact), and how many body pairs were in contact.
+  const std::vector<bool>& coupling_key() const { return key_; }
+  int contact_pairs() const;
 
  private:
   // Calls f(point, mass, rotation, body_inertia) for every lumped mass and rotational
@@ -85,9 +89,17 @@ class Simulator {
     std::vector<StepReport> reports;  // per island, for the islands' threads
     int threads = 1;                  // SolverOptions::island_threads resolved
   };
-  StepIslands& islands_at(int frame);  // IslandCache::at with this simulator's solvers
+  StepIslands& islands_at(const std::vector<bool>& key);  // IslandCache::at, this simulator's solvers
   IslandCache<StepIslands> islands_;
-  StepIslands* current_ = nullptr;     // the islands of the state (last step's, or step 1's)
+  StepIslands* current_ = nullptr;  // the islands of the state (last step's, or step 1's)
+  std::vector<bool> key_;           // their couplings (Model::coupling_key)
+  std::vector<bool> saved_key_;     // key_ at the start of a step (restored if it fails)
+  // Contact between bodies: the candidate pairs, which touch, each body's margin (m).
+  TouchingPairs pairs_;
+  std::vector<bool> touching_;
+  std::vector<double> margin_;
+  State start_;  // the step's start, to solve it again with pairs found within it
+  static constexpr int kMaxContactRounds = 3;
 };
 
 }  // namespace liedyn
