@@ -1,7 +1,9 @@
 #include "body_contact.hpp"
 
 #include <cmath>
+#include <algorithm>
 #include <limits>
+#include <numbers>
 #include <variant>
 
 #include "so3.hpp"
@@ -90,6 +92,87 @@ double bounding_radius(const Collider& shape) {
 }
 
 }  // namespace
+
+namespace {
+
+// n points on the unit sphere, the part with z ≥ z_min (−1: all of it), by the Fibonacci
+// lattice: evenly spread, no poles doubled.
+void fibonacci(int n, double z_min, const Vector3& centre, double radius, std::vector<Vector3>& out) {
+  const double golden = std::numbers::pi * (3.0 - std::sqrt(5.0));
+  for (int i = 0; i < n; ++i) {
+    const double z = 1.0 - (1.0 - z_min) * (i + 0.5) / n;
+    const double rho = std::sqrt(std::max(0.0, 1.0 - z * z));
+    out.push_back(centre + radius * Vector3(rho * std::cos(golden * i), rho * std::sin(golden * i), z));
+  }
+}
+
+int divisions(double length, double spacing) { return std::max(1, static_cast<int>(std::ceil(length / spacing))); }
+
+}  // namespace
+
+std::vector<Vector3> surface_samples(const Collider& shape, double spacing, int budget,
+                                     const std::string& path) {
+  if (!(spacing > 0.0) || !std::isfinite(spacing)) {
+    throw ModelError(path + ".sample_spacing", "must be a positive number of metres");
+  }
+  // Counts first, in doubles (a tiny spacing must fail here, not in an allocation).
+  double count = 0.0;
+  const double pi = std::numbers::pi;
+  if (const auto* s = std::get_if<SphereShape>(&shape.shape)) {
+    count = std::ceil(4.0 * pi * s->radius * s->radius / (spacing * spacing));
+  } else if (const auto* b = std::get_if<BoxShape>(&shape.shape)) {
+    const Vector3 n = 2.0 * b->half_extents / spacing;
+    count = 2.0 * ((n.x() + 2) * (n.y() + 2) + (n.y() + 2) * (n.z() + 2) + (n.x() + 2) * (n.z() + 2));
+  } else if (const auto* c = std::get_if<CapsuleShape>(&shape.shape)) {
+    count = 4.0 * pi * c->radius * c->radius / (spacing * spacing) +
+            (2.0 * c->half_length / spacing + 2) * (2.0 * pi * c->radius / spacing + 1);
+  } else {
+    throw ModelError(path + ".shape", "a body's shape must be a sphere, a box or a capsule");
+  }
+  if (count > budget) {
+    throw ModelError(path + ".sample_spacing", "would give about " + std::to_string(static_cast<long long>(count)) +
+                                                   " samples, more than the scene's budget of " + std::to_string(budget));
+  }
+  std::vector<Vector3> points;
+  if (const auto* s = std::get_if<SphereShape>(&shape.shape)) {
+    fibonacci(static_cast<int>(count), -1.0, Vector3::Zero(), s->radius, points);
+  } else if (const auto* b = std::get_if<BoxShape>(&shape.shape)) {
+    // A grid on each face: n_i + 1 coordinates along axis i, the points with at least one
+    // coordinate on a face (each once).
+    const Vector3& h = b->half_extents;
+    const int nx = divisions(2 * h.x(), spacing), ny = divisions(2 * h.y(), spacing), nz = divisions(2 * h.z(), spacing);
+    for (int i = 0; i <= nx; ++i) {
+      for (int j = 0; j <= ny; ++j) {
+        for (int k = 0; k <= nz; ++k) {
+          if (i != 0 && i != nx && j != 0 && j != ny && k != 0 && k != nz) continue;
+          points.emplace_back(-h.x() + 2 * h.x() * i / nx, -h.y() + 2 * h.y() * j / ny, -h.z() + 2 * h.z() * k / nz);
+        }
+      }
+    }
+  } else if (const auto* c = std::get_if<CapsuleShape>(&shape.shape)) {
+    // Rings along the side (both ends included), then the two caps beyond them.
+    const int rings = divisions(2 * c->half_length, spacing);
+    const int around = std::max(3, static_cast<int>(std::ceil(2 * pi * c->radius / spacing)));
+    for (int i = 0; i <= rings && c->half_length > 0.0; ++i) {
+      const double z = -c->half_length + 2 * c->half_length * i / rings;
+      for (int j = 0; j < around; ++j) {
+        const double a = 2 * pi * j / around;
+        points.emplace_back(c->radius * std::cos(a), c->radius * std::sin(a), z);
+      }
+    }
+    const int cap = std::max(1, static_cast<int>(std::ceil(2 * pi * c->radius * c->radius / (spacing * spacing))));
+    const std::size_t first = points.size();
+    fibonacci(cap, c->half_length > 0.0 ? 0.0 : -1.0, Vector3(0, 0, c->half_length), c->radius, points);
+    if (c->half_length > 0.0) {
+      for (std::size_t i = first, n = points.size(); i < n; ++i) {
+        const Vector3 p = points[i];
+        points.emplace_back(p.x(), -p.y(), -p.z());  // the other cap, turned by π about x
+      }
+    }
+  }
+  for (Vector3& p : points) p = shape.position + shape.orientation * p;
+  return points;
+}
 
 TouchingPairs::TouchingPairs(const Model& model) : pairs_(model.body_pairs()) {
   for (const RigidBody& body : model.bodies) {

@@ -29,6 +29,7 @@
 // (solvers/islands.hpp) for the steps in which it is (Model::touching_pairs).
 
 #include <memory>
+#include <string>
 #include <utility>
 #include <vector>
 
@@ -64,6 +65,15 @@ struct BodyContact {
   // φ_B's value and world-frame derivatives at the sample; w = p − x_B.
   SdfValue field(const State& q, Vector3& w, bool with_hessian) const;
 };
+
+// Points on the surface of a body's shape (a sphere, a box or a capsule; its coordinates, the
+// shape's pose within the body applied), about `spacing` (m, > 0) apart: a Fibonacci lattice
+// on a sphere and on a capsule's caps, rings along its side, a grid on each face of a box
+// (edges and corners included). Throws ModelError(path + ".sample_spacing") if the spacing is
+// not positive or would give more than `budget` points, and (path + ".shape") for another
+// shape.
+std::vector<Vector3> surface_samples(const Collider& shape, double spacing, int budget,
+                                     const std::string& path);
 
 // Which pairs of bodies touch at a state (Model::body_pairs: the candidates), for the
 // couplings of a step. A pair touches when a sample of one body comes within its radius plus

@@ -14,6 +14,7 @@
 #include <sstream>
 #include <vector>
 
+#include "../lib/body_contact.hpp"
 #include "../lib/so3.hpp"
 #include "analytic.hpp"
 #include "input_file.hpp"
@@ -489,13 +490,15 @@ Collider parse_collider(const json& value, const std::string& path, const std::s
   return collider;
 }
 
-// "contact" of a body (with "points" or a "box" sample generator) or of a rod (every free
-// node; radius defaults to the rod's). Units and defaults: lib/contact.hpp.
+// "contact" of a body (with "points", a "box" sample generator, or a "shape" for other bodies
+// to touch with its "sample_spacing") or of a rod (every free node; radius defaults to the
+// rod's). Units and defaults: lib/contact.hpp, lib/body_contact.hpp.
 ContactMaterial parse_contact(ObjectReader& owner, double default_radius,
-                              std::vector<Vector3>* points, int& budget) {
-  // A body's contact gives its samples; a rod's samples are its nodes.
+                              std::vector<Vector3>* points, std::shared_ptr<const Collider>* shape,
+                              int& budget) {
+  // A body's contact gives its samples and its shape; a rod's samples are its nodes.
   ObjectReader::Keys keys = {"stiffness", "radius", "friction", "friction_velocity"};
-  if (points != nullptr) keys.insert(keys.end(), {"points", "box"});
+  if (points != nullptr) keys.insert(keys.end(), {"points", "box", "shape", "sample_spacing"});
   ObjectReader c(owner.get("contact"), owner.field("contact"), owner.source(), keys);
   ContactMaterial m;
   m.stiffness = c.number("stiffness");
@@ -539,8 +542,32 @@ ContactMaterial parse_contact(ObjectReader& owner, double default_radius,
         }
       }
     }
-    if (points->empty()) {
-      c.fail(c.field("points"), "a body's contact needs \"points\" or a \"box\" of samples");
+    if (c.has("shape")) {
+      // The body's solid for other bodies (body coordinates), and with "sample_spacing" its
+      // samples on its surface.
+      int no_points = 0;
+      Collider solid = parse_collider(c.get("shape"), c.field("shape"), owner.source(), no_points);
+      if (!std::holds_alternative<SphereShape>(solid.shape) && !std::holds_alternative<BoxShape>(solid.shape) &&
+          !std::holds_alternative<CapsuleShape>(solid.shape)) {
+        c.fail(c.field("shape") + ".type", "a body's shape must be a sphere, a box or a capsule");
+      }
+      if (solid.inside) c.fail(c.field("shape") + ".inside", "a body's shape is a solid, not its complement");
+      if (c.has("sample_spacing")) {
+        try {
+          const std::vector<Vector3> on_surface =
+              surface_samples(solid, c.number("sample_spacing"), budget, owner.field("contact"));
+          budget -= static_cast<int>(on_surface.size());
+          points->insert(points->end(), on_surface.begin(), on_surface.end());
+        } catch (const ModelError& e) {
+          c.fail(c.field("sample_spacing"), std::string(e.what()).substr(e.field().size() + 2));
+        }
+      }
+      *shape = std::make_shared<const Collider>(std::move(solid));
+    } else if (c.has("sample_spacing")) {
+      c.fail(c.field("sample_spacing"), "samples a \"shape\": give one");
+    }
+    if (points->empty() && *shape == nullptr) {
+      c.fail(c.field("points"), "a body's contact needs \"points\", a \"box\" of samples or a \"shape\"");
     }
   }
   c.finish();
@@ -676,7 +703,7 @@ RodSpec parse_rod(const json& value, const std::string& path, const std::string&
   }
   if (r.has("contact")) {
     int no_samples = 0;  // a rod's samples are its nodes
-    rod.contact = parse_contact(r, rod.radius, nullptr, no_samples);
+    rod.contact = parse_contact(r, rod.radius, nullptr, nullptr, no_samples);
   }
   if (r.has("prescribed_motions")) {
     const json& motions = r.array("prescribed_motions");
@@ -795,7 +822,9 @@ Scene parse(const json& root, const std::string& source) {
     body.orientation = orientation_of(b, "orientation");
     body.linear_velocity = b.vector<3>("linear_velocity", Vector3::Zero());
     body.angular_velocity = b.vector<3>("angular_velocity", Vector3::Zero());
-    if (b.has("contact")) body.contact = parse_contact(b, 0.0, &body.contact_points, contact_budget);
+    if (b.has("contact")) {
+      body.contact = parse_contact(b, 0.0, &body.contact_points, &body.shape, contact_budget);
+    }
     b.finish();
     scene.model.bodies.push_back(body);
   }

@@ -1,0 +1,129 @@
+// Contact between bodies in whole runs (lib/body_contact.hpp; pairs and islands:
+// TouchingPairs, solvers/islands.hpp): the bundled two balls, head-on and off-centre.
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <filesystem>
+#include <cmath>
+#include <fstream>
+#include <sstream>
+#include <string>
+
+#include "cli_fixture.hpp"
+#include "problems/scene.hpp"
+#include "solvers/simulator.hpp"
+
+namespace liedyn {
+namespace {
+
+Scene two_spheres() {
+  return load_scene(std::filesystem::path(LIEDYN_SOURCE_DIR) / "problems/scenes/contact/two_spheres.json");
+}
+
+Vector3 momentum(const Simulator& sim) {
+  Vector3 p = Vector3::Zero();
+  for (std::size_t i = 0; i < sim.model().bodies.size(); ++i) {
+    p += sim.model().bodies[i].mass * sim.linear_velocity(static_cast<int>(i));
+  }
+  return p;
+}
+
+TEST(BodyContactScenes, TwoBallsCollideKeepingTheirMomentumAndLosingEnergy) {
+  for (const double offset : {0.0, 0.05}) {  // head-on, and the bundled off-centre shot
+    SCOPED_TRACE(offset);
+    Scene scene = two_spheres();
+    scene.model.bodies[0].position.y() = offset;
+    Simulator sim(scene.model, scene.solver);
+    const Vector3 p0 = momentum(sim);
+    double energy = sim.kinetic_energy() + sim.potential_energy();
+    double deepest = 0.0, drift = 0.0, rise = 0.0;
+    int touching = 0, islands_apart = 0, islands_together = 0;
+    for (int k = 1; k <= scene.frames; ++k) {
+      const StepReport r = sim.step();
+      ASSERT_TRUE(r.converged()) << k << ": " << r.message;
+      const double e = sim.kinetic_energy() + sim.potential_energy();
+      rise = std::max(rise, e - energy);
+      energy = e;
+      drift = std::max(drift, (momentum(sim) - p0).norm());
+      deepest = std::max(deepest, sim.max_penetration());
+      touching += sim.contact_pairs() > 0;
+      (sim.islands() == 1 ? islands_together : islands_apart) += 1;
+    }
+    // The internal forces cancel in every step's force balance: the momentum moves only by the
+    // solver's residual (tolerance 1e-12 m on the Newton step).
+    EXPECT_LT(drift, 1e-9 * p0.norm());
+    EXPECT_LE(rise, 1e-12);
+    EXPECT_LT(deepest, scene.model.bodies[0].contact.radius);  // no sample through the other's
+    EXPECT_GT(deepest, 0.0);
+    // They met and parted: the pair coupled them into one island for a while only.
+    EXPECT_GT(touching, 5);
+    EXPECT_GT(islands_together, 5);
+    EXPECT_GT(islands_apart, 100);
+    // The target was struck: it carries a good part of the momentum.
+    EXPECT_GT(sim.linear_velocity(1).norm(), 0.3 * p0.norm() / scene.model.bodies[1].mass);
+    EXPECT_GT(sim.island_sets(), 1);
+  }
+}
+
+// A pair that only meets within a step: the cue at rest, its samples 1 mm off the target, pushed by
+// 500 N for one 10 ms step, 5 cm at 1 kg, half the target's radius. At the step's start
+// nothing is within reach (no motion yet: margin 0); the step's solution lies deep in the
+// target, so the step is solved again with the pair coupled, and ends with the cue resting on
+// the target's surface at the penalty's depth F/k, not inside it.
+TEST(BodyContactScenes, APairThatMeetsWithinAStepIsSolvedAgainCoupled) {
+  Scene scene = two_spheres();
+  scene.model.time_step = 0.01;
+  for (RigidBody& b : scene.model.bodies) {
+    b.linear_velocity.setZero();
+    b.contact.stiffness = 1e6;
+  }
+  scene.model.bodies[0].position = Vector3(-0.206, 0.0, 0.0);  // samples 1 mm off
+  ForceSpec push;
+  push.at.body = 0;
+  push.force = Vector3(500.0, 0.0, 0.0);
+  scene.model.forces.push_back(push);
+  Simulator sim(scene.model, scene.solver);
+  EXPECT_EQ(sim.contact_pairs(), 0);
+  const StepReport r = sim.step();
+  ASSERT_TRUE(r.converged()) << r.message;
+  EXPECT_EQ(sim.contact_pairs(), 1);
+  EXPECT_EQ(sim.islands(), 1);
+  EXPECT_GT(sim.max_penetration(), 0.0);
+  EXPECT_LT(sim.max_penetration(), scene.model.bodies[0].contact.radius);
+}
+
+class BodyContactCli : public test::CliFixture {
+ protected:
+  BodyContactCli() : CliFixture("liedyn_body_contact_test_") {}
+};
+
+// The billiard shot (optimization/billiard.json): the gradient through the collision agrees
+// with central differences, and NLopt's and Ipopt's L-BFGS aim the cue ball so that the
+// target ends within the normalised loss of 1e-4.
+TEST_F(BodyContactCli, TheBilliardShotIsDifferentiableAndAimed) {
+  const std::filesystem::path scene =
+      std::filesystem::path(LIEDYN_SOURCE_DIR) / "problems/scenes/optimization/billiard.json";
+  const Result check = run({"gradcheck", scene.string()});
+  EXPECT_EQ(check.exit_code, 0) << check.out << check.err;
+  for (const char* optimizer : {"nlopt-lbfgs", "ipopt-lbfgs"}) {
+    SCOPED_TRACE(optimizer);
+    const std::string out = std::string("shot_") + optimizer;
+    const Result r = run({"optimize", scene.string(), "--optimizer", optimizer, "--out", out});
+    EXPECT_EQ(r.exit_code, 0) << r.out << r.err;
+    std::ifstream history(dir_ / out / "history.csv");  // iteration,loss,normalized_loss,…
+    std::string line;
+    std::getline(history, line);
+    double best = INFINITY;
+    while (std::getline(history, line)) {
+      std::stringstream fields(line);
+      std::string field;
+      for (int i = 0; i < 3; ++i) std::getline(fields, field, ',');
+      best = std::min(best, std::stod(field));
+    }
+    EXPECT_LE(best, 1e-4);
+  }
+}
+
+}  // namespace
+}  // namespace liedyn
