@@ -7,6 +7,8 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
+#include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -22,6 +24,22 @@ inline std::string read_file(const std::filesystem::path& p) {
   std::ostringstream s;
   s << in.rdbuf();
   return s.str();
+}
+
+// The smallest normalised loss in an optimisation's history.csv
+// (iteration,loss,normalized_loss,…); +∞ without rows.
+inline double best_normalized_loss(const std::filesystem::path& history_csv) {
+  std::ifstream history(history_csv);
+  std::string line;
+  std::getline(history, line);  // header
+  double best = INFINITY;
+  while (std::getline(history, line)) {
+    std::stringstream fields(line);
+    std::string field;
+    for (int i = 0; i < 3; ++i) std::getline(fields, field, ',');
+    best = std::min(best, std::stod(field));
+  }
+  return best;
 }
 
 class CliFixture : public ::testing::Test {
