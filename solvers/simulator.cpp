@@ -71,10 +71,12 @@ StepReport Simulator::step() {
 
   // The step's couplings: the joints active at it and the pairs of bodies within reach of
   // each other at its start, each body's margin the distance it moved in the last step.
-  for (std::size_t i = 0; i < model_.bodies.size() && dynamic; ++i) {
-    margin_[i] = step_.points[i].norm() + so3::log(step_.rotations[i]).norm() * pairs_.reach(static_cast<int>(i));
+  if (pairs_.size() > 0) {  // no body can touch another: nothing to look for
+    for (std::size_t i = 0; i < model_.bodies.size() && dynamic; ++i) {
+      margin_[i] = step_.points[i].norm() + so3::log(step_.rotations[i]).norm() * pairs_.reach(static_cast<int>(i));
+    }
+    pairs_.find(state_, margin_, touching_);
   }
-  pairs_.find(state_, margin_, touching_);
   saved_key_ = key_;  // same size: no allocation
   StepIslands* const before = current_;
   start_ = state_;

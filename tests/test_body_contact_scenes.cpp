@@ -93,6 +93,32 @@ TEST(BodyContactScenes, APairThatMeetsWithinAStepIsSolvedAgainCoupled) {
   EXPECT_LT(sim.max_penetration(), scene.model.bodies[0].contact.radius);
 }
 
+// A body's shape and its samples: bad values name their field.
+TEST(BodyContactScenes, BadShapesNameTheirField) {
+  const auto error = [](const std::string& contact) {
+    try {
+      parse_scene(R"({ "time_step": 0.01, "frames": 1, "bodies": [ { "name": "a", "mass": 1, "inertia": [1, 1, 1],
+                       "contact": { "stiffness": 1e4, )" + contact + " } } ] }",
+                  "s.json");
+    } catch (const SceneError& e) {
+      return e.field() + ": " + e.reason();
+    }
+    return std::string("accepted");
+  };
+  EXPECT_EQ(error(R"("shape": { "type": "sphere", "radius": 0.1 }, "sample_spacing": 0.02)"), "accepted");
+  EXPECT_EQ(error(R"("shape": { "type": "plane" })"),
+            "bodies[0].contact.shape.type: a body's shape must be a sphere, a box or a capsule");
+  EXPECT_EQ(error(R"("shape": { "type": "sphere", "radius": 0.1, "inside": true })"),
+            "bodies[0].contact.shape.inside: a body's shape is a solid, not its complement");
+  EXPECT_EQ(error(R"("sample_spacing": 0.02, "points": [[0, 0, 0]])"),
+            "bodies[0].contact.sample_spacing: samples a \"shape\": give one");
+  EXPECT_EQ(error(R"("shape": { "type": "box", "half_extents": [1, 1, 1] }, "sample_spacing": 0)"),
+            "bodies[0].contact.sample_spacing: must be a positive number of metres");
+  EXPECT_EQ(error(R"("shape": { "type": "sphere", "radius": 1 }, "sample_spacing": 1e-6)")
+                .rfind("bodies[0].contact.sample_spacing: would give about ", 0),
+            0u);
+}
+
 class BodyContactCli : public test::CliFixture {
  protected:
   BodyContactCli() : CliFixture("liedyn_body_contact_test_") {}
