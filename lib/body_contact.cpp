@@ -6,6 +6,7 @@
 #include <numbers>
 #include <variant>
 
+#include "point_pair.hpp"
 #include "so3.hpp"
 
 namespace liedyn {
@@ -78,6 +79,87 @@ void BodyContact::residual(const State& q, Residual& res, ResidualJacobian* J) c
     J->block<1, 3>(0, 6) = root_k * n.transpose();
     J->block<1, 3>(0, 9) = root_k * w.cross(n).transpose();
   }
+}
+
+void BodyFriction::begin_step(const State& previous, const Step&) {
+  const Matrix3& R_b = previous.rotations[body_b];
+  contact_point = R_b.transpose() * (at.position(previous) - previous.points[body_b]);
+  const SdfValue s = shape->evaluate(contact_point, false);
+  normal_force = stiffness * std::max(0.0, radius - s.distance);
+  const double length = s.gradient.norm();
+  normal = length > 0.0 ? Vector3(R_b * s.gradient / length) : Vector3::UnitZ();
+}
+
+SmoothedSlip BodyFriction::slip(const State& q, Vector3& lever_b) const {
+  lever_b = q.rotations[body_b] * contact_point;
+  const Vector3 d = q.points[body_b] + lever_b - at.position(q);
+  return SmoothedSlip(d - normal.dot(d) * normal, epsilon);
+}
+
+double BodyFriction::evaluate(const State& q, LocalGradient<kBlocks>* g, LocalHessian<kBlocks>* H) const {
+  if (normal_force == 0.0) {
+    if (g != nullptr) g->setZero();
+    if (H != nullptr) H->setZero();
+    return 0.0;
+  }
+  Vector3 r_b;
+  const SmoothedSlip s = slip(q, r_b);
+  const double scale = coefficient * normal_force;  // μλ
+  if (g != nullptr || H != nullptr) {
+    Matrix3 K = Matrix3::Zero();
+    if (H != nullptr) K = scale * s.curvature(Matrix3::Identity() - normal * normal.transpose());
+    point_pair_derivatives(at.lever(q), r_b, scale * s.phi1 * s.u, K, g, H);
+  }
+  return scale * s.f0;
+}
+
+void BodyFriction::residual(const State& q, Residual& r, ResidualJacobian* J) const {
+  friction_residual(*this, q, r, J);
+}
+
+Eigen::Matrix<double, 12, 12> BodyFriction::previous_jacobian(const State& q, const State& previous) const {
+  using Block = Eigen::Matrix<double, 3, 12>;
+  Eigen::Matrix<double, 12, 12> out = Eigen::Matrix<double, 12, 12>::Zero();
+  if (normal_force == 0.0) return out;
+  Vector3 r_b;
+  const SmoothedSlip s = slip(q, r_b);
+  const Matrix3& R_b_previous = previous.rotations[body_b];
+  const Vector3 w_previous = at.position(previous) - previous.points[body_b];
+  const SdfValue lagged = shape->evaluate(contact_point, true);
+  const double g_norm = lagged.gradient.norm();
+  const Vector3 G = R_b_previous * lagged.gradient;  // world
+  const Matrix3 N = R_b_previous * lagged.hessian * R_b_previous.transpose();
+  Block J_previous;  // Ĵ
+  J_previous << Matrix3::Identity(), -so3::hat(at.lever(previous)), -Matrix3::Identity(), so3::hat(w_previous);
+  const Block du_contact = R_b_previous.transpose() * J_previous;  // ∂û/∂q̂
+  const Eigen::Matrix<double, 1, 12> dlambda = -stiffness * G.transpose() * J_previous;
+  const Matrix3 P = Matrix3::Identity() - normal * normal.transpose();
+  Block dn = Block::Zero();
+  if (g_norm > 0.0) dn = (P * N / g_norm) * J_previous;
+  dn.rightCols<3>() -= so3::hat(normal);
+  const Matrix3& R_b = q.rotations[body_b];
+  const Block dd = R_b * du_contact;
+  const Vector3 d = q.points[body_b] + r_b - at.position(q);
+  const Block du = P * dd - (normal * d.transpose() + normal.dot(d) * Matrix3::Identity()) * dn;
+  const Block df = coefficient * (s.phi1 * s.u * dlambda + normal_force * s.jacobian() * du);
+  const Vector3 f = coefficient * normal_force * s.phi1 * s.u;
+  out.middleRows<3>(0) = -df;
+  out.middleRows<3>(3) = -so3::hat(at.lever(q)) * df;
+  out.middleRows<3>(6) = df;
+  out.middleRows<3>(9) = so3::hat(r_b) * df - so3::hat(f) * dd;
+  return out;
+}
+
+void BodyFriction::add_step_adjoint(const State& q, const State& previous, const Step&,
+                                    const LocalGradient<kBlocks>& z, Eigen::VectorXd& a_previous,
+                                    Eigen::VectorXd&) const {
+  if (normal_force == 0.0) return;
+  const LocalGradient<kBlocks> w = previous_jacobian(q, previous).transpose() * z;
+  const int a = at.point;
+  a_previous.segment<3>(tangent_point(a)) += w.segment<3>(0);
+  a_previous.segment<3>(tangent_rotation(q, a)) += w.segment<3>(3);
+  a_previous.segment<3>(tangent_point(body_b)) += w.segment<3>(6);
+  a_previous.segment<3>(tangent_rotation(q, body_b)) += w.segment<3>(9);
 }
 
 namespace {
@@ -171,6 +253,15 @@ std::vector<Vector3> surface_samples(const Collider& shape, double spacing, int 
     }
   }
   for (Vector3& p : points) p = shape.position + shape.orientation * p;
+  if (const auto* b = std::get_if<BoxShape>(&shape.shape); b != nullptr && b->rounding > 0.0) {
+    // The grid is on the outer box; a rounded box's edges and corners lie inside it. Each
+    // point goes onto the surface along the SDF's gradient (exact outside: φ is a distance),
+    // or a body resting on an edge row would stand on samples that touch nothing.
+    for (Vector3& p : points) {
+      const SdfValue s = shape.evaluate(p, false);
+      p -= s.distance * s.gradient;
+    }
+  }
   return points;
 }
 

@@ -33,6 +33,7 @@
 #include <utility>
 #include <vector>
 
+#include "friction.hpp"
 #include "model.hpp"
 #include "sdf.hpp"
 #include "state.hpp"
@@ -40,17 +41,21 @@
 
 namespace liedyn {
 
-struct BodyContact {
+// What the contact and friction terms between two bodies share: a sample of A, a sphere of
+// radius ρ, against B's shape with stiffness k.
+struct BodySample {
+  std::array<int, 4> offsets{-1, -1, -1, -1};  // x_A, θ_A, x_B, θ_B
+  AttachedPoint at;                            // the sample, on A
+  int body_b = -1;                             // B (State::points and ::rotations)
+  std::shared_ptr<const Collider> shape;       // B's shape, in B's coordinates
+  double stiffness = 0.0;                      // k, A's
+  double radius = 0.0;                         // ρ, A's
+};
+
+struct BodyContact : BodySample {
   static constexpr int kBlocks = 4;
   static constexpr const char* kName = "body_contact";
   static constexpr bool kEnergyOfState = true;
-
-  std::array<int, kBlocks> offsets{-1, -1, -1, -1};  // x_A, θ_A, x_B, θ_B
-  AttachedPoint at;                                  // the sample, on A
-  int body_b = -1;                                   // B (State::points and ::rotations)
-  std::shared_ptr<const Collider> shape;             // B's shape, in B's coordinates
-  double stiffness = 0.0;                            // k, A's
-  double radius = 0.0;                               // ρ, A's
 
   // ρ − φ: > 0 when the sample's sphere overlaps B.
   double penetration(const State& q) const;
@@ -66,10 +71,66 @@ struct BodyContact {
   SdfValue field(const State& q, Vector3& w, bool with_hessian) const;
 };
 
+// Smoothed Coulomb friction between a sample of body A and body B: friction.hpp's lagged law
+// on the slip of the sample relative to the point of B it touched.
+//
+// At the start of the step, with hats for q_{k−1}: the sample at p̂ = x̂_A + R̂_A p̄ sits at
+// û = R̂_Bᵀ(p̂ − x̂_B) in B's coordinates, and
+//   λ = k max(0, ρ − φ_B(û)),   n = R̂_B G/‖G‖ (G = ∇φ_B(û)),   P = I − n nᵀ
+// are frozen, as is û: B's material point b̄ = û. Over the step the sample moves from that
+// point by d = p_B − p_A with p_A = x_A + R_A p̄ and p_B = x_B + R_B û (zero at q_{k−1}), and
+//   D = μ λ f₀(‖P d‖)
+// (f₀ and its slopes: friction.hpp). The potential is one of the vector between two attached
+// points, so the gradient and Hessian are point_pair.hpp's mapping of
+//   f = ∂D/∂d = μλ φ₁ u,   K = μλ (φ₁ P + (φ₁′/y) u uᵀ),   u = P d, y = ‖u‖,
+// with the levers r_A = R_A p̄, r_B = R_B û. A body sliding over a still one feels μλ against
+// its slip; the still one feels the opposite force at the same place (equal and opposite, as
+// for BodyContact: momentum is conserved, only energy is dissipated).
+//
+// Least-squares form: r = √(2D), J = gᵀ/r (friction_residual).
+//
+// The adjoint: λ, n and û are functions of q̂ = (x̂_A, θ̂_A, x̂_B, θ̂_B), through
+//   ∂û/∂q̂ = R̂_Bᵀ Ĵ,   Ĵ = [I, −hat(r̂_A), −I, hat(ŵ)],   ŵ = p̂ − x̂_B   (as BodyContact's J),
+//   ∂λ/∂q̂ = −k Gᵀ ∂û/∂q̂,
+//   ∂n/∂q̂ = (P N/‖G‖) Ĵ − [0, 0, 0, hat(n)]   (N = R̂_B ∇²φ_B(û) R̂_Bᵀ; B's turn carries n),
+//   ∂d/∂q̂ = R_B ∂û/∂q̂,   ∂u/∂q̂ = P ∂d/∂q̂ − (n dᵀ + (n·d) I) ∂n/∂q̂,
+//   ∂f/∂q̂ = μ φ₁ u ∂λ/∂q̂ + μλ (φ₁ I + (φ₁′/y) u uᵀ) ∂u/∂q̂,
+// and the gradient C = [−f; −r_A × f; f; r_B × f] has ∂C/∂q̂ rows −∂f, −hat(r_A) ∂f, ∂f and
+// hat(r_B) ∂f − hat(f) R_B ∂û/∂q̂ (r_B moves with û). Δq_{k−1} does not enter.
+struct BodyFriction : BodySample {
+  static constexpr int kBlocks = 4;
+  static constexpr const char* kName = "body_friction";
+  double coefficient = 0.0;  // μ, A's
+  double epsilon = 0.0;      // ε = ε_v h, m, > 0
+
+  // Lagged per step (begin_step).
+  Vector3 contact_point = Vector3::Zero();  // û, in B's coordinates
+  double normal_force = 0.0;                // λ
+  Vector3 normal = Vector3::UnitZ();        // n, world
+
+  void begin_step(const State& previous, const Step& previous_step);
+  double evaluate(const State& q, LocalGradient<kBlocks>* g, LocalHessian<kBlocks>* H) const;
+
+  static constexpr int kResiduals = 1;
+  using Residual = LocalResidual<kResiduals>;
+  using ResidualJacobian = LocalResidualJacobian<kResiduals, kBlocks>;
+  void residual(const State& q, Residual& r, ResidualJacobian* J) const;
+
+  // ∂C/∂q̂: the 12×12 mixed block of the local gradient with respect to the previous poses
+  // of A and B (formulas above). `previous` must be the state begin_step was given.
+  Eigen::Matrix<double, 12, 12> previous_jacobian(const State& q, const State& previous) const;
+  void add_step_adjoint(const State& q, const State& previous, const Step& previous_step,
+                        const LocalGradient<kBlocks>& z, Eigen::VectorXd& a_previous,
+                        Eigen::VectorXd& da_previous) const;
+
+ private:
+  SmoothedSlip slip(const State& q, Vector3& lever_b) const;
+};
+
 // Points on the surface of a body's shape (a sphere, a box or a capsule; its coordinates, the
 // shape's pose within the body applied), about `spacing` (m, > 0) apart: a Fibonacci lattice
 // on a sphere and on a capsule's caps, rings along its side, a grid on each face of a box
-// (edges and corners included). Throws ModelError(path + ".sample_spacing") if the spacing is
+// (edges and corners included; on a rounded box, moved onto its rounded edges and corners). Throws ModelError(path + ".sample_spacing") if the spacing is
 // not positive or would give more than `budget` points, and (path + ".shape") for another
 // shape.
 std::vector<Vector3> surface_samples(const Collider& shape, double spacing, int budget,

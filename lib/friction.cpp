@@ -15,22 +15,29 @@ void Friction::begin_step(const State& previous, const Step&) {
   normal = length > 0.0 ? Vector3(s.gradient / length) : Vector3::UnitZ();
 }
 
-Friction::Slip Friction::slip(const Vector3& p) const {
-  const Vector3 w = p - previous_position;
-  Slip s;
-  s.u = w - normal.dot(w) * normal;
-  s.y = s.u.norm();
-  if (s.y < epsilon) {
+SmoothedSlip::SmoothedSlip(const Vector3& tangential, double epsilon)
+    : u(tangential), y(tangential.norm()) {
+  if (y < epsilon) {
     const double inv = 1.0 / epsilon;
-    s.phi1 = 2.0 * inv - s.y * inv * inv;
-    s.dphi1 = -inv * inv;
-    s.f0 = s.y * s.y * inv * (1.0 - s.y * inv / 3.0) + epsilon / 3.0;
+    phi1 = 2.0 * inv - y * inv * inv;
+    dphi1 = -inv * inv;
+    f0 = y * y * inv * (1.0 - y * inv / 3.0) + epsilon / 3.0;
   } else {
-    s.phi1 = 1.0 / s.y;
-    s.dphi1 = -1.0 / (s.y * s.y);
-    s.f0 = s.y;
+    phi1 = 1.0 / y;
+    dphi1 = -1.0 / (y * y);
+    f0 = y;
   }
-  return s;
+}
+
+Matrix3 SmoothedSlip::curvature(const Matrix3& P) const {
+  Matrix3 A = phi1 * P;
+  if (y > 0.0) A += (dphi1 / y) * (u * u.transpose());
+  return A;
+}
+
+SmoothedSlip Friction::slip(const Vector3& p) const {
+  const Vector3 w = p - previous_position;
+  return SmoothedSlip(w - normal.dot(w) * normal, epsilon);
 }
 
 double Friction::evaluate(const State& q, LocalGradient<2>* g, LocalHessian<2>* H) const {
@@ -39,33 +46,19 @@ double Friction::evaluate(const State& q, LocalGradient<2>* g, LocalHessian<2>* 
     if (H != nullptr) H->setZero();
     return 0.0;
   }
-  const Slip s = slip(at.position(q));
+  const SmoothedSlip s = slip(at.position(q));
   const double scale = coefficient * normal_force;  // μλ
   if (g != nullptr || H != nullptr) {
     const Vector3 f = scale * s.phi1 * s.u;
     Matrix3 K = Matrix3::Zero();
-    if (H != nullptr) {
-      // μλ(φ₁ P + φ₁′ y û ûᵀ) = μλ(φ₁ P + (φ₁′/y) u uᵀ); φ₁′/y is finite wherever y > 0, and
-      // the term vanishes as y → 0 (φ₁′ bounded).
-      const Matrix3 P = Matrix3::Identity() - normal * normal.transpose();
-      K = scale * s.phi1 * P;
-      if (s.y > 0.0) K += (scale * s.dphi1 / s.y) * (s.u * s.u.transpose());
-    }
+    if (H != nullptr) K = scale * s.curvature(Matrix3::Identity() - normal * normal.transpose());
     attached_point_derivatives(at.lever(q), f, K, g, H);
   }
   return scale * s.f0;
 }
 
 void Friction::residual(const State& q, Residual& r, ResidualJacobian* J) const {
-  LocalGradient<2> g;
-  const double D = evaluate(q, J != nullptr ? &g : nullptr, nullptr);
-  r(0) = std::sqrt(2.0 * D);
-  if (J == nullptr) return;
-  if (r(0) > 0.0) {
-    *J = g.transpose() / r(0);  // ∂√(2D) = ∂D/√(2D)
-  } else {
-    J->setZero();
-  }
+  friction_residual(*this, q, r, J);
 }
 
 Eigen::Matrix<double, 6, 6> Friction::previous_jacobian(const State& q,
@@ -73,15 +66,14 @@ Eigen::Matrix<double, 6, 6> Friction::previous_jacobian(const State& q,
   Eigen::Matrix<double, 6, 6> out = Eigen::Matrix<double, 6, 6>::Zero();
   if (normal_force == 0.0) return out;
   const Vector3 p = at.position(q);
-  const Slip s = slip(p);
+  const SmoothedSlip s = slip(p);
   const SdfValue lagged = collider->evaluate(previous_position, true);
   const double g_norm = lagged.gradient.norm();
   const Matrix3 P = Matrix3::Identity() - normal * normal.transpose();
   const Vector3 w = p - previous_position;
   const Matrix3 dn = g_norm > 0.0 ? Matrix3(P * lagged.hessian / g_norm) : Matrix3::Zero();
   const Matrix3 du = -P - (normal * w.transpose() + normal.dot(w) * Matrix3::Identity()) * dn;
-  Matrix3 A = s.phi1 * Matrix3::Identity();  // ∂(φ₁ u)/∂u
-  if (s.y > 0.0) A += (s.dphi1 / s.y) * (s.u * s.u.transpose());
+  const Matrix3 A = s.jacobian();  // ∂(φ₁ u)/∂u
   // λ = k(ρ − φ(p̂)) > 0 here, so ∂λ/∂p̂ = −k G.
   const Vector3 dlambda = -stiffness * lagged.gradient;
   const Matrix3 df = coefficient * (s.phi1 * s.u * dlambda.transpose() + normal_force * A * du);

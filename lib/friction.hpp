@@ -27,6 +27,7 @@
 // and p̂ = x̂ + R̂ p̄ gives ∂p̂/∂(x̂, θ̂) = [I, −hat(r̂)]; the θ rows of C are r × f.
 // Δq_{k−1} does not enter.
 
+#include <cmath>
 #include <memory>
 
 #include "contact.hpp"
@@ -35,6 +36,39 @@
 #include "term.hpp"
 
 namespace liedyn {
+
+// The smoothed slip law of a tangential displacement u (formulas above), shared by the
+// friction terms against colliders (Friction) and between bodies (BodyFriction).
+struct SmoothedSlip {
+  Vector3 u;      // the tangential displacement
+  double y;       // ‖u‖
+  double phi1;    // f₁(y)/y
+  double dphi1;   // φ₁′(y)
+  double f0;      // f₀(y)
+
+  SmoothedSlip(const Vector3& tangential, double epsilon);
+  // ∂(φ₁ u)/∂u = φ₁ I + (φ₁′/y) u uᵀ (the last part vanishes as y → 0, φ₁′ bounded).
+  Matrix3 jacobian() const { return curvature(Matrix3::Identity()); }
+  // K/(μλ) = φ₁ P + (φ₁′/y) u uᵀ for the tangent projector P (= jacobian() P, as uᵀP = uᵀ;
+  // written symmetric).
+  Matrix3 curvature(const Matrix3& P) const;
+};
+
+// The least-squares form r = √(2D) of a friction term (D > 0 whenever λ > 0), J = gᵀ/r, for
+// any term whose evaluate() gives D and its gradient.
+template <class T>
+void friction_residual(const T& term, const State& q, typename T::Residual& r,
+                       typename T::ResidualJacobian* J) {
+  LocalGradient<T::kBlocks> g;
+  const double D = term.evaluate(q, J != nullptr ? &g : nullptr, nullptr);
+  r(0) = std::sqrt(2.0 * D);
+  if (J == nullptr) return;
+  if (r(0) > 0.0) {
+    *J = g.transpose() / r(0);  // ∂√(2D) = ∂D/√(2D)
+  } else {
+    J->setZero();
+  }
+}
 
 struct Friction : ContactSample {
   static constexpr int kBlocks = 2;
@@ -65,14 +99,7 @@ struct Friction : ContactSample {
                         Eigen::VectorXd& da_previous) const;
 
  private:
-  struct Slip {
-    Vector3 u;      // P (p − p̂)
-    double y;       // ‖u‖
-    double phi1;    // f₁(y)/y
-    double dphi1;   // φ₁′(y)
-    double f0;      // f₀(y)
-  };
-  Slip slip(const Vector3& p) const;
+  SmoothedSlip slip(const Vector3& p) const;  // of the sample at p: u = P (p − p̂)
 };
 
 }  // namespace liedyn

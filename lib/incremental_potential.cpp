@@ -150,7 +150,8 @@ void add_contact_terms(const Model& model,
 }
 
 // Every sample of A against B's shape and of B against A's, for each pair of bodies that
-// touches under `key` (Model::coupling_key); A's and B's blocks are in one component.
+// touches under `key` (Model::coupling_key), with its friction where A's μ > 0; A's and B's
+// blocks are in one component.
 void add_body_contact_terms(const Model& model, const std::vector<bool>& key,
                             const std::vector<int>& point_offset, const std::vector<int>& rotation_offset,
                             const std::vector<int>& component_of, std::vector<Component>& components) {
@@ -162,15 +163,22 @@ void add_body_contact_terms(const Model& model, const std::vector<bool>& key,
       const RigidBody& sampled = model.bodies[a];
       const RigidBody& solid = model.bodies[b];
       if (!sampled.contact.enabled() || solid.shape == nullptr) continue;
-      for (const Vector3& sample : sampled.contact_points) {
-        BodyContact term;
-        term.offsets = {point_offset[a], rotation_offset[a], point_offset[b], rotation_offset[b]};
-        term.at = {a, a, sample};
-        term.body_b = b;
-        term.shape = solid.shape;
-        term.stiffness = sampled.contact.stiffness;
-        term.radius = sampled.contact.radius;
-        components[component_of[a]].potential.add(term);
+      for (const Vector3& point : sampled.contact_points) {
+        const BodySample sample{{point_offset[a], rotation_offset[a], point_offset[b], rotation_offset[b]},
+                                {a, a, point},
+                                b,
+                                solid.shape,
+                                sampled.contact.stiffness,
+                                sampled.contact.radius};
+        IncrementalPotential& potential = components[component_of[a]].potential;
+        potential.add(BodyContact{sample});
+        // As against a collider: friction is a dynamic term, A's coefficient.
+        if (sampled.contact.friction > 0.0 && !model.static_equilibrium) {
+          BodyFriction friction{sample};
+          friction.coefficient = sampled.contact.friction;
+          friction.epsilon = sampled.contact.friction_velocity * model.time_step;
+          potential.add(friction);
+        }
       }
     }
   }

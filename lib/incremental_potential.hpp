@@ -51,7 +51,8 @@ class IncrementalPotential {
                                ConstantTorque, RegionForce, Spring, RodStretch, RodShear,
                                RodBendTwist, CableSegment, JointPoint, JointLine, JointAlignment, JointWeld,
                                JointMotor, JointForceMotor, JointLimit<HingeAngle>,
-                               JointLimit<SliderPosition>, Contact, Friction, BodyContact>;
+                               JointLimit<SliderPosition>, Contact, Friction, BodyContact,
+                               BodyFriction>;
 
   // The terms of type T (one contiguous vector per type).
   template <class T>

@@ -28,6 +28,28 @@ std::string deepest_start(const Model& model, const Vector3& p, double radius,
   return {};
 }
 
+// A sample of one body of a modelled pair whose centre starts inside the other's shape: a
+// message, or empty.
+std::string inside_other(const Model& model, int a, int b) {
+  for (const auto& [sampled, solid] : {std::pair{a, b}, std::pair{b, a}}) {
+    const RigidBody& s = model.bodies[sampled];
+    const RigidBody& o = model.bodies[solid];
+    if (!s.contact.enabled() || o.shape == nullptr) continue;
+    for (std::size_t i = 0; i < s.contact_points.size(); ++i) {
+      const Vector3 p = s.position + s.orientation * s.contact_points[i];
+      const double phi = o.shape->evaluate(o.orientation.transpose() * (p - o.position), false).distance;
+      if (phi < 0.0) {
+        std::ostringstream os;
+        os << "contact sample " << i << " of \"" << s.name << "\" starts " << -phi + s.contact.radius
+           << " m inside the shape of \"" << o.name << "\", deeper than its radius " << s.contact.radius
+           << " m: the penalty will push them apart hard (move them apart)";
+        return os.str();
+      }
+    }
+  }
+  return {};
+}
+
 }  // namespace
 
 std::vector<std::string> scene_warnings(const Scene& scene) {
@@ -77,13 +99,20 @@ std::vector<std::string> scene_warnings(const Scene& scene) {
                        " collider(s) touch nothing: no body or rod has a contact block (give "
                        "bodies \"contact\" with samples, or rods \"contact\")");
   }
+  // Pairs whose contact is modelled (a shape on one, samples on the other) touch; the others
+  // pass through one another if their samples start overlapping.
+  const std::vector<std::pair<int, int>> touching = model.body_pairs();
   for (std::size_t a = 0; a < boxes.size(); ++a) {
     for (std::size_t b = a + 1; b < boxes.size(); ++b) {
-      if (!boxes[a].isEmpty() && !boxes[b].isEmpty() && boxes[a].intersects(boxes[b])) {
-        warnings.push_back("bodies[" + std::to_string(a) + "] (\"" + model.bodies[a].name +
-                           "\") and bodies[" + std::to_string(b) + "] (\"" + model.bodies[b].name +
-                           "\") start with overlapping contact samples (their bounding boxes "
-                           "intersect): bodies touch colliders, not each other, so they will "
+      const std::string pair = "bodies[" + std::to_string(a) + "] (\"" + model.bodies[a].name +
+                               "\") and bodies[" + std::to_string(b) + "] (\"" + model.bodies[b].name + "\")";
+      if (std::find(touching.begin(), touching.end(), std::pair{int(a), int(b)}) != touching.end()) {
+        const std::string w = inside_other(model, int(a), int(b));
+        if (!w.empty()) warnings.push_back(pair + ": " + w);
+      } else if (!boxes[a].isEmpty() && !boxes[b].isEmpty() && boxes[a].intersects(boxes[b])) {
+        warnings.push_back(pair +
+                           " start with overlapping contact samples (their bounding boxes "
+                           "intersect) but neither has a \"shape\" to touch: they will "
                            "pass through one another");
       }
     }

@@ -1,16 +1,20 @@
-// Contact between two bodies (lib/body_contact.hpp): a sample of A against B's shape. Value
-// vs Lie gradient vs Lie Hessian by central differences in the tangent space of both poses
-// (tests/fd_check.hpp), for spheres, rounded boxes and capsules (posed within B), at every
-// rotation of fd::kAngles for A and for B, over penetrations and stiffnesses from tiny to
-// huge; the residual form; and the internal forces' balance (no net force or torque: what
-// makes contact between bodies conserve momentum).
+// Contact between two bodies (lib/body_contact.hpp): a sample of A against B's shape, and its
+// friction. Value vs Lie gradient vs Lie Hessian by central differences in the tangent space
+// of both poses (tests/fd_check.hpp), for spheres, rounded boxes and capsules (posed within
+// B), at every rotation of fd::kAngles for A and for B, over penetrations and stiffnesses
+// from tiny to huge, sticking and sliding, time steps from tiny to huge; the residual forms;
+// friction's mixed block with respect to the previous poses (the adjoint's); and the internal
+// forces' balance (no net force or torque: what makes contact between bodies conserve
+// momentum).
 //
 // Geometry is O(1) and penetrations ≫ the FD steps, as in tests/test_contact.cpp.
 
 #include <gtest/gtest.h>
 
+#include <limits>
 #include <memory>
 #include <random>
+#include <string>
 #include <vector>
 
 #include "fd_check.hpp"
@@ -81,6 +85,14 @@ Pair make_pair(const std::shared_ptr<const Collider>& shape, double depth, doubl
 
 const fd::Dofs kDofs = {fd::point_dof(0), fd::rotation_dof(0), fd::point_dof(1), fd::rotation_dof(1)};
 
+// Net force and torque about the origin of a 4-block gradient (x_A, θ_A, x_B, θ_B) at q.
+std::pair<Vector3, Vector3> net_force_and_torque(const LocalGradient<4>& g, const State& q) {
+  const Vector3 force = g.segment<3>(0) + g.segment<3>(6);
+  const Vector3 torque = q.points[0].cross(Vector3(g.segment<3>(0))) + g.segment<3>(3) +
+                         q.points[1].cross(Vector3(g.segment<3>(6))) + g.segment<3>(9);
+  return {force, torque};
+}
+
 TEST(BodyContact, LieDerivativesOfBothPosesMatchFiniteDifferences) {
   std::mt19937 rng(41);
   int checked = 0;
@@ -126,9 +138,7 @@ TEST(BodyContact, InternalForcesBalanceAndTheResidualFormAgrees) {
       LocalGradient<4> g;
       const double value = c.term.evaluate(c.q, &g, nullptr);
       // Equal and opposite forces; no net torque about the origin, Σ (x_i × g_x + g_θ).
-      const Vector3 force = g.segment<3>(0) + g.segment<3>(6);
-      const Vector3 torque = c.q.points[0].cross(Vector3(g.segment<3>(0))) + g.segment<3>(3) +
-                             c.q.points[1].cross(Vector3(g.segment<3>(6))) + g.segment<3>(9);
+      const auto [force, torque] = net_force_and_torque(g, c.q);
       EXPECT_LT(force.norm(), 1e-12 * g.norm());
       EXPECT_LT(torque.norm(), 1e-12 * g.norm() * (1.0 + c.q.points[0].norm() + c.q.points[1].norm()));
       EXPECT_GT(g.norm(), 1.0);
@@ -137,6 +147,269 @@ TEST(BodyContact, InternalForcesBalanceAndTheResidualFormAgrees) {
       c.term.residual(c.q, r, &J);
       EXPECT_NEAR(0.5 * r.squaredNorm(), value, 1e-12 * value);
       EXPECT_LT((J.transpose() * r - g).norm(), 1e-12 * g.norm());
+    }
+  }
+}
+
+// ----------------------------------------------------------------------------------------
+// Surface samples.
+
+TEST(SurfaceSamples, LieOnTheShapeAndCoverItAtTheirSpacing) {
+  std::mt19937 rng(51);
+  const double spacing = 0.05;
+  for (const Shape& shape : {Shape(SphereShape{0.3}), Shape(BoxShape{Vector3(0.2, 0.3, 0.1), 0.0}),
+                             Shape(BoxShape{Vector3(0.2, 0.3, 0.1), 0.03}), Shape(CapsuleShape{0.25, 0.1}),
+                             Shape(CapsuleShape{0.0, 0.1})}) {
+    Collider c;
+    c.shape = shape;
+    c.position = fd::random_vector(rng, 0.3);
+    c.orientation = rotation_at(1.2, rng);
+    const std::vector<Vector3> samples = surface_samples(c, spacing, 100000, "bodies[0].contact");
+    ASSERT_GT(samples.size(), 20u);
+    double farthest_gap = 0.0;
+    for (const Vector3& p : samples) EXPECT_NEAR(c.evaluate(p, false).distance, 0.0, 1e-12);
+    // Every point of the surface (random points walked onto it) has a sample within about
+    // the spacing: the lattices' and grids' largest gaps are below it.
+    for (int i = 0; i < 500; ++i) {
+      Vector3 p = c.position + fd::random_unit(rng);
+      for (int k = 0; k < 50; ++k) {
+        const SdfValue s = c.evaluate(p, false);
+        p -= s.distance * s.gradient;
+      }
+      double nearest = std::numeric_limits<double>::infinity();
+      for (const Vector3& q : samples) nearest = std::min(nearest, (q - p).norm());
+      farthest_gap = std::max(farthest_gap, nearest);
+    }
+    EXPECT_LT(farthest_gap, spacing);
+  }
+}
+
+TEST(SurfaceSamples, ASpacingThatIsNotPositiveOrTooFineIsAnErrorNamingItsField) {
+  Collider c;
+  c.shape = SphereShape{0.1};
+  for (const double spacing : {0.0, -1.0, std::numeric_limits<double>::quiet_NaN(), 1e-6}) {
+    try {
+      surface_samples(c, spacing, 1000, "bodies[2].contact");
+      ADD_FAILURE() << "spacing " << spacing << " accepted";
+    } catch (const ModelError& e) {
+      EXPECT_EQ(e.field(), "bodies[2].contact.sample_spacing") << e.what();
+    }
+  }
+}
+
+// ----------------------------------------------------------------------------------------
+// Friction between bodies.
+
+struct FrictionPair {
+  BodyFriction term;
+  State previous, q;
+};
+
+// A's sample 0.02 deep in B at the previous state (make_pair's geometry), then both bodies
+// moved and turned (B by a small rigid motion, A turned by 0.2 rad) so that the sample slips
+// by `slip` along the lagged tangent plane relative to the point of B it touched, and moves
+// by `normal_move` along the normal.
+FrictionPair friction_pair(const std::shared_ptr<const Collider>& shape, double angle_a, double angle_b,
+                           double slip, double epsilon, double stiffness, std::mt19937& rng,
+                           double normal_move = 0.002) {
+  const Pair start = make_pair(shape, 0.02, angle_a, angle_b, stiffness, rng);
+  FrictionPair c;
+  static_cast<BodySample&>(c.term) = start.term;
+  c.term.coefficient = 0.4;
+  c.term.epsilon = epsilon;
+  c.previous = start.q;
+  c.term.begin_step(c.previous, Step{});
+  const Vector3 n = c.term.normal;
+  c.q = c.previous;
+  c.q.rotations[1] = so3::exp(0.1 * fd::random_unit(rng)) * c.previous.rotations[1];
+  c.q.points[1] += fd::random_vector(rng, 0.05);
+  const Vector3 p_b = c.q.points[1] + c.q.rotations[1] * c.term.contact_point;
+  c.q.rotations[0] = so3::exp(0.2 * fd::random_unit(rng)) * c.previous.rotations[0];
+  const Vector3 p_a = p_b + slip * fd::random_perpendicular(n, rng) + normal_move * n;
+  c.q.points[0] = p_a - c.q.rotations[0] * c.term.at.local;
+  return c;
+}
+
+TEST(BodyFriction, LieDerivativesInStickAndSlipMatchFiniteDifferences) {
+  std::mt19937 rng(44);
+  const double epsilon = 1e-2;
+  int checked = 0;
+  for (const auto& shape : shapes(rng)) {
+    for (const double angle_a : kAngles) {
+      for (const double angle_b : {0.0, 1e-9, 2.5, std::numbers::pi}) {
+        // Deep in the stick regime, near the switch on both sides, and sliding.
+        for (const double slip : {0.3 * epsilon, 0.9 * epsilon, 1.1 * epsilon, 20.0 * epsilon}) {
+          SCOPED_TRACE(trace("angles of A and B, slip", angle_a, angle_b, slip));
+          const FrictionPair c = friction_pair(shape, angle_a, angle_b, slip, epsilon, 1e4, rng);
+          ASSERT_NEAR(c.term.normal_force, 1e4 * 0.02, 1e-9);
+          fd::TermCheckOptions options;
+          // As for Friction (test_contact.cpp): D depends on y = ‖u‖ ≥ 3e-3, whose fourth
+          // derivative is ~1/y³, so second differences of the value take a step 1e-5 ≤ y/300
+          // (truncation ≤ 1e-5 relative); the switch at y = ε is ≥ 1e-3 from every slip.
+          // Differences of the gradient have truncation step²/6 · ∂⁴D with ∂⁴D ~ 2μλ/(ε² y)
+          // ≈ 5e8 in the stick zone (its cubic through y): 1e-4 at the default step, ~1e-8 of
+          // the Hessian's scale; step 2e-7 brings it 25× below the 1e-9 floor, while the
+          // round-off 16 eps|g|/step stays ~1e-6.
+          options.gradient.step = 2e-7;
+          options.hessian.step = 2e-7;
+          options.hessian_from_value.step = 1e-5;
+          EXPECT_TRUE(fd::check_term(c.term, c.q, kDofs, options));
+          ++checked;
+        }
+      }
+    }
+  }
+  EXPECT_EQ(checked, 3 * 9 * 4 * 4);
+}
+
+TEST(BodyFriction, SlidingForceIsMuLambdaAgainstTheSlipAndEqualAndOpposite) {
+  std::mt19937 rng(45);
+  for (const auto& shape : shapes(rng)) {
+    for (const double k : {1e-3, 1.0, 1e9}) {
+      SCOPED_TRACE(trace("stiffness", k));
+      const FrictionPair c = friction_pair(shape, 1.0, 2.0, 0.05, 1e-4, k, rng, 0.0);
+      LocalGradient<4> g;
+      c.term.evaluate(c.q, &g, nullptr);
+      // Sliding (y = 500 ε): the force on A's sample, −∂D/∂p_A, is μλ along the slip of B
+      // relative to A, i.e. against A's slip.
+      const double mu_lambda = c.term.coefficient * c.term.normal_force;
+      const Vector3 slip_of_a = c.term.at.position(c.q) - (c.q.points[1] + c.q.rotations[1] * c.term.contact_point);
+      EXPECT_TRUE((-g.head<3>()).isApprox(-mu_lambda * slip_of_a.normalized(), 1e-12));
+      const auto [force, torque] = net_force_and_torque(g, c.q);
+      EXPECT_LT(force.norm(), 1e-12 * g.norm());
+      EXPECT_LT(torque.norm(), 1e-12 * g.norm() * (1.0 + c.q.points[0].norm() + c.q.points[1].norm()));
+      fd::TermCheckOptions options;
+      options.hessian_from_value.step = 1e-5;
+      EXPECT_TRUE(fd::check_term(c.term, c.q, kDofs, options));
+    }
+  }
+}
+
+TEST(BodyFriction, NoLaggedContactNoFriction) {
+  std::mt19937 rng(46);
+  const auto shape = shapes(rng).front();
+  const Pair apart = make_pair(shape, -0.05, 1.0, 2.5, 1e4, rng);
+  BodyFriction term;
+  static_cast<BodySample&>(term) = apart.term;
+  term.coefficient = 0.4;
+  term.epsilon = 1e-3;
+  term.begin_step(apart.q, Step{});
+  EXPECT_EQ(term.normal_force, 0.0);
+  State q = apart.q;
+  q.points[0] += Vector3(0.01, 0.02, -0.03);
+  LocalGradient<4> g;
+  LocalHessian<4> H;
+  EXPECT_EQ(term.evaluate(q, &g, &H), 0.0);
+  EXPECT_TRUE(g.isZero(0.0));
+  EXPECT_TRUE(H.isZero(0.0));
+  EXPECT_TRUE(term.previous_jacobian(q, apart.q).isZero(0.0));
+}
+
+TEST(BodyFriction, ResidualFormReproducesValueAndGradient) {
+  std::mt19937 rng(47);
+  for (const auto& shape : shapes(rng)) {
+    for (const double slip : {0.3e-2, 5e-2}) {
+      const FrictionPair c = friction_pair(shape, 1.3, 0.4, slip, 1e-2, 1e4, rng);
+      LocalGradient<4> g;
+      const double D = c.term.evaluate(c.q, &g, nullptr);
+      BodyFriction::Residual r;
+      BodyFriction::ResidualJacobian J;
+      c.term.residual(c.q, r, &J);
+      EXPECT_NEAR(0.5 * r.squaredNorm(), D, 1e-13 * D);
+      EXPECT_TRUE((J.transpose() * r).isApprox(g, 1e-12));
+      const fd::VectorFunction F = [&c](const State& s) {
+        BodyFriction::Residual rs;
+        c.term.residual(s, rs, nullptr);
+        return Eigen::VectorXd(rs);
+      };
+      EXPECT_TRUE(fd::check_vector_jacobian(F, c.q, kDofs, J));
+    }
+  }
+}
+
+TEST(BodyFriction, MixedBlockOfTheLaggedStepMatchesFiniteDifferences) {
+  // C(q; q_{k−1}): the local gradient at the fixed current state as a function of both
+  // previous poses, through û, λ and n (begin_step re-run at every perturbed q_{k−1}).
+  std::mt19937 rng(48);
+  int checked = 0;
+  for (const auto& shape : shapes(rng)) {
+    for (const double angle_a : kAngles) {
+      for (const double angle_b : kAngles) {
+        for (const double slip : {0.3e-2, 5e-2}) {
+          SCOPED_TRACE(trace("angles of A and B, slip", angle_a, angle_b, slip));
+          const FrictionPair c = friction_pair(shape, angle_a, angle_b, slip, 1e-2, 1e4, rng);
+          const fd::VectorFunction C = [&c](const State& previous) {
+            BodyFriction t = c.term;
+            t.begin_step(previous, Step{});
+            LocalGradient<4> g;
+            t.evaluate(c.q, &g, nullptr);
+            return Eigen::VectorXd(g);
+          };
+          const Eigen::MatrixXd J = c.term.previous_jacobian(c.q, c.previous);
+          fd::FdOptions o;
+          o.step = 2e-7;  // the stick zone's truncation, as in the Lie derivatives' test
+          EXPECT_TRUE(fd::check_vector_jacobian(C, c.previous, kDofs, J, o));
+          ++checked;
+        }
+      }
+    }
+  }
+  EXPECT_EQ(checked, 3 * 9 * 9 * 2);
+}
+
+TEST(BodyFriction, TinyAndHugeTimeStepsKeepDerivativesExactAndTheForceBounded) {
+  // ε = ε_v h over h from 1e-6 to 1 s at ε_v = 1e-3 m/s. The geometry is scaled with ε (a
+  // sphere of radius 100 ε, levers of 50 ε, a penetration of 20 ε, slips 0.5 ε and 3 ε) so
+  // that the state's round-off eps·|p| stays far below FD steps that fit in the quadratic
+  // zone: 1e-4 ε for first differences, 1e-3 ε for second differences of the value (as for
+  // Friction in test_contact.cpp).
+  std::mt19937 rng(49);
+  for (const double h : {1e-6, 1e-3, 1.0}) {
+    const double epsilon = 1e-3 * h;
+    Collider sphere;
+    sphere.shape = SphereShape{100.0 * epsilon};
+    const auto shape = std::make_shared<const Collider>(sphere);
+    for (const double factor : {0.5, 3.0}) {
+      SCOPED_TRACE(trace("h factor", h, factor));
+      BodyFriction term;
+      term.shape = shape;
+      term.radius = 10.0 * epsilon;
+      term.stiffness = 1e4;
+      term.coefficient = 0.4;
+      term.epsilon = epsilon;
+      term.body_b = 1;
+      term.offsets = {0, 3, 6, 9};
+      term.at = {0, 0, 50.0 * epsilon * fd::random_unit(rng)};
+      State previous;
+      previous.rotations = {rotation_at(2.0, rng), rotation_at(1.0, rng)};
+      previous.points = {Vector3::Zero(), 30.0 * epsilon * fd::random_unit(rng)};
+      const Vector3 direction = fd::random_unit(rng);
+      const Vector3 p = previous.points[1] + (90.0 * epsilon) * direction;  // 20 ε deep
+      previous.points[0] = p - previous.rotations[0] * term.at.local;
+      term.begin_step(previous, Step{});
+      ASSERT_NEAR(term.normal_force, 1e4 * 20.0 * epsilon, 1e-6 * term.normal_force);
+      State q = previous;
+      q.points[0] += factor * epsilon * fd::random_perpendicular(term.normal, rng);
+      fd::TermCheckOptions options;
+      options.gradient.step = 1e-4 * epsilon;
+      options.hessian.step = 1e-4 * epsilon;
+      options.hessian_from_value.step = 1e-3 * epsilon;
+      // The θ rows are lever × force with levers of 50 ε: far below the x rows at h = 1e-6,
+      // under what a check relative to the largest entry can call non-zero (compared all the
+      // same; their non-zero check is the O(1) test above).
+      options.gradient.require_nonzero = fd::NonZero::kAny;
+      options.hessian.require_nonzero = fd::NonZero::kAny;
+      EXPECT_TRUE(fd::check_term(term, q, kDofs, options));
+    }
+    // At O(1) geometry the same ε gives a force never above Coulomb's μλ, whatever the slip.
+    std::mt19937 rng_pair(50);
+    for (const double slip : {0.0, 0.5 * epsilon, epsilon, 1e3 * epsilon}) {
+      const FrictionPair c = friction_pair(shapes(rng_pair)[1], 1.0, 2.0, slip, epsilon, 1e4, rng_pair, 0.0);
+      LocalGradient<4> g;
+      LocalHessian<4> H;
+      c.term.evaluate(c.q, &g, &H);
+      EXPECT_LE(g.head<3>().norm(), c.term.coefficient * c.term.normal_force * (1.0 + 1e-9));
+      EXPECT_TRUE(H.allFinite());
     }
   }
 }

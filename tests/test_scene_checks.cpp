@@ -52,6 +52,21 @@ TEST(SceneChecks, OverlappingBodies) {
       << w[0];
 }
 
+// Bodies with shapes touch each other: overlapping bounding boxes are ordinary, but a sample
+// that starts inside the other's shape is named.
+TEST(SceneChecks, BodiesWithShapesWarnOnlyWhenOneStartsInsideTheOther) {
+  const auto ball = [](const std::string& name, double z) {
+    return R"({"name": ")" + name + R"(", "mass": 1, "inertia": [1, 1, 1], "position": [0, 0, )" + std::to_string(z) +
+           R"(], "contact": {"stiffness": 1e4, "radius": 0.01, "shape": {"type": "sphere", "radius": 0.1},
+               "sample_spacing": 0.05}})";
+  };
+  EXPECT_TRUE(warnings_of(ball("a", 1.0) + "," + ball("b", 1.205)).empty());
+  const auto w = warnings_of(ball("a", 1.0) + "," + ball("b", 1.15));
+  ASSERT_EQ(w.size(), 1u);
+  EXPECT_EQ(w[0].rfind("bodies[0] (\"a\") and bodies[1] (\"b\"): contact sample ", 0), 0u) << w[0];
+  EXPECT_NE(w[0].find("inside the shape of \"b\""), std::string::npos) << w[0];
+}
+
 TEST(SceneChecks, BundledScenesWarnOfNothing) {
   int scenes = 0;
   for (const auto& entry : std::filesystem::recursive_directory_iterator(
