@@ -1,10 +1,18 @@
 #include "contact.hpp"
 
+#include <algorithm>
 #include <cmath>
 
 #include "point_pair.hpp"
 
 namespace liedyn {
+
+bool ContactMaterial::touches(const std::string& name) const {
+  const auto listed = [&](const std::vector<std::string>& names) {
+    return std::find(names.begin(), names.end(), name) != names.end();
+  };
+  return (collides_with.empty() || listed(collides_with)) && !listed(ignores);
+}
 
 double ContactSample::penetration(const State& q) const {
   return radius - collider->evaluate(at.position(q), false).distance;

@@ -24,6 +24,8 @@
 // inertia already puts in the pattern: contacts that come and go never change the sparsity.
 
 #include <memory>
+#include <string>
+#include <vector>
 
 #include "sdf.hpp"
 #include "state.hpp"
@@ -38,7 +40,12 @@ struct ContactMaterial {
   double friction = 0.0;           // μ, ≥ 0 (0: frictionless)
   double friction_velocity = 1e-3; // ε_v, m/s, > 0: the smoothed Coulomb law's stick–slip
                                    // transition speed (friction.hpp); sticking creeps below it
+  // What it touches, by name (bodies, colliders): everything by default, only those in
+  // collides_with when it is given, never those in ignores (one of the two at most).
+  std::vector<std::string> collides_with;
+  std::vector<std::string> ignores;
   bool enabled() const { return stiffness > 0.0; }
+  bool touches(const std::string& name) const;
 };
 
 // What a contact term and its friction term share: a sample, a sphere of radius ρ attached

@@ -130,13 +130,15 @@ std::vector<std::shared_ptr<const Collider>> shared_colliders(const Model& model
   return out;
 }
 
-// A sample's contact term with each collider, and its friction term where μ > 0.
+// A sample's contact term with each collider it touches (ContactMaterial::touches), and its
+// friction term where μ > 0.
 void add_contact_terms(const Model& model,
                        const std::vector<std::shared_ptr<const Collider>>& colliders,
                        const ContactMaterial& material, const AttachedPoint& at,
                        const std::array<int, 2>& offsets, IncrementalPotential& p) {
   if (!material.enabled()) return;
   for (const auto& collider : colliders) {
+    if (!material.touches(collider->name)) continue;
     const ContactSample sample{offsets, at, collider, material.stiffness, material.radius};
     p.add(Contact{sample});
     // Static equilibria have no step to slip over: friction is a dynamic term.

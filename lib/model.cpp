@@ -302,6 +302,7 @@ void Model::validate() const {
     }
   }
   if (!static_equilibrium) validate_motion_speeds();
+  validate_contact_names();
   if (static_equilibrium) validate_anchoring();
 }
 
@@ -337,7 +338,10 @@ std::vector<std::pair<int, int>> Model::body_pairs() const {
   };
   for (int a = 0; a < static_cast<int>(bodies.size()); ++a) {
     for (int b = a + 1; b < static_cast<int>(bodies.size()); ++b) {
-      if (faces(bodies[a], bodies[b]) || faces(bodies[b], bodies[a])) out.emplace_back(a, b);
+      const RigidBody& A = bodies[a];
+      const RigidBody& B = bodies[b];
+      if (!A.contact.touches(B.name) || !B.contact.touches(A.name)) continue;  // both must agree
+      if (faces(A, B) || faces(B, A)) out.emplace_back(a, b);
     }
   }
   return out;
@@ -431,6 +435,42 @@ void Model::validate_anchoring() const {
     throw ModelError(index_field("rods", i - n, "fixed_nodes"),
                      "static mode needs at least one clamped node, or a joint to the world or to "
                      "an anchored object (a free rod has no equilibrium under load)");
+  }
+}
+
+void Model::validate_contact_names() const {
+  const auto check = [&](const ContactMaterial& contact, const std::string& owner, bool is_rod,
+                         const std::string& path) {
+    if (!contact.collides_with.empty() && !contact.ignores.empty()) {
+      throw ModelError(path + ".ignores", "give \"collides_with\" or \"ignores\", not both");
+    }
+    for (const auto& [list, member] : {std::pair{&contact.collides_with, "collides_with"},
+                                       std::pair{&contact.ignores, "ignores"}}) {
+      for (std::size_t k = 0; k < list->size(); ++k) {
+        const std::string& name = (*list)[k];
+        const std::string field = path + "." + member + "[" + std::to_string(k) + "]";
+        if (name == owner) throw ModelError(field, "names its own object");
+        const bool body = std::any_of(bodies.begin(), bodies.end(), [&](const RigidBody& b) { return b.name == name; });
+        const bool rod = std::any_of(rods.begin(), rods.end(), [&](const RodSpec& r) { return r.name == name; });
+        const bool collider =
+            std::any_of(colliders.begin(), colliders.end(), [&](const Collider& c) { return c.name == name; });
+        if (!body && !rod && !collider) {
+          throw ModelError(field, "no body, rod or collider is named \"" + name + "\"");
+        }
+        // Rods touch colliders only: a rod in a body's list, or a body or rod in a rod's, asks
+        // for contact that is not modelled (an "ignores" of it is harmless).
+        if (std::string(member) == "collides_with" && (rod || (is_rod && body))) {
+          throw ModelError(field, "\"" + name + "\": contact between rods and bodies or rods is not modelled yet "
+                                  "(rods touch colliders only)");
+        }
+      }
+    }
+  };
+  for (std::size_t i = 0; i < bodies.size(); ++i) {
+    check(bodies[i].contact, bodies[i].name, false, index_field("bodies", i, "contact"));
+  }
+  for (std::size_t r = 0; r < rods.size(); ++r) {
+    check(rods[r].contact, rods[r].name, true, index_field("rods", r, "contact"));
   }
 }
 

@@ -198,6 +198,8 @@ struct Model {
   void validate_anchoring() const;
   // The contact checks of validate(): colliders, materials, samples; `path` as above.
   static void validate_contact(const ContactMaterial& contact, const std::string& path);
+  // The names in every contact block's collides_with and ignores.
+  void validate_contact_names() const;
 
   // State q_0 and step Δq_0 = (h v_0, exp(h ω_0)) (docs/design.md §2.2); rods start in their
   // initial shape, with parallel-transported edge frames, edges at rest and nodes at their

@@ -497,7 +497,7 @@ ContactMaterial parse_contact(ObjectReader& owner, double default_radius,
                               std::vector<Vector3>* points, std::shared_ptr<const Collider>* shape,
                               int& budget) {
   // A body's contact gives its samples and its shape; a rod's samples are its nodes.
-  ObjectReader::Keys keys = {"stiffness", "radius", "friction", "friction_velocity"};
+  ObjectReader::Keys keys = {"stiffness", "radius", "friction", "friction_velocity", "collides_with", "ignores"};
   if (points != nullptr) keys.insert(keys.end(), {"points", "box", "shape", "sample_spacing"});
   ObjectReader c(owner.get("contact"), owner.field("contact"), owner.source(), keys);
   ContactMaterial m;
@@ -506,6 +506,15 @@ ContactMaterial parse_contact(ObjectReader& owner, double default_radius,
   m.radius = c.number("radius", default_radius);
   m.friction = c.number("friction", m.friction);
   m.friction_velocity = c.number("friction_velocity", m.friction_velocity);
+  // Names, resolved once every object is read (Model::validate_contact_names).
+  for (const auto& [key, names] : {std::pair{"collides_with", &m.collides_with}, std::pair{"ignores", &m.ignores}}) {
+    if (!c.has(key)) continue;
+    const json& list = c.array(key);
+    for (std::size_t i = 0; i < list.size(); ++i) {
+      if (!list[i].is_string()) c.fail(item_path(c.field(key), i), "must be the name of a body or a collider");
+      names->push_back(list[i].get<std::string>());
+    }
+  }
   if (points != nullptr) {
     if (c.has("points")) {
       const json& list = c.array("points");

@@ -11,11 +11,13 @@ std::string collider_label(const Model& model, std::size_t c) {
   return "colliders[" + std::to_string(c) + "] (\"" + model.colliders[c].name + "\")";
 }
 
-// The first collider `p` starts inside by more than `radius` (its centre inside the solid):
-// a message, or empty.
-std::string deepest_start(const Model& model, const Vector3& p, double radius,
+// The first collider that a sample of `material` touches and that `p` starts inside by more
+// than its radius (its centre inside the solid): a message, or empty.
+std::string deepest_start(const Model& model, const Vector3& p, const ContactMaterial& material,
                           const std::string& what) {
+  const double radius = material.radius;
   for (std::size_t c = 0; c < model.colliders.size(); ++c) {
+    if (!material.touches(model.colliders[c].name)) continue;
     const double phi = model.colliders[c].evaluate(p, false).distance;
     if (phi < 0.0) {
       std::ostringstream os;
@@ -68,7 +70,7 @@ std::vector<std::string> scene_warnings(const Scene& scene) {
       boxes[b].extend(p - Vector3::Constant(body.contact.radius));
       boxes[b].extend(p + Vector3::Constant(body.contact.radius));
       if (warned) continue;
-      const std::string w = deepest_start(model, p, body.contact.radius,
+      const std::string w = deepest_start(model, p, body.contact,
                                           label + ": contact sample " + std::to_string(i));
       if (!w.empty()) {
         warnings.push_back(w);
@@ -85,7 +87,7 @@ std::vector<std::string> scene_warnings(const Scene& scene) {
         continue;  // clamped nodes have no contact
       }
       const std::string w =
-          deepest_start(model, rod.nodes[static_cast<std::size_t>(i)], rod.contact.radius,
+          deepest_start(model, rod.nodes[static_cast<std::size_t>(i)], rod.contact,
                         "rods[" + std::to_string(r) + "] (\"" + rod.name + "\"): node " +
                             std::to_string(i));
       if (!w.empty()) {
@@ -100,7 +102,8 @@ std::vector<std::string> scene_warnings(const Scene& scene) {
                        "bodies \"contact\" with samples, or rods \"contact\")");
   }
   // Pairs whose contact is modelled (a shape on one, samples on the other) touch; the others
-  // pass through one another if their samples start overlapping.
+  // pass through one another if their samples start overlapping (unless told to ignore
+  // each other).
   const std::vector<std::pair<int, int>> touching = model.body_pairs();
   for (std::size_t a = 0; a < boxes.size(); ++a) {
     for (std::size_t b = a + 1; b < boxes.size(); ++b) {
@@ -109,7 +112,9 @@ std::vector<std::string> scene_warnings(const Scene& scene) {
       if (std::find(touching.begin(), touching.end(), std::pair{int(a), int(b)}) != touching.end()) {
         const std::string w = inside_other(model, int(a), int(b));
         if (!w.empty()) warnings.push_back(pair + ": " + w);
-      } else if (!boxes[a].isEmpty() && !boxes[b].isEmpty() && boxes[a].intersects(boxes[b])) {
+      } else if (!boxes[a].isEmpty() && !boxes[b].isEmpty() && boxes[a].intersects(boxes[b]) &&
+                 model.bodies[a].contact.touches(model.bodies[b].name) &&
+                 model.bodies[b].contact.touches(model.bodies[a].name)) {  // not told to ignore
         warnings.push_back(pair +
                            " start with overlapping contact samples (their bounding boxes "
                            "intersect) but neither has a \"shape\" to touch: they will "

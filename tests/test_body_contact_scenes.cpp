@@ -214,6 +214,51 @@ TEST(BodyContactAdjoint, TheBilliardGradientRunsBackThroughFrictionBetweenTheBal
   EXPECT_TRUE(r.passed()) << "max relative error " << r.max_relative_error << " at parameter " << r.worst;
 }
 
+// "collides_with" and "ignores": a ball told to ignore another passes through it, one told
+// to ignore the floor falls through it, and a pair touches only when both agree.
+TEST(BodyContactScenes, CollidesWithAndIgnoresNarrowWhatTouches) {
+  const auto scene = [](const std::string& a_filter, const std::string& b_filter) {
+    const auto ball = [](const std::string& name, double x, double v, const std::string& filter) {
+      return R"({"name": ")" + name + R"(", "mass": 1, "inertia": [0.004, 0.004, 0.004], "position": [)" +
+             std::to_string(x) + R"(, 0, 0.2], "linear_velocity": [)" + std::to_string(v) +
+             R"(, 0, 0], "contact": {"stiffness": 1e5, "radius": 0.005, "shape": {"type": "sphere", "radius": 0.1},
+                 "sample_spacing": 0.03)" + filter + "}}";
+    };
+    return parse_scene(R"({"time_step": 0.001, "frames": 300, "gravity": [0, 0, -9.81],
+                           "colliders": [{"name": "floor", "type": "plane"}], "bodies": [)" +
+                           ball("a", -0.3, 2.0, a_filter) + "," + ball("b", 0.0, 0.0, b_filter) + "]}",
+                       "filters.json");
+  };
+  // Each run: where a and b end (x of a, z of a).
+  const auto run = [](const Scene& s) {
+    Simulator sim(s.model, s.solver);
+    for (int k = 1; k <= s.frames; ++k) EXPECT_TRUE(sim.step().state_updated()) << k;
+    return std::pair{sim.state().points[0].x(), sim.state().points[0].z()};
+  };
+  const auto [x_hit, z_hit] = run(scene("", ""));
+  EXPECT_LT(x_hit, -0.05);  // struck b and stopped short of it (head-on: b took its speed)
+  EXPECT_GT(z_hit, 0.09);   // on the floor
+  EXPECT_GT(run(scene(R"(, "ignores": ["b"])", "")).first, 0.2);  // through b
+  EXPECT_GT(run(scene("", R"(, "collides_with": ["floor"])")).first, 0.2);  // b does not agree
+  EXPECT_LT(run(scene(R"(, "collides_with": ["b", "floor"])", "")).first, -0.05);
+  EXPECT_LT(run(scene(R"(, "ignores": ["floor"])", "")).second, 0.0);  // through the floor
+  EXPECT_EQ(scene(R"(, "ignores": ["b"])", "").model.body_pairs().size(), 0u);
+
+  const auto error = [&](const std::string& filter) {
+    try {
+      scene(filter, "");
+    } catch (const SceneError& e) {
+      return e.field() + ": " + e.reason();
+    }
+    return std::string("accepted");
+  };
+  EXPECT_EQ(error(R"(, "ignores": ["c"])"), "bodies[0].contact.ignores[0]: no body, rod or collider is named \"c\"");
+  EXPECT_EQ(error(R"(, "collides_with": ["floor", "a"])"), "bodies[0].contact.collides_with[1]: names its own object");
+  EXPECT_EQ(error(R"(, "collides_with": ["b"], "ignores": ["floor"])"),
+            "bodies[0].contact.ignores: give \"collides_with\" or \"ignores\", not both");
+  EXPECT_EQ(error(R"(, "ignores": [3])"), "bodies[0].contact.ignores[0]: must be the name of a body or a collider");
+}
+
 class BodyContactCli : public test::CliFixture {
  protected:
   BodyContactCli() : CliFixture("liedyn_body_contact_test_") {}
