@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "../lib/body_contact.hpp"
+#include "../lib/mass_properties.hpp"
 #include "../lib/so3.hpp"
 #include "analytic.hpp"
 #include "input_file.hpp"
@@ -819,20 +820,35 @@ Scene parse(const json& root, const std::string& source) {
   int contact_budget = kMaxContactSamples;
   for (std::size_t i = 0; i < bodies.size(); ++i) {
     ObjectReader b(bodies[i], item_path("bodies", i), source,
-                   {"name", "mass", "inertia", "position", "orientation", "linear_velocity",
+                   {"name", "mass", "inertia", "density", "position", "orientation", "linear_velocity",
                     "angular_velocity", "contact"});
     RigidBody body;
     body.name = b.string("name");
     claim_name(b, body.name, b.field("name"), item_path("bodies", i), taken);
     names.emplace(body.name, static_cast<int>(i));
-    body.mass = b.number("mass");
-    body.inertia = b.inertia("inertia");
     body.position = b.vector<3>("position", Vector3::Zero());
     body.orientation = orientation_of(b, "orientation");
     body.linear_velocity = b.vector<3>("linear_velocity", Vector3::Zero());
     body.angular_velocity = b.vector<3>("angular_velocity", Vector3::Zero());
     if (b.has("contact")) {
       body.contact = parse_contact(b, 0.0, &body.contact_points, &body.shape, contact_budget);
+    }
+    if (b.has("density")) {
+      // Mass and inertia of the body's shape, filled with that density.
+      for (const char* key : {"mass", "inertia"}) {
+        if (b.has(key)) b.fail(b.field(key), "give \"density\" or \"mass\" and \"inertia\", not both");
+      }
+      if (body.shape == nullptr) b.fail(b.field("density"), "needs the body's \"contact\": {\"shape\"} to fill");
+      try {
+        const MassProperties m = mass_properties(*body.shape, b.number("density"), item_path("bodies", i));
+        body.mass = m.mass;
+        body.inertia = m.inertia;
+      } catch (const ModelError& e) {
+        b.fail(e.field(), std::string(e.what()).substr(e.field().size() + 2));
+      }
+    } else {
+      body.mass = b.number("mass");
+      body.inertia = b.inertia("inertia");
     }
     b.finish();
     scene.model.bodies.push_back(body);
