@@ -155,6 +155,8 @@ class TouchingPairs {
   // Marks the pairs that penetrate at q (a sample deeper than its radius) but are not yet in
   // `touching`; true if there were any.
   bool add_penetrating(const State& q, std::vector<bool>& touching) const;
+  // Whether pair p penetrates at q.
+  bool penetrates(const State& q, int p) const { return near(q, p, 0.0); }
 
  private:
   struct Body {

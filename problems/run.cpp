@@ -56,7 +56,7 @@ void write_frame_row(std::ostream& out, const Simulator& sim, const StepReport* 
       << (report ? report->regularized_iterations : 0) << ','
       << (report ? to_string(report->status) : "initial") << ',' << sim.max_penetration() << ','
       << (report ? report->constraint_violation : sim.constraint_violation()) << ','
-      << (report ? report->multiplier_updates : 0) << '\n';
+      << (report ? report->multiplier_updates : 0) << ',' << sim.contact_pairs() << '\n';
 }
 
 }  // namespace
@@ -69,7 +69,7 @@ SimulationSummary simulate_into(const Scene& scene, OutputFolder& out, std::ostr
   frames << "frame,time,newton_iterations,gradient_norm,converged,kinetic_energy,"
             "potential_energy,angular_momentum_x,angular_momentum_y,angular_momentum_z,"
             "step_norm,regularized_iterations,status,max_penetration,constraint_violation,"
-            "multiplier_updates\n";
+            "multiplier_updates,contact_pairs\n";
 
   Simulator sim(scene.model, scene.solver);
   SimulationSummary summary;

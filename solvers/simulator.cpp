@@ -183,7 +183,32 @@ double Simulator::max_penetration() const {
 }
 
 int Simulator::contact_pairs() const {
-  return static_cast<int>(std::count(touching_.begin(), touching_.end(), true));
+  int pairs = 0;
+  for (std::size_t p = 0; p < pairs_.size(); ++p) pairs += pairs_.penetrates(state_, static_cast<int>(p));
+  // A point at p touches collider c when it is within ρ of it.
+  const auto inside = [&](const Collider& c, const ContactMaterial& m, const Vector3& p) {
+    return m.touches(c.name) && m.radius - c.evaluate(p, false).distance > 0.0;
+  };
+  for (const Collider& c : model_.colliders) {
+    for (std::size_t i = 0; i < model_.bodies.size(); ++i) {
+      const RigidBody& b = model_.bodies[i];
+      if (!b.contact.enabled()) continue;
+      pairs += std::any_of(b.contact_points.begin(), b.contact_points.end(), [&](const Vector3& s) {
+        return inside(c, b.contact, state_.points[i] + state_.rotations[i] * s);
+      });
+    }
+    for (std::size_t r = 0; r < model_.rods.size(); ++r) {
+      const RodSpec& rod = model_.rods[r];
+      if (!rod.contact.enabled()) continue;
+      bool touching = false;
+      for (int n = 0; n < rod.node_count() && !touching; ++n) {
+        const bool clamped = std::find(rod.fixed_nodes.begin(), rod.fixed_nodes.end(), n) != rod.fixed_nodes.end();
+        touching = !clamped && inside(c, rod.contact, state_.points[model_.rod_point(static_cast<int>(r), n)]);
+      }
+      pairs += touching;
+    }
+  }
+  return pairs;
 }
 
 double Simulator::constraint_violation() const {

@@ -62,8 +62,11 @@ class Simulator {
   int islands() const { return static_cast<int>(current_->solvers.size()); }
   int island_sets() const { return static_cast<int>(islands_.size()); }
   // Which couplings held in the last step (Model::coupling_key: the joints, then the body
-  // pairs of Model::body_pairs in contact), and how many body pairs were in contact.
+  // pairs of Model::body_pairs within reach of each other).
   const std::vector<bool>& coupling_key() const { return key_; }
+  // How many pairs are in contact at the current state, all kinds: a body or rod with a
+  // sample (a rod: a free node) inside a collider it touches, two bodies with a sample of one
+  // inside the other's shape (ρ − φ > 0).
   int contact_pairs() const;
 
  private:

@@ -10,6 +10,7 @@
 #include <numbers>
 #include <sstream>
 #include <string>
+#include <tuple>
 
 #include "cli_fixture.hpp"
 #include "lib/body_contact.hpp"
@@ -130,20 +131,21 @@ TEST(BodyContactScenes, ATowerOfBoxesStandsOnATiltedFloorByFrictionAndFallsPastI
       }
       drift = std::max(drift, (sim.state().points[top] - start).norm());
     }
-    return std::pair{drift, sim.state().points[top]};
+    return std::tuple{drift, sim.state().points[top], sim.contact_pairs()};
   };
-  const auto [drift, end] = run(bundled, bundled.frames, true);
+  const auto [drift, end, pairs] = run(bundled, bundled.frames, true);
   EXPECT_LE(drift, 1e-3);
+  EXPECT_EQ(pairs, 4);  // the floor and the bottom box, and three pairs of boxes
   EXPECT_GE(bundled.frames * bundled.model.time_step, 3.0);
 
   Scene frictionless = bundled;
   for (RigidBody& b : frictionless.model.bodies) b.contact.friction = 0.0;
-  EXPECT_GT(run(frictionless, 100).first, 0.05);  // in 1 s
+  EXPECT_GT(std::get<0>(run(frictionless, 100)), 0.05);  // in 1 s
 
   Scene steep = bundled;
   const double angle = 30.0 * std::numbers::pi / 180.0;
   steep.model.gravity = 9.81 * Vector3(std::sin(angle), 0.0, -std::cos(angle));
-  const auto [steep_drift, steep_end] = run(steep, 200);
+  const auto [steep_drift, steep_end, steep_pairs] = run(steep, 200);
   EXPECT_LT(steep_end.z(), 0.5 * bundled.model.bodies[top].position.z());  // fallen
 }
 
@@ -263,6 +265,25 @@ class BodyContactCli : public test::CliFixture {
  protected:
   BodyContactCli() : CliFixture("liedyn_body_contact_test_") {}
 };
+
+// frames.csv counts the pairs in contact per frame: none before the balls meet, one (the
+// pair) while they touch, none after.
+TEST_F(BodyContactCli, FramesCsvCountsThePairsInContact) {
+  const std::filesystem::path scene =
+      std::filesystem::path(LIEDYN_SOURCE_DIR) / "problems/scenes/contact/two_spheres.json";
+  const Result r = run({"simulate", scene.string(), "--out", "balls"});
+  ASSERT_EQ(r.exit_code, 0) << r.out << r.err;
+  std::istringstream frames(test::read_file(dir_ / "balls" / "frames.csv"));
+  std::string line;
+  std::getline(frames, line);
+  ASSERT_TRUE(line.ends_with(",contact_pairs")) << line;
+  std::string counts;
+  while (std::getline(frames, line)) {
+    const char last = line.back();
+    if (counts.empty() || counts.back() != last) counts += last;
+  }
+  EXPECT_EQ(counts, "010");
+}
 
 // The billiard shot (optimization/billiard.json): the gradient through the collision agrees
 // with central differences, and NLopt's and Ipopt's L-BFGS aim the cue ball so that the
