@@ -1,0 +1,142 @@
+#pragma once
+// Penalty contact between two rod edges, each a capsule: edge a = [a0, a1] of radius ρ_a and
+// edge b = [b0, b1] of radius ρ_b (edge e of a rod joins its nodes e and e + 1, state.hpp).
+//
+// Why not the closest distance between the two segments: it is not differentiable where the
+// segments are parallel (the closest pair is not unique and jumps as they turn through
+// parallel), which is exactly how two rods lying side by side meet; a mollifier (Li et al.
+// 2020) repairs that with extra terms. Here the penalty is instead integrated along each edge
+// against the other segment, by a fixed Gauss–Legendre rule of N points per edge: each
+// sample's distance to a segment is smooth at parallel configurations, and the potential of
+// a line contact grows with the length that overlaps, with k a stiffness per unit length.
+//
+// Point–segment distance. For a point p and a segment [b0, b1], with e = b1 − b0,
+//   t̂ = (p − b0)·e / |e|²,   t = clamp(t̂, 0, 1),   w = p − b0 − t e,   d = |w|,   n = w/d.
+// At fixed t, w = Σ_i α_i x_i over the blocks x = (p, b0, b1), α = (1, −(1−t), −t).
+//   Gradient: ∂d/∂x_i = α_i n. In the interior (0 < t̂ < 1) t minimises |w| so ∂d/∂t = −n·e
+//     = 0 (w ⊥ e: the envelope theorem); at an end t is constant. Either way d is C¹ where
+//     d > 0, t being continuous in x.
+//   Hessian: with P = I − n nᵀ, dn = P dw/d and dw = Σ_j α_j dx_j − e dt. At an end dt = 0:
+//     ∂²d/∂x_i∂x_j = α_i α_j P / d.
+//   In the interior, differentiating w·e = 0 gives |e|² dt = Σ_j (α_j e + β_j w)·dx_j with
+//   β = (0, −1, 1) (de = db1 − db0), and dα_i = −β_i dt; so, with P e = e (n ⊥ e),
+//     ∂²d/∂x_i∂x_j = α_i P (α_j I − e g_jᵀ)/d − β_i n g_jᵀ = [α_i α_j P − u_i u_jᵀ] / d,
+//     g_j = (α_j e + β_j w)/|e|²,   u_i = (α_i e + β_i w)/|e|,
+//   symmetric as it must be: u_i u_jᵀ/d is the curvature given back because the closest
+//   point slides along the segment (the Schur complement of minimising over t). It is
+//   absent at an end, so the Hessian jumps where t̂ crosses 0 or 1, like a penalty's at
+//   contact; the gradient does not. (In the interior the α_i α_j ê êᵀ parts of the two
+//   terms cancel, ê = e/|e|: sliding the point along the segment changes nothing.)
+//   Degenerate cases: |e| = 0 takes t = 0 (a point, the end formulas); d = 0 (p on the
+//   segment) has no direction, and the gradient and Hessian are taken as 0 there (V is not
+//   differentiable at that point, a cone as for a spring of zero length, spring.hpp).
+//
+// Edge–edge potential, δ = ρ_a + ρ_b, Gauss–Legendre nodes s_q on [0, 1] with weights w_q
+// (Σ w_q = 1), ℓ̄_a, ℓ̄_b the edges' rest lengths (constants), a(s) = (1 − s) a0 + s a1:
+//   V = Σ_q c^a_q ½ k max(0, δ − d(a(s_q), [b0, b1]))² + Σ_q c^b_q ½ k max(0, δ − d(b(s_q), [a0, a1]))²,
+//   c^a_q = ½ w_q ℓ̄_a,   c^b_q = ½ w_q ℓ̄_b:
+// each edge's penalty integrated along it against the other segment, the two averaged so
+// that V is symmetric in a and b. The sample p = (1 − s) p0 + s p1 is linear in the nodes, so
+// the chain rule only extends α and β to the blocks (a0, a1, b0, b1):
+//   samples of a against [b0, b1]:  α = (1 − s, s, −(1 − t), −t),  β = (0, 0, −1, 1),
+//   samples of b against [a0, a1]:  α = (−(1 − t), −t, 1 − s, s),  β = (−1, 1, 0, 0),
+// with no second-order term of its own. For one sample in contact (gap γ = δ − d > 0),
+// ψ = c ½ k γ², ψ' = ∂ψ/∂d = −c k γ, ψ'' = c k, and
+//   gradient block i:   ψ' α_i n,
+//   Hessian block ij:   α_i α_j (ψ'' n nᵀ + (ψ'/d) P) − (ψ'/d) u_i u_jᵀ   (interior),
+//                       α_i α_j (ψ'' n nᵀ + (ψ'/d) P)                      (at an end).
+// ψ' < 0, so the lateral part (ψ'/d) P is negative and the Hessian is indefinite, exact, and
+// regularised by the Newton solver like every indefinite Hessian (solvers/newton.hpp). V is
+// C¹; its Hessian jumps where a sample's gap reaches 0 and where its projection reaches an end
+// of the other segment. V depends on relative positions only and is invariant under rotation:
+// the four node forces sum to zero and have no net torque (contact conserves momentum).
+//
+// What the quadrature sees: contact only where a sample is within δ of the other segment.
+// Two edges crossing at a point between samples (spaced about ℓ/N) are missed when δ is
+// smaller than about half that spacing, so N should be about ℓ/δ or more for edges much
+// longer than their radii; penetration() reports the deepest sample, not the segments'
+// closest distance (segment_distance below).
+//
+// Least-squares form (contract: term.hpp), kResiduals = 2N, samples of a then samples of b:
+//   r_q = √(c_q k) max(0, γ_q) = √(w_q ℓ̄ k / 2) max(0, γ_q),   ½‖r‖² = V,
+//   J row q = −√(c_q k) (α_i nᵀ)_i   where γ_q > 0 and d_q > 0, else 0,
+// so that Jᵀ r is evaluate()'s gradient (also at d = 0, where both take no direction).
+//
+// All four blocks are points (rod nodes, no rotation): `nodes` index State::points and
+// `offsets` the tangent vector. Reads q_k only: the adjoint needs no mixed block.
+
+#include <array>
+
+#include "state.hpp"
+#include "term.hpp"
+
+namespace liedyn {
+
+// The largest number of Gauss–Legendre points per edge that BasicEdgeContact is built for.
+inline constexpr int kMaxEdgeQuadraturePoints = 8;
+
+// The n-point Gauss–Legendre rule on [0, 1] (1 ≤ n ≤ kMaxEdgeQuadraturePoints): nodes in
+// increasing order, weights summing to 1; exact for polynomials of degree ≤ 2n − 1.
+struct QuadratureRule {
+  int size = 0;
+  std::array<double, kMaxEdgeQuadraturePoints> nodes{};
+  std::array<double, kMaxEdgeQuadraturePoints> weights{};
+};
+const QuadratureRule& gauss_legendre(int n);
+
+// d(p, [b0, b1]) as derived above; when g (H) is non-null, writes its gradient (Hessian)
+// with respect to the blocks (p, b0, b1); both are 0 where d = 0.
+double point_segment_distance(const Vector3& p, const Vector3& b0, const Vector3& b1,
+                              LocalGradient<3>* g = nullptr, LocalHessian<3>* H = nullptr);
+
+// The closest distance between the segments [a0, a1] and [b0, b1], for reporting (not
+// differentiated). The minimum is attained either at a pair of interior points, which is
+// then the pair closest between the two lines, or at an end of one of the segments, where it
+// is a point–segment distance. So the result is the smallest of the four end-to-segment
+// distances and of the lines' closest pair (its parameter on a clamped to the segment, then
+// b's point the closest to it, clamped; the clamped closest-points algorithm, Lumelsky 1985,
+// with every end case tried rather than chosen). Every candidate is the distance of an
+// actual pair of points, so it never undershoots. Where the lines are parallel an end
+// attains the minimum; where they are nearly so the 2 × 2 system for a's parameter is
+// ill-conditioned, but with b's point fitted to a's the error only slides the pair along
+// the lines, which changes the distance by ~ sin²(angle) times the slide squared. Segments
+// of zero length are points.
+double segment_distance(const Vector3& a0, const Vector3& a1, const Vector3& b0,
+                        const Vector3& b1);
+
+template <int N>
+struct BasicEdgeContact {
+  static_assert(N >= 1 && N <= kMaxEdgeQuadraturePoints, "Gauss–Legendre points per edge");
+  static constexpr int kBlocks = 4;
+  static constexpr const char* kName = "edge_contact";
+  static constexpr bool kEnergyOfState = true;
+  static constexpr int kQuadraturePoints = N;
+
+  std::array<int, kBlocks> offsets{-1, -1, -1, -1};  // a0, a1, b0, b1 (tangent offsets)
+  std::array<int, kBlocks> nodes{-1, -1, -1, -1};    // indices into State::points: a0, a1, b0, b1
+  double stiffness = 0.0;      // k, N/m² (per unit length of edge)
+  double radius_a = 0.0;       // ρ_a, m
+  double radius_b = 0.0;       // ρ_b, m
+  double rest_length_a = 0.0;  // ℓ̄_a, m: weighs a's samples
+  double rest_length_b = 0.0;  // ℓ̄_b, m
+
+  double evaluate(const State& q, LocalGradient<kBlocks>* g, LocalHessian<kBlocks>* H) const;
+  // ρ_a + ρ_b − the smallest distance of a sample to the other segment: > 0 when overlapping.
+  double penetration(const State& q) const;
+
+  static constexpr int kResiduals = 2 * N;
+  using Residual = LocalResidual<kResiduals>;
+  using ResidualJacobian = LocalResidualJacobian<kResiduals, kBlocks>;
+  void residual(const State& q, Residual& r, ResidualJacobian* J) const;
+};
+
+// The rule's size is a template parameter because the residual count 2N must be known at
+// compile time (Ceres's residual blocks); 4 points per edge by default.
+using EdgeContact = BasicEdgeContact<4>;
+
+extern template struct BasicEdgeContact<1>;
+extern template struct BasicEdgeContact<2>;
+extern template struct BasicEdgeContact<4>;
+extern template struct BasicEdgeContact<8>;
+
+}  // namespace liedyn
