@@ -301,7 +301,6 @@ bool TouchingPairs::near(const State& q, int p, double margin) const {
 
 void TouchingPairs::find(const State& q, const std::vector<double>& margin,
                          std::vector<bool>& touching) const {
-  touching.resize(pairs_.size());  // allocates the first time only
   for (std::size_t p = 0; p < pairs_.size(); ++p) {
     touching[p] = near(q, static_cast<int>(p), margin[pairs_[p].first] + margin[pairs_[p].second]);
   }

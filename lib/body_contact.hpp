@@ -150,7 +150,8 @@ class TouchingPairs {
   std::size_t size() const { return pairs_.size(); }
   // The radius about body i's centre of mass that its samples' spheres and its shape fit in.
   double reach(int body) const { return reach_[body]; }
-  // touching[p] for every candidate pair p at q, with margin[i] (m) per body.
+  // touching[p] for every candidate pair p at q, with margin[i] (m) per body (`touching` holds
+  // at least size() entries: the body pairs come first in a coupling key).
   void find(const State& q, const std::vector<double>& margin, std::vector<bool>& touching) const;
   // Marks the pairs that penetrate at q (a sample deeper than its radius) but are not yet in
   // `touching`; true if there were any.

@@ -243,4 +243,44 @@ template struct BasicEdgeContact<2>;
 template struct BasicEdgeContact<4>;
 template struct BasicEdgeContact<8>;
 
+TouchingEdges::TouchingEdges(const Model& model) {
+  for (const EdgePair& e : model.edge_pairs()) {
+    candidates_.push_back({{model.rod_point(e.rod_a, e.edge_a), model.rod_point(e.rod_a, e.edge_a + 1),
+                            model.rod_point(e.rod_b, e.edge_b), model.rod_point(e.rod_b, e.edge_b + 1)},
+                           model.rods[e.rod_a].contact.radius + model.rods[e.rod_b].contact.radius});
+  }
+}
+
+double TouchingEdges::gap(const State& q, std::size_t p) const {
+  const Candidate& c = candidates_[p];
+  const auto& x = q.points;
+  return segment_distance(x[c.nodes[0]], x[c.nodes[1]], x[c.nodes[2]], x[c.nodes[3]]) - c.radii;
+}
+
+void TouchingEdges::find(const State& q, const Step& step, std::vector<bool>& touching, std::size_t first) const {
+  const auto& x = q.points;
+  const auto moved = [&](int i) { return step.points.empty() ? 0.0 : step.points[i].norm(); };
+  for (std::size_t p = 0; p < candidates_.size(); ++p) {
+    const auto& n = candidates_[p].nodes;
+    const double margin = std::max(moved(n[0]), moved(n[1])) + std::max(moved(n[2]), moved(n[3]));
+    const double reach = 0.5 * ((x[n[1]] - x[n[0]]).norm() + (x[n[3]] - x[n[2]]).norm()) + candidates_[p].radii + margin;
+    const Vector3 between = 0.5 * (x[n[0]] + x[n[1]] - x[n[2]] - x[n[3]]);  // midpoint to midpoint
+    touching[first + p] = between.squaredNorm() <= reach * reach && gap(q, p) < margin;
+  }
+}
+
+bool TouchingEdges::add_penetrating(const State& q, std::vector<bool>& touching, std::size_t first) const {
+  bool added = false;
+  for (std::size_t p = 0; p < candidates_.size(); ++p) {
+    if (!touching[first + p] && gap(q, p) < 0.0) touching[first + p] = added = true;
+  }
+  return added;
+}
+
+double TouchingEdges::min_separation(const State& q) const {
+  double smallest = std::numeric_limits<double>::infinity();
+  for (std::size_t p = 0; p < candidates_.size(); ++p) smallest = std::min(smallest, gap(q, p));
+  return smallest;
+}
+
 }  // namespace liedyn

@@ -66,7 +66,9 @@
 // `offsets` the tangent vector. Reads q_k only: the adjoint needs no mixed block.
 
 #include <array>
+#include <vector>
 
+#include "model.hpp"
 #include "state.hpp"
 #include "term.hpp"
 
@@ -138,5 +140,37 @@ extern template struct BasicEdgeContact<1>;
 extern template struct BasicEdgeContact<2>;
 extern template struct BasicEdgeContact<4>;
 extern template struct BasicEdgeContact<8>;
+
+// Which pairs of rod edges (Model::edge_pairs: the candidates) are within reach of each
+// other at a state, for the couplings and terms of a step: a pair is within reach when its
+// segments come within the sum of their radii plus a margin (the largest distance a node of
+// each edge moved in the last step, added). A sphere about each edge's midpoint rules most
+// pairs out before the segments' distance. Allocation-free after construction. The entries
+// of the candidates are `touching[first + p]` (after the body pairs of a coupling key).
+class TouchingEdges {
+ public:
+  TouchingEdges() = default;
+  explicit TouchingEdges(const Model& model);
+
+  std::size_t size() const { return candidates_.size(); }
+  // touching[first + p] for every candidate p at q; `step` holds the last step's node
+  // motions (Step::points).
+  void find(const State& q, const Step& step, std::vector<bool>& touching, std::size_t first) const;
+  // Marks the candidates whose capsules overlap at q but are not yet in `touching`; true if
+  // there were any.
+  bool add_penetrating(const State& q, std::vector<bool>& touching, std::size_t first) const;
+  bool penetrates(const State& q, int p) const { return gap(q, static_cast<std::size_t>(p)) < 0.0; }
+  // The smallest distance between the surfaces of two candidate edges at q (segment_distance
+  // less both radii; < 0 where they overlap), +∞ without candidates.
+  double min_separation(const State& q) const;
+
+ private:
+  struct Candidate {
+    std::array<int, 4> nodes;  // State::points of a0, a1, b0, b1
+    double radii;              // ρ_a + ρ_b
+  };
+  double gap(const State& q, std::size_t p) const;
+  std::vector<Candidate> candidates_;
+};
 
 }  // namespace liedyn

@@ -213,18 +213,26 @@ void append_component(Component& into, Component from) {
 // conditioning. Where other stiffnesses dominate, StepSolver::solve raises ρ.
 constexpr double kExactPenalty = 1e4;
 
-// The joints' terms (JointSpec), added to the component of the ends once every body and rod
-// has its place: where a point or rotation of the state is, as (component, offset), −1 if it
-// is not a DOF.
+// Where each point and rotation of the state is once every body and rod has its place, as
+// (component, offset); {−1, −1} if it is not a DOF.
+struct DofMap {
+  std::vector<std::array<int, 2>> points, rotations;
+  DofMap(const Model& model, const std::vector<Component>& components)
+      : points(model.point_count(), {-1, -1}),
+        rotations(model.rod_rotation(static_cast<int>(model.rods.size()), 0), {-1, -1}) {
+    for (int c = 0; c < static_cast<int>(components.size()); ++c) {
+      for (const DofBlock& b : components[c].points) points[b.index] = {c, b.offset};
+      for (const DofBlock& b : components[c].rotations) rotations[b.index] = {c, b.offset};
+    }
+  }
+};
+
+// The joints' terms (JointSpec), added to the component of the ends.
 void add_joint_terms(const Model& model, const std::vector<bool>& key, std::vector<Component>& components) {
   if (model.joints.empty()) return;
-  std::vector<std::array<int, 2>> point_dof(model.point_count(), {-1, -1});
-  std::vector<std::array<int, 2>> rotation_dof(model.rod_rotation(static_cast<int>(model.rods.size()), 0),
-                                               {-1, -1});
-  for (int c = 0; c < static_cast<int>(components.size()); ++c) {
-    for (const DofBlock& b : components[c].points) point_dof[b.index] = {c, b.offset};
-    for (const DofBlock& b : components[c].rotations) rotation_dof[b.index] = {c, b.offset};
-  }
+  const DofMap dofs(model, components);
+  const std::vector<std::array<int, 2>>& point_dof = dofs.points;
+  const std::vector<std::array<int, 2>>& rotation_dof = dofs.rotations;
   // The rods' lumped masses and edge inertias, discretised once for all joints to them.
   std::vector<std::optional<RodDiscretization>> rods(model.rods.size());
   const auto rod = [&](int r) -> const RodDiscretization& {
@@ -401,6 +409,42 @@ int find_root(std::vector<int>& parent, int i) {
   return i;
 }
 
+// Contact between the rod edges that touch under `key` (the entries after the body pairs),
+// in the component of their nodes. The stiffness per unit length is each rod's contact k over
+// its edge's rest length (so a rod lying along another presses with about k per node, as on
+// a collider), the two edges' averaged.
+void add_edge_contact_terms(const Model& model, const std::vector<bool>& key, std::vector<Component>& components) {
+  const std::size_t first = model.joints.size() + model.body_pairs().size();
+  if (key.size() <= first) return;
+  const std::vector<EdgePair> pairs = model.edge_pairs();
+  const DofMap dofs(model, components);
+  std::vector<std::optional<RodDiscretization>> rods(model.rods.size());
+  const auto rest_length = [&](int r, int e) {
+    if (!rods[r]) rods[r] = discretize(model.rods[r]);
+    return rods[r]->rest_length[e];
+  };
+  for (std::size_t p = 0; p < pairs.size() && first + p < key.size(); ++p) {
+    if (!key[first + p]) continue;
+    const EdgePair& e = pairs[p];
+    EdgeContact term;
+    term.nodes = {model.rod_point(e.rod_a, e.edge_a), model.rod_point(e.rod_a, e.edge_a + 1),
+                  model.rod_point(e.rod_b, e.edge_b), model.rod_point(e.rod_b, e.edge_b + 1)};
+    int component = -1;
+    for (int b = 0; b < 4; ++b) {
+      term.offsets[b] = dofs.points[term.nodes[b]][1];
+      if (component < 0) component = dofs.points[term.nodes[b]][0];
+    }
+    const RodSpec& a = model.rods[e.rod_a];
+    const RodSpec& b = model.rods[e.rod_b];
+    term.rest_length_a = rest_length(e.rod_a, e.edge_a);
+    term.rest_length_b = rest_length(e.rod_b, e.edge_b);
+    term.radius_a = a.contact.radius;
+    term.radius_b = b.contact.radius;
+    term.stiffness = 0.5 * (a.contact.stiffness / term.rest_length_a + b.contact.stiffness / term.rest_length_b);
+    components[component].potential.add(term);  // Model::edge_pairs: some node is free
+  }
+}
+
 }  // namespace
 
 std::vector<Component> build_components(const Model& model, int frame) {
@@ -519,6 +563,7 @@ std::vector<Component> build_components(const Model& model, const std::vector<bo
   }
   add_joint_terms(model, key, components);
   add_body_contact_terms(model, key, point_offset, rotation_offset, component_of, components);
+  add_edge_contact_terms(model, key, components);
   return components;
 }
 

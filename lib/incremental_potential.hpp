@@ -20,6 +20,7 @@
 #include "body_contact.hpp"
 #include "cable.hpp"
 #include "contact.hpp"
+#include "edge_contact.hpp"
 #include "friction.hpp"
 #include "inertia.hpp"
 #include "joint_limits.hpp"
@@ -52,7 +53,7 @@ class IncrementalPotential {
                                RodBendTwist, CableSegment, JointPoint, JointLine, JointAlignment, JointWeld,
                                JointMotor, JointForceMotor, JointLimit<HingeAngle>,
                                JointLimit<SliderPosition>, Contact, Friction, BodyContact,
-                               BodyFriction>;
+                               BodyFriction, EdgeContact>;
 
   // The terms of type T (one contiguous vector per type).
   template <class T>

@@ -347,6 +347,33 @@ std::vector<std::pair<int, int>> Model::body_pairs() const {
   return out;
 }
 
+std::vector<EdgePair> Model::edge_pairs() const {
+  std::vector<EdgePair> out;
+  const auto clamped = [&](int r, int node) {
+    const std::vector<int>& fixed = rods[r].fixed_nodes;
+    return std::find(fixed.begin(), fixed.end(), node) != fixed.end();
+  };
+  const auto add = [&](int r, int i, int s, int j) {
+    if (clamped(r, i) && clamped(r, i + 1) && clamped(s, j) && clamped(s, j + 1)) return;
+    out.push_back({r, i, s, j});
+  };
+  for (int r = 0; r < static_cast<int>(rods.size()); ++r) {
+    const RodSpec& a = rods[r];
+    if (!a.contact.enabled()) continue;
+    for (int i = 0; a.self_contact && i < a.edge_count(); ++i) {
+      for (int j = i + a.self_contact_skip + 1; j < a.edge_count(); ++j) add(r, i, r, j);
+    }
+    for (int s = r + 1; s < static_cast<int>(rods.size()); ++s) {
+      const RodSpec& b = rods[s];
+      if (!b.contact.enabled() || !a.contact.touches(b.name) || !b.contact.touches(a.name)) continue;
+      for (int i = 0; i < a.edge_count(); ++i) {
+        for (int j = 0; j < b.edge_count(); ++j) add(r, i, s, j);
+      }
+    }
+  }
+  return out;
+}
+
 void Model::coupling_key(int frame, const std::vector<bool>& touching, std::vector<bool>& key) const {
   key.resize(joints.size() + touching.size());  // allocates the first time only
   for (std::size_t j = 0; j < joints.size(); ++j) key[j] = joints[j].active_at(frame);
@@ -363,6 +390,12 @@ std::vector<std::pair<int, int>> Model::couplings(const std::vector<bool>* key) 
     const std::vector<std::pair<int, int>> pairs = body_pairs();
     for (std::size_t p = 0; p < pairs.size(); ++p) {
       if ((*key)[joints.size() + p]) out.push_back(pairs[p]);
+    }
+    const std::vector<EdgePair> edges = edge_pairs();
+    const std::size_t first = joints.size() + pairs.size();
+    const int n = static_cast<int>(bodies.size());
+    for (std::size_t p = 0; p < edges.size() && first + p < key->size(); ++p) {
+      if ((*key)[first + p] && edges[p].rod_a != edges[p].rod_b) out.emplace_back(n + edges[p].rod_a, n + edges[p].rod_b);
     }
   }
   return out;
@@ -457,11 +490,11 @@ void Model::validate_contact_names() const {
         if (!body && !rod && !collider) {
           throw ModelError(field, "no body, rod or collider is named \"" + name + "\"");
         }
-        // Rods touch colliders only: a rod in a body's list, or a body or rod in a rod's, asks
+        // Rods touch colliders and rods: a rod in a body's list, or a body in a rod's, asks
         // for contact that is not modelled (an "ignores" of it is harmless).
-        if (std::string(member) == "collides_with" && (rod || (is_rod && body))) {
-          throw ModelError(field, "\"" + name + "\": contact between rods and bodies or rods is not modelled yet "
-                                  "(rods touch colliders only)");
+        if (std::string(member) == "collides_with" && (is_rod ? body : rod)) {
+          throw ModelError(field, "\"" + name + "\": contact between rods and bodies is not modelled yet "
+                                  "(rods touch colliders and rods)");
         }
       }
     }
@@ -525,6 +558,7 @@ void Model::validate_rod(const RodSpec& rod, const std::string& path) {
   non_negative(rod.stretch_stiffness, "stretch_stiffness");
   non_negative(rod.shear_stiffness, "shear_stiffness");
   validate_contact(rod.contact, field("contact"));
+  if (rod.self_contact_skip < 1) throw ModelError(field("contact.self_contact_skip"), "must be at least 1 (neighbouring edges share a node)");
   for (int k = 0; k < 3; ++k) {
     non_negative(rod.bending_stiffness[k], "bending_stiffness[" + std::to_string(k) + "]");
   }

@@ -19,6 +19,12 @@
 namespace liedyn {
 
 // Invalid input to the model; `field` is a dotted path such as "bodies[1].inertia".
+// Edge edge_a of rod rod_a and edge edge_b of rod rod_b (rod_a ≤ rod_b; within one rod,
+// edge_a < edge_b).
+struct EdgePair {
+  int rod_a = -1, edge_a = -1, rod_b = -1, edge_b = -1;
+};
+
 class ModelError : public std::invalid_argument {
  public:
   ModelError(std::string field, const std::string& reason);
@@ -156,11 +162,16 @@ struct Model {
   // The pairs of bodies (a < b) that can touch each other: both with contact enabled, and a
   // sample of one facing the other's shape (RigidBody::shape).
   std::vector<std::pair<int, int>> body_pairs() const;
+  // The pairs of rod edges that may touch (EdgePair), after the body pairs in a coupling key:
+  // the edges of two rods that both have contact and agree to touch, and a self-contact
+  // rod's own edges more than its self_contact_skip apart; none whose four nodes are clamped.
+  std::vector<EdgePair> edge_pairs() const;
   // Which couplings hold at a step, as the key of its islands (solvers/islands.hpp): one
-  // entry per joint (active at `frame`, JointSpec::active_at), then one per body pair
-  // (`touching`, indexed as body_pairs(); all false when empty). Written into `key`.
+  // entry per joint (active at `frame`, JointSpec::active_at), then one per body pair and one
+  // per edge pair (`touching`, indexed as body_pairs() then edge_pairs(); all false when
+  // empty). Written into `key`.
   void coupling_key(int frame, const std::vector<bool>& touching, std::vector<bool>& key) const;
-  // The objects that springs, joints and touching bodies couple, as (a, b) pairs: body i is
+  // The objects that springs, joints, touching bodies and touching rods couple, as (a, b) pairs: body i is
   // i, rod r is bodies.size() + r, and −1 the world. What ties objects into one island under
   // `key` (coupling_key), and without one (every joint, whatever its steps, and no contact)
   // what anchors them in static mode.

@@ -74,8 +74,12 @@ struct RodSpec {
   // Per interior node: per-step ω̄ and slots in γ (lib/term.hpp); empty: none.
   std::vector<ScheduledParameter<3>> rest_darboux_controls;
   // Contact of every free node, a sphere of contact.radius, with the model's colliders
-  // (lib/contact.hpp); contact.stiffness = 0: none.
+  // (lib/contact.hpp); contact.stiffness = 0: none. With contact, its edges (capsules of
+  // contact.radius) touch the edges of every other rod with contact (lib/edge_contact.hpp),
+  // and with self_contact its own edges more than self_contact_skip apart along it.
   ContactMaterial contact;
+  bool self_contact = false;
+  int self_contact_skip = 2;
   // Slots in an optimisation's parameter vector γ (−1: not a parameter); bending takes 3.
   int stretch_stiffness_slot = -1, shear_stiffness_slot = -1, bending_stiffness_slot = -1;
 

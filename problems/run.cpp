@@ -56,7 +56,9 @@ void write_frame_row(std::ostream& out, const Simulator& sim, const StepReport* 
       << (report ? report->regularized_iterations : 0) << ','
       << (report ? to_string(report->status) : "initial") << ',' << sim.max_penetration() << ','
       << (report ? report->constraint_violation : sim.constraint_violation()) << ','
-      << (report ? report->multiplier_updates : 0) << ',' << sim.contact_pairs() << '\n';
+      << (report ? report->multiplier_updates : 0) << ',' << sim.contact_pairs() << ',';
+  if (sim.has_rod_contact()) out << sim.min_rod_separation();  // empty without
+  out << '\n';
 }
 
 }  // namespace
@@ -69,7 +71,7 @@ SimulationSummary simulate_into(const Scene& scene, OutputFolder& out, std::ostr
   frames << "frame,time,newton_iterations,gradient_norm,converged,kinetic_energy,"
             "potential_energy,angular_momentum_x,angular_momentum_y,angular_momentum_z,"
             "step_norm,regularized_iterations,status,max_penetration,constraint_violation,"
-            "multiplier_updates,contact_pairs\n";
+            "multiplier_updates,contact_pairs,min_rod_separation\n";
 
   Simulator sim(scene.model, scene.solver);
   SimulationSummary summary;

@@ -492,14 +492,16 @@ Collider parse_collider(const json& value, const std::string& path, const std::s
 }
 
 // "contact" of a body (with "points", a "box" sample generator, or a "shape" for other bodies
-// to touch with its "sample_spacing") or of a rod (every free node; radius defaults to the
-// rod's). Units and defaults: lib/contact.hpp, lib/body_contact.hpp.
+// to touch with its "sample_spacing") or of a rod (every free node, and its edges against
+// other rods' and, with "self_contact", its own; radius defaults to the rod's). Units and
+// defaults: lib/contact.hpp, lib/body_contact.hpp, lib/edge_contact.hpp.
 ContactMaterial parse_contact(ObjectReader& owner, double default_radius,
                               std::vector<Vector3>* points, std::shared_ptr<const Collider>* shape,
-                              int& budget) {
+                              int& budget, RodSpec* rod = nullptr) {
   // A body's contact gives its samples and its shape; a rod's samples are its nodes.
   ObjectReader::Keys keys = {"stiffness", "radius", "friction", "friction_velocity", "collides_with", "ignores"};
   if (points != nullptr) keys.insert(keys.end(), {"points", "box", "shape", "sample_spacing"});
+  if (rod != nullptr) keys.insert(keys.end(), {"self_contact", "self_contact_skip"});
   ObjectReader c(owner.get("contact"), owner.field("contact"), owner.source(), keys);
   ContactMaterial m;
   m.stiffness = c.number("stiffness");
@@ -507,6 +509,10 @@ ContactMaterial parse_contact(ObjectReader& owner, double default_radius,
   m.radius = c.number("radius", default_radius);
   m.friction = c.number("friction", m.friction);
   m.friction_velocity = c.number("friction_velocity", m.friction_velocity);
+  if (rod != nullptr) {
+    rod->self_contact = c.boolean("self_contact", false);
+    if (c.has("self_contact_skip")) rod->self_contact_skip = c.integer("self_contact_skip", 1, 1 << 20);
+  }
   // Names, resolved once every object is read (Model::validate_contact_names).
   for (const auto& [key, names] : {std::pair{"collides_with", &m.collides_with}, std::pair{"ignores", &m.ignores}}) {
     if (!c.has(key)) continue;
@@ -713,7 +719,7 @@ RodSpec parse_rod(const json& value, const std::string& path, const std::string&
   }
   if (r.has("contact")) {
     int no_samples = 0;  // a rod's samples are its nodes
-    rod.contact = parse_contact(r, rod.radius, nullptr, nullptr, no_samples);
+    rod.contact = parse_contact(r, rod.radius, nullptr, nullptr, no_samples, &rod);
   }
   if (r.has("prescribed_motions")) {
     const json& motions = r.array("prescribed_motions");

@@ -24,8 +24,11 @@ Simulator::Simulator(Model model, const SolverOptions& options)
   previous_ = state_;
   previous_step_ = step_;
   pairs_ = TouchingPairs(model_);
+  edges_ = TouchingEdges(model_);
   margin_.assign(model_.bodies.size(), 0.0);
+  touching_.assign(pairs_.size() + edges_.size(), false);
   pairs_.find(state_, margin_, touching_);
+  edges_.find(state_, Step{}, touching_, pairs_.size());
   model_.coupling_key(1, touching_, key_);
   current_ = &islands_at(key_);
 }
@@ -77,6 +80,7 @@ StepReport Simulator::step() {
     }
     pairs_.find(state_, margin_, touching_);
   }
+  if (edges_.size() > 0) edges_.find(state_, step_, touching_, pairs_.size());
   saved_key_ = key_;  // same size: no allocation
   StepIslands* const before = current_;
   start_ = state_;
@@ -106,7 +110,10 @@ StepReport Simulator::step() {
     if (!report.state_updated()) break;
     // Two bodies that reached each other only within the step: solve it again with them
     // coupled, from the same start (a few rounds at most: each adds pairs).
-    if (round == kMaxContactRounds || !pairs_.add_penetrating(state_, touching_)) break;
+    if (round == kMaxContactRounds) break;
+    const bool bodies = pairs_.add_penetrating(state_, touching_);
+    const bool edges = edges_.add_penetrating(state_, touching_, pairs_.size());
+    if (!bodies && !edges) break;
     state_ = start_;
   }
 
@@ -185,6 +192,7 @@ double Simulator::max_penetration() const {
 int Simulator::contact_pairs() const {
   int pairs = 0;
   for (std::size_t p = 0; p < pairs_.size(); ++p) pairs += pairs_.penetrates(state_, static_cast<int>(p));
+  for (std::size_t p = 0; p < edges_.size(); ++p) pairs += edges_.penetrates(state_, static_cast<int>(p));
   // A point at p touches collider c when it is within ρ of it.
   const auto inside = [&](const Collider& c, const ContactMaterial& m, const Vector3& p) {
     return m.touches(c.name) && m.radius - c.evaluate(p, false).distance > 0.0;

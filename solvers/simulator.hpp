@@ -14,6 +14,7 @@
 #include <memory>
 #include <vector>
 
+#include "../lib/edge_contact.hpp"
 #include "free_directions.hpp"
 #include "islands.hpp"
 #include "step_solver.hpp"
@@ -68,6 +69,10 @@ class Simulator {
   // sample (a rod: a free node) inside a collider it touches, two bodies with a sample of one
   // inside the other's shape (ρ − φ > 0).
   int contact_pairs() const;
+  // The smallest distance between the surfaces of two rod edges that may touch
+  // (TouchingEdges::min_separation), +∞ without rod–rod contact in the model.
+  double min_rod_separation() const { return edges_.min_separation(state_); }
+  bool has_rod_contact() const { return edges_.size() > 0; }
 
  private:
   // Calls f(point, mass, rotation, body_inertia) for every lumped mass and rotational
@@ -99,7 +104,8 @@ class Simulator {
   std::vector<bool> saved_key_;     // key_ at the start of a step (restored if it fails)
   // Contact between bodies: the candidate pairs, which touch, each body's margin (m).
   TouchingPairs pairs_;
-  std::vector<bool> touching_;
+  TouchingEdges edges_;
+  std::vector<bool> touching_;  // body pairs, then edge pairs
   std::vector<double> margin_;
   State start_;  // the step's start, to solve it again with pairs found within it
   static constexpr int kMaxContactRounds = 3;
