@@ -1,0 +1,186 @@
+// Contact between rods and within a rod, in whole runs (lib/edge_contact.hpp: the term is
+// FD-tested in test_edge_contact.cpp; the candidates and the pairs within reach:
+// Model::edge_pairs, TouchingEdges): the bundled rope coil with and without self-contact,
+// a rod dropped across another, two rods colliding without gravity (momentum), filters, and
+// the adjoint through rod–rod contact.
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <iostream>
+#include <filesystem>
+#include <limits>
+#include <string>
+
+#include "lib/edge_contact.hpp"
+#include "problems/optimization.hpp"
+#include "problems/scene.hpp"
+#include "solvers/gradient_check.hpp"
+#include "solvers/simulator.hpp"
+
+namespace liedyn {
+namespace {
+
+Scene rod_coil() {
+  return load_scene(std::filesystem::path(LIEDYN_SOURCE_DIR) / "problems/scenes/contact/rod_coil.json");
+}
+
+// The bundled coil: its coils pile up on the floor and on one another, and no two edges more
+// than 2 apart come closer than the rope's radius, centreline to centreline (a surface
+// separation of −ρ). Without self-contact the same run passes the coils through one another
+// (measured with the self-contact model's candidates on the other run's states).
+TEST(RodContactScenes, TheCoiledRopeLiesOnItselfAndWithoutSelfContactPassesThrough) {
+  const Scene with = rod_coil();
+  const RodSpec& rope = with.model.rods[0];
+  ASSERT_TRUE(rope.self_contact);
+  const double radius = rope.contact.radius;
+  Scene without = with;
+  without.model.rods[0].self_contact = false;
+  const TouchingEdges candidates(with.model);
+  ASSERT_EQ(candidates.size(), 157u * 158u / 2u);  // 160 edges, pairs more than 2 apart
+
+  Simulator sim(with.model, with.solver);
+  Simulator through(without.model, without.solver);
+  double closest = std::numeric_limits<double>::infinity(), closest_without = closest;
+  int frames_in_contact = 0;
+  for (int k = 1; k <= with.frames; ++k) {
+    const StepReport r = sim.step();
+    ASSERT_TRUE(r.converged()) << k << ": " << r.message;
+    ASSERT_TRUE(through.step().state_updated()) << k;
+    closest = std::min(closest, sim.min_rod_separation());
+    closest_without = std::min(closest_without, candidates.min_separation(through.state()));
+    frames_in_contact += sim.min_rod_separation() < 0.0;
+  }
+  EXPECT_GT(closest, -radius);              // never closer than half the diameter
+  EXPECT_GT(frames_in_contact, 20);          // and the coils did lie on one another
+  EXPECT_LT(closest_without, -1.5 * radius);  // through one another without it
+  int on_floor = 0;
+  for (int i = 0; i < rope.node_count(); ++i) on_floor += sim.state().points[sim.model().rod_point(0, i)].z() < 0.03;
+  EXPECT_GT(on_floor, 80);
+  std::cout << "coil: closest surface separation " << closest << " m (without self-contact " << closest_without
+            << "), " << sim.island_sets() << " sets of islands built over " << with.frames << " steps\n";
+}
+
+// A rod of 10 edges dropped across another lying on the floor: it comes to rest on it, its
+// middle at about three radii above the floor; told to ignore it, it falls to the floor.
+TEST(RodContactScenes, ARodDroppedAcrossAnotherRestsOnIt) {
+  const auto scene = [](const std::string& filter) {
+    const auto rod = [](const std::string& name, const std::string& start, const std::string& end,
+                        const std::string& filter) {
+      return R"({"name": ")" + name + R"(", "shape": {"type": "line", "start": )" + start + R"(, "end": )" + end +
+             R"(, "edges": 10}, "mass": 0.05, "radius": 0.01, "stretch_stiffness": 1e3, "shear_stiffness": 1e3,
+                 "bending_stiffness": [1e-3, 1e-3, 1e-3], "contact": {"stiffness": 1e4, "friction": 0.5)" + filter + "}}";
+    };
+    return parse_scene(R"({"time_step": 0.002, "frames": 400, "gravity": [0, 0, -9.81],
+                           "colliders": [{"name": "floor", "type": "plane"}], "rods": [)" +
+                           rod("below", "[-0.25, 0, 0.0099]", "[0.25, 0, 0.0099]", "") + "," +
+                           rod("above", "[0.01, -0.25, 0.05]", "[0.01, 0.25, 0.05]", filter) + "]}",
+                       "crossing.json");
+  };
+  const auto middle_height = [](const Scene& s) {
+    Simulator sim(s.model, s.solver);
+    for (int k = 1; k <= s.frames; ++k) EXPECT_TRUE(sim.step().state_updated()) << k;
+    return sim.state().points[sim.model().rod_point(1, 5)].z();
+  };
+  EXPECT_EQ(scene("").model.edge_pairs().size(), 100u);
+  EXPECT_NEAR(middle_height(scene("")), 0.03, 0.003);
+  const Scene ignoring = scene(R"(, "ignores": ["below"])");
+  EXPECT_TRUE(ignoring.model.edge_pairs().empty());
+  EXPECT_LT(middle_height(ignoring), 0.0105);
+}
+
+// Two rods thrown at each other without gravity or colliders, crossing at right angles: the
+// contact forces are internal, so the total momentum stays, to the solver's tolerance.
+TEST(RodContactScenes, TwoRodsCollidingKeepTheirMomentum) {
+  const auto rod = [](const std::string& name, const std::string& start, const std::string& end, const std::string& v) {
+    std::string velocities;
+    for (int i = 0; i <= 8; ++i) velocities += std::string(i ? ", " : "") + v;
+    return R"({"name": ")" + name + R"(", "shape": {"type": "line", "start": )" + start + R"(, "end": )" + end +
+           R"(, "edges": 8}, "mass": 0.05, "radius": 0.01, "stretch_stiffness": 1e3, "shear_stiffness": 1e3,
+               "bending_stiffness": [1e-3, 1e-3, 1e-3], "node_velocities": [)" + velocities +
+           R"(], "contact": {"stiffness": 1e4}})";
+  };
+  const Scene s = parse_scene(R"({"time_step": 0.001, "frames": 300, "solver": {"tolerance": 1e-12},
+                                  "rods": [)" + rod("a", "[-0.2, 0, 0.1]", "[0.2, 0, 0.1]", "[0, 0, -1]") + "," +
+                                  rod("b", "[0.03, -0.2, -0.1]", "[0.03, 0.2, -0.1]", "[0, 0, 1]") + "]}",
+                              "collision.json");
+  Simulator sim(s.model, s.solver);
+  std::vector<double> mass;
+  for (const RodSpec& r : s.model.rods) {
+    const RodDiscretization d = discretize(r);
+    mass.insert(mass.end(), d.node_mass.begin(), d.node_mass.end());
+  }
+  const auto total = [&] {
+    Vector3 p = Vector3::Zero();
+    for (std::size_t i = 0; i < mass.size(); ++i) p += mass[i] * sim.last_step().points[i] / s.model.time_step;
+    return p;
+  };
+  const Vector3 p0 = total();
+  double drift = 0.0, closest = std::numeric_limits<double>::infinity();
+  for (int k = 1; k <= s.frames; ++k) {
+    ASSERT_TRUE(sim.step().converged()) << k;
+    drift = std::max(drift, (total() - p0).norm());
+    closest = std::min(closest, sim.min_rod_separation());
+  }
+  EXPECT_LT(closest, 0.0);  // they met
+  EXPECT_GT(closest, -0.01);
+  EXPECT_LT(drift, 1e-8);
+  // They bounced apart: a's momentum points up again, b's down.
+  Vector3 a = Vector3::Zero();
+  for (int i = 0; i <= 8; ++i) a += mass[i] * sim.linear_velocity(s.model.rod_point(0, i));
+  EXPECT_GT(a.z(), 0.0);
+  EXPECT_LT((p0 - a).z(), 0.0);
+}
+
+// The adjoint through rod–rod contact: a rod thrown across another lying on the floor; γ its
+// initial node velocities, the loss its final distance to a target line. Central differences
+// of 1e-5 relative, as through contact with colliders (test_contact_scenes.cpp).
+TEST(RodContactAdjoint, TheGradientRunsBackThroughContactBetweenRods) {
+  const std::string text = R"({
+    "time_step": 0.002, "frames": 100, "gravity": [0, 0, -9.81],
+    "solver": { "tolerance": 1e-12, "max_iterations": 100 },
+    "colliders": [ { "type": "plane" } ],
+    "rods": [ { "name": "below", "shape": { "type": "line", "start": [-0.25, 0, 0.0099], "end": [0.25, 0, 0.0099], "edges": 6 },
+                "mass": 0.05, "radius": 0.01, "stretch_stiffness": 1e3, "shear_stiffness": 1e3,
+                "bending_stiffness": [1e-3, 1e-3, 1e-3], "contact": { "stiffness": 2e3 } },
+              { "name": "thrown", "shape": { "type": "line", "start": [0.02, -0.2, 0.06], "end": [0.02, 0.2, 0.06], "edges": 6 },
+                "mass": 0.05, "radius": 0.01, "stretch_stiffness": 1e3, "shear_stiffness": 1e3,
+                "bending_stiffness": [1e-3, 1e-3, 1e-3], "contact": { "stiffness": 2e3 } } ],
+    "optimization": {
+      "parameters": [ { "kind": "rod_node_velocities", "rod": "thrown" } ],
+      "objective": [ { "term": "point_targets", "rod": "thrown", "frame": -1,
+                       "polyline": [[0.1, -0.2, 0.1], [0.1, 0.2, 0.1]] } ] } })";
+  const Scene scene = parse_scene(text, "rods_adjoint.json");
+  Simulator forward(scene.model, scene.solver);
+  double closest = std::numeric_limits<double>::infinity();
+  for (int k = 0; k < scene.frames; ++k) {
+    forward.step();
+    closest = std::min(closest, forward.min_rod_separation());
+  }
+  ASSERT_LT(closest, 0.0);  // the rods touch: the check runs through their contact
+  const DifferentiableSimulation sim = make_differentiable_simulation(scene);
+  GradientCheckOptions options;
+  options.step = 1e-5;
+  const GradientCheckResult r = check_gradient(sim, sim.initial_parameters(), options);
+  EXPECT_TRUE(r.passed()) << "max relative error " << r.max_relative_error << " at parameter " << r.worst;
+}
+
+TEST(RodContactScenes, SelfContactKeysAreChecked) {
+  const auto error = [](const std::string& contact) {
+    try {
+      parse_scene(R"({"time_step": 0.01, "frames": 1, "rods": [{"name": "r", "shape": {"type": "line", "start": [0, 0, 0],
+                       "end": [1, 0, 0], "edges": 10}, "mass": 1, "radius": 0.01, "stretch_stiffness": 1, "shear_stiffness": 1,
+                       "bending_stiffness": [1, 1, 1], "contact": {"stiffness": 1e3, )" + contact + "}}]}",
+                  "s.json");
+    } catch (const SceneError& e) {
+      return e.field() + ": " + e.reason();
+    }
+    return std::string("accepted");
+  };
+  EXPECT_EQ(error(R"("self_contact": true, "self_contact_skip": 3)"), "accepted");
+  EXPECT_EQ(error(R"("self_contact": 1)"), "rods[0].contact.self_contact: must be true or false (got number)");
+  EXPECT_EQ(error(R"("self_contact_skip": 0)").rfind("rods[0].contact.self_contact_skip: ", 0), 0u);
+}
+
+}  // namespace
+}  // namespace liedyn
