@@ -594,6 +594,7 @@ void SparseSystem::solve_linear(const Vector& b, Vector& solution) {
   // the permutation P of the blocks is ours). Written out because cholmod_solve2 reallocates
   // its workspace at every call in this version.
   Cholmod& c = *cholmod_;
+  solution.resize(c.dofs);  // the adjoint's first solve hands an empty vector
   const auto* p = static_cast<const int*>(c.L->p);
   const auto* i = static_cast<const int*>(c.L->i);
   const auto* nz = static_cast<const int*>(c.L->nz);

@@ -624,4 +624,28 @@ TEST(Allocation, ContactAndFrictionStepsDoNotAllocate) {
   EXPECT_GT(sim.max_penetration(), 0.0);  // the run is in contact
 }
 
+// Contact between rods (lib/edge_contact.hpp): a clamped rod resting across another clamped
+// one, pressed by gravity. Once the set of edge pairs within reach holds, a step searches
+// all 1600 candidate pairs, evaluates the contact terms and solves the coupled island without
+// allocating (the island set was built when the pairs first met).
+TEST(Allocation, StepsWhoseRodContactsHoldDoNotAllocate) {
+  Model model = clamped_rod();
+  model.rods[0].contact.stiffness = 1e3;
+  model.rods[0].contact.radius = 0.01;
+  liedyn::RodSpec across = model.rods[0];
+  across.name = "across";
+  for (int i = 0; i <= 40; ++i) across.nodes[i] = Vector3(0.5, -0.5 + 0.025 * i, -0.03);
+  across.fixed_nodes = {0, 40};
+  across.fixed_edges = {0, 39};
+  model.rods.push_back(across);
+  ASSERT_EQ(model.edge_pairs().size(), 1600u);
+  Simulator sim(model, SolverOptions{});
+  for (int k = 1; k <= 50; ++k) ASSERT_TRUE(sim.step().converged()) << k;  // they meet and settle
+  ASSERT_LT(sim.min_rod_separation(), 0.0);
+  const int sets = sim.island_sets();
+  expect_no_allocation(run_counted(sim, kSteps), kSteps);
+  EXPECT_LT(sim.min_rod_separation(), 0.0);  // still in contact
+  EXPECT_EQ(sim.island_sets(), sets);
+}
+
 }  // namespace
