@@ -409,6 +409,21 @@ struct TermCheckOptions {
   FdOptions hessian_from_value = value_hessian_defaults();
 };
 
+// Steps for a term checked where its smooth zone is only `zone` wide (friction's ε = ε_v h at
+// a tiny h): 1e-4·zone for first differences (truncation ~step²/(y·zone)), 1e-3·zone for
+// second differences of the value. Only some entry need be non-zero: at such scales the
+// rotation rows (lever × force, levers of a few hundred zones) fall below what a check
+// relative to the largest entry can call non-zero; they are compared all the same.
+inline TermCheckOptions within_zone(double zone) {
+  TermCheckOptions o;
+  o.gradient.step = 1e-4 * zone;
+  o.hessian.step = 1e-4 * zone;
+  o.hessian_from_value.step = 1e-3 * zone;
+  o.gradient.require_nonzero = NonZero::kAny;
+  o.hessian.require_nonzero = NonZero::kAny;
+  return o;
+}
+
 template <class Term>
 ::testing::AssertionResult check_term(const Term& term, const State& q, const Dofs& dofs,
                                       const TermCheckOptions& opt = {}) {

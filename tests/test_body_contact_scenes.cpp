@@ -12,11 +12,10 @@
 #include <string>
 #include <tuple>
 
+#include "adjoint_check.hpp"
 #include "cli_fixture.hpp"
 #include "lib/body_contact.hpp"
-#include "problems/optimization.hpp"
 #include "problems/scene.hpp"
-#include "solvers/gradient_check.hpp"
 #include "solvers/simulator.hpp"
 
 namespace liedyn {
@@ -204,16 +203,11 @@ TEST(BodyContactScenes, BadShapesNameTheirField) {
 
 // The billiard shot with friction between the balls (μ = 1 on both): the gradient runs back
 // through the lagged friction's mixed blocks (BodyFriction::add_step_adjoint; without them
-// the worst relative error is 1.7, not ~1e-6). Steps of 1e-5 relative, as for the die
-// (test_contact_scenes.cpp: the lagged normal force is only C⁰ in q_{k−1}).
+// the worst relative error is 1.7, not ~1e-6).
 TEST(BodyContactAdjoint, TheBilliardGradientRunsBackThroughFrictionBetweenTheBalls) {
   Scene scene = load_scene(std::filesystem::path(LIEDYN_SOURCE_DIR) / "problems/scenes/optimization/billiard.json");
   for (RigidBody& b : scene.model.bodies) b.contact.friction = 1.0;
-  const DifferentiableSimulation sim = make_differentiable_simulation(scene);
-  GradientCheckOptions options;
-  options.step = 1e-5;
-  const GradientCheckResult r = check_gradient(sim, sim.initial_parameters(), options);
-  EXPECT_TRUE(r.passed()) << "max relative error " << r.max_relative_error << " at parameter " << r.worst;
+  EXPECT_TRUE(test::gradient_agrees(scene));
 }
 
 // "collides_with" and "ignores": a ball told to ignore another passes through it, one told

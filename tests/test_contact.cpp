@@ -372,16 +372,9 @@ TEST(Friction, TinyAndHugeTimeStepsKeepDerivativesExactAndTheForceBounded) {
       ASSERT_NEAR(term.normal_force, 1e4 * 50.0 * epsilon, 1e-9 * term.normal_force);
       State q = previous;
       q.points[0] += factor * epsilon * fd::random_perpendicular(n, rng);
-      fd::TermCheckOptions options;
-      options.gradient.step = 1e-4 * epsilon;
-      options.hessian.step = 1e-4 * epsilon;
-      options.hessian_from_value.step = 1e-3 * epsilon;
-      // The θ rows are r × f with |r| = 100 ε: at h = 1e-6 that is 1e-7 of the x rows, below
-      // what a check relative to the largest entry can call non-zero. They are compared all
-      // the same; their non-zero check is the O(1)-lever test above.
-      options.gradient.require_nonzero = fd::NonZero::kAny;
-      options.hessian.require_nonzero = fd::NonZero::kAny;
-      EXPECT_TRUE(fd::check_term(term, q, kBodyDofs, options));
+      // The θ rows are r × f with |r| = 100 ε: at h = 1e-6 that is 1e-7 of the x rows; their
+      // non-zero check is the O(1)-lever test above.
+      EXPECT_TRUE(fd::check_term(term, q, kBodyDofs, fd::within_zone(epsilon)));
     }
     // At O(1) geometry the same ε gives a force that never exceeds Coulomb's μλ, whatever
     // the slip (f₁ ≤ 1), and finite derivatives.

@@ -13,6 +13,7 @@
 #include <numbers>
 #include <string>
 
+#include "adjoint_check.hpp"
 #include "lib/model.hpp"
 #include "lib/so3.hpp"
 #include "problems/optimization.hpp"
@@ -389,20 +390,15 @@ TEST(ContactScenes, RotationVectorsAndQuaternionsAgreeWithLieThroughContact) {
 
 // ---------------------------------------------------------------------------------------
 // Adjoint gradients through contact and friction, end to end (the terms' own blocks are
-// checked in test_contact.cpp): central differences of the loss at a tight forward tolerance.
-// Contact is C¹ (its Hessian jumps where a sample touches) and the lagged normal force only
-// C⁰ in q_{k−1}, so differences whose step crosses such a switch see O(step) errors: steps of
-// 1e-5 relative stay clear of them on these runs (1e-4 does not on the die: 8e-2).
+// checked in test_contact.cpp): central differences of the loss at a tight forward tolerance
+// (the step: adjoint_check.hpp).
 
 TEST(ContactAdjoint, TheDieThrowGradientRunsBackThroughContactAndFriction) {
   const Scene scene = load_scene(std::string(LIEDYN_SOURCE_DIR) +
                                  "/problems/scenes/optimization/die_throw_contact.json");
+  EXPECT_TRUE(test::gradient_agrees(scene));
   const DifferentiableSimulation sim = make_differentiable_simulation(scene);
-  GradientCheckOptions options;
-  options.step = 1e-5;
-  const GradientCheckResult r = check_gradient(sim, sim.initial_parameters(), options);
-  EXPECT_TRUE(r.passed()) << "max relative error " << r.max_relative_error;
-  EXPECT_GT(r.loss, 0.1);  // far from the target: a gradient worth checking
+  EXPECT_GT(sim.evaluate(sim.initial_parameters(), nullptr).loss, 0.1);  // far from the target: worth checking
 }
 
 TEST(ContactAdjoint, RodNodeVelocitiesThroughAFrictionalFloor) {
@@ -421,8 +417,7 @@ TEST(ContactAdjoint, RodNodeVelocitiesThroughAFrictionalFloor) {
       "objective": [ { "term": "point_targets", "rod": "rod", "frame": -1,
                        "polyline": [[0.1, 0.1, 0], [0.4, 0.1, 0]] } ] } })";
   const Scene scene = parse_scene(text, "rod_on_floor");
-  const DifferentiableSimulation sim = make_differentiable_simulation(scene);
-  Eigen::VectorXd gamma = sim.initial_parameters();
+  Eigen::VectorXd gamma = make_differentiable_simulation(scene).initial_parameters();
   for (int i = 0; i < gamma.size(); i += 3) gamma.segment<3>(i) = Vector3(0.3, 0.1, -0.5);
   // The run must touch the floor, and friction must act: check it before trusting the check.
   Simulator forward(scene.model, scene.solver);
@@ -433,11 +428,7 @@ TEST(ContactAdjoint, RodNodeVelocitiesThroughAFrictionalFloor) {
   }
   // (The plain run starts at rest; the optimised parameters only move it harder.)
   EXPECT_GT(deepest, 0.0);
-  GradientCheckOptions options;
-  options.step = 1e-5;
-  const GradientCheckResult r = check_gradient(sim, gamma, options);
-  EXPECT_TRUE(r.passed()) << "max relative error " << r.max_relative_error << " at parameter "
-                          << r.worst;
+  EXPECT_TRUE(test::gradient_agrees(scene, gamma));
 }
 
 }  // namespace

@@ -12,10 +12,9 @@
 #include <limits>
 #include <string>
 
+#include "adjoint_check.hpp"
 #include "lib/edge_contact.hpp"
-#include "problems/optimization.hpp"
 #include "problems/scene.hpp"
-#include "solvers/gradient_check.hpp"
 #include "solvers/simulator.hpp"
 
 namespace liedyn {
@@ -133,8 +132,7 @@ TEST(RodContactScenes, TwoRodsCollidingKeepTheirMomentum) {
 }
 
 // The adjoint through rod–rod contact: a rod thrown across another lying on the floor; γ its
-// initial node velocities, the loss its final distance to a target line. Central differences
-// of 1e-5 relative, as through contact with colliders (test_contact_scenes.cpp).
+// initial node velocities, the loss its final distance to a target line.
 TEST(RodContactAdjoint, TheGradientRunsBackThroughContactBetweenRods) {
   const std::string text = R"({
     "time_step": 0.002, "frames": 100, "gravity": [0, 0, -9.81],
@@ -158,11 +156,7 @@ TEST(RodContactAdjoint, TheGradientRunsBackThroughContactBetweenRods) {
     closest = std::min(closest, forward.min_rod_separation());
   }
   ASSERT_LT(closest, 0.0);  // the rods touch: the check runs through their contact
-  const DifferentiableSimulation sim = make_differentiable_simulation(scene);
-  GradientCheckOptions options;
-  options.step = 1e-5;
-  const GradientCheckResult r = check_gradient(sim, sim.initial_parameters(), options);
-  EXPECT_TRUE(r.passed()) << "max relative error " << r.max_relative_error << " at parameter " << r.worst;
+  EXPECT_TRUE(test::gradient_agrees(scene));
 }
 
 TEST(RodContactScenes, SelfContactKeysAreChecked) {
