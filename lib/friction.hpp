@@ -38,7 +38,7 @@
 namespace liedyn {
 
 // The smoothed slip law of a tangential displacement u (formulas above), shared by the
-// friction terms against colliders (Friction) and between bodies (BodyFriction).
+// friction terms against colliders (Friction) and between bodies (body_contact.hpp).
 struct SmoothedSlip {
   Vector3 u;      // the tangential displacement
   double y;       // ‖u‖
