@@ -155,9 +155,8 @@ void BodyFriction::add_step_adjoint(const State& q, const State& previous, const
                                     Eigen::VectorXd&) const {
   if (normal_force == 0.0) return;
   const LocalGradient<kBlocks> w = previous_jacobian(q, previous).transpose() * z;
-  const int a = at.point;
-  a_previous.segment<3>(tangent_point(a)) += w.segment<3>(0);
-  a_previous.segment<3>(tangent_rotation(q, a)) += w.segment<3>(3);
+  a_previous.segment<3>(tangent_point(at.point)) += w.segment<3>(0);
+  if (at.rotation >= 0) a_previous.segment<3>(tangent_rotation(q, at.rotation)) += w.segment<3>(3);  // a rod node has none
   a_previous.segment<3>(tangent_point(body_b)) += w.segment<3>(6);
   a_previous.segment<3>(tangent_rotation(q, body_b)) += w.segment<3>(9);
 }
@@ -310,6 +309,55 @@ bool TouchingPairs::add_penetrating(const State& q, std::vector<bool>& touching)
   bool added = false;
   for (std::size_t p = 0; p < pairs_.size(); ++p) {
     if (!touching[p] && near(q, static_cast<int>(p), 0.0)) touching[p] = added = true;
+  }
+  return added;
+}
+
+TouchingRodsAndBodies::TouchingRodsAndBodies(const Model& model) {
+  for (const auto& [r, b] : model.rod_body_pairs()) {
+    const RodSpec& rod = model.rods[r];
+    Pair p;
+    p.body = b;
+    for (int i = 0; i < rod.node_count(); ++i) {
+      if (std::find(rod.fixed_nodes.begin(), rod.fixed_nodes.end(), i) == rod.fixed_nodes.end()) {
+        p.nodes.push_back(model.rod_point(r, i));
+      }
+    }
+    p.radius = rod.contact.radius;
+    p.shape = model.bodies[b].shape;
+    p.reach = bounding_radius(*p.shape);
+    pairs_.push_back(std::move(p));
+  }
+}
+
+double TouchingRodsAndBodies::overlap(const State& q, std::size_t index, double margin) const {
+  const Pair& p = pairs_[index];
+  const Vector3& x_b = q.points[p.body];
+  const Matrix3& R_b = q.rotations[p.body];
+  const double within = p.reach + p.radius + margin;
+  double deepest = -std::numeric_limits<double>::infinity();
+  for (int node : p.nodes) {
+    const Vector3 w = q.points[node] - x_b;
+    if (w.squaredNorm() > within * within) continue;
+    deepest = std::max(deepest, p.radius - p.shape->evaluate(R_b.transpose() * w, false).distance);
+  }
+  return deepest;
+}
+
+void TouchingRodsAndBodies::find(const State& q, const Step& step, const std::vector<double>& body_margin,
+                                 std::vector<bool>& touching, std::size_t first) const {
+  for (std::size_t i = 0; i < pairs_.size(); ++i) {
+    double moved = 0.0;
+    for (int node : pairs_[i].nodes) moved = std::max(moved, step.points.empty() ? 0.0 : step.points[node].norm());
+    const double margin = body_margin[pairs_[i].body] + moved;
+    touching[first + i] = overlap(q, i, margin) > -margin;
+  }
+}
+
+bool TouchingRodsAndBodies::add_penetrating(const State& q, std::vector<bool>& touching, std::size_t first) const {
+  bool added = false;
+  for (std::size_t i = 0; i < pairs_.size(); ++i) {
+    if (!touching[first + i] && overlap(q, i, 0.0) > 0.0) touching[first + i] = added = true;
   }
   return added;
 }

@@ -175,4 +175,33 @@ class TouchingPairs {
   std::vector<double> reach_;
 };
 
+// Which (rod, body) pairs (Model::rod_body_pairs) touch at a state: a free node of the rod
+// within the rod's contact radius plus a margin of the body's shape (the margin: the body's,
+// as for TouchingPairs, plus the farthest any node of the rod moved in the last step). The
+// body's bounding sphere rules most nodes out first. Allocation-free after construction.
+// The entries of the pairs are `touching[first + p]`.
+class TouchingRodsAndBodies {
+ public:
+  TouchingRodsAndBodies() = default;
+  explicit TouchingRodsAndBodies(const Model& model);
+
+  std::size_t size() const { return pairs_.size(); }
+  void find(const State& q, const Step& step, const std::vector<double>& body_margin,
+            std::vector<bool>& touching, std::size_t first) const;
+  bool add_penetrating(const State& q, std::vector<bool>& touching, std::size_t first) const;
+  bool penetrates(const State& q, int p) const { return overlap(q, static_cast<std::size_t>(p), 0.0) > 0.0; }
+
+ private:
+  struct Pair {
+    int body = -1;
+    std::vector<int> nodes;  // State::points of the rod's free nodes
+    double radius = 0.0;     // the rod's contact radius
+    double reach = 0.0;      // the body's bounding radius
+    std::shared_ptr<const Collider> shape;
+  };
+  // The deepest ρ − φ of a node within reach + margin of the body's centre (−∞ without one).
+  double overlap(const State& q, std::size_t p, double margin) const;
+  std::vector<Pair> pairs_;
+};
+
 }  // namespace liedyn

@@ -151,6 +151,19 @@ void add_contact_terms(const Model& model,
   }
 }
 
+// A sample's contact term against another body's shape, and its friction term where its
+// material's μ > 0 (as against a collider: friction is a dynamic term).
+void add_body_sample_terms(const Model& model, const BodySample& sample, const ContactMaterial& material,
+                           IncrementalPotential& potential) {
+  potential.add(BodyContact{sample});
+  if (material.friction > 0.0 && !model.static_equilibrium) {
+    BodyFriction friction{sample};
+    friction.coefficient = material.friction;
+    friction.epsilon = material.friction_velocity * model.time_step;
+    potential.add(friction);
+  }
+}
+
 // Every sample of A against B's shape and of B against A's, for each pair of bodies that
 // touches under `key` (Model::coupling_key), with its friction where A's μ > 0; A's and B's
 // blocks are in one component.
@@ -166,21 +179,13 @@ void add_body_contact_terms(const Model& model, const std::vector<bool>& key,
       const RigidBody& solid = model.bodies[b];
       if (!sampled.contact.enabled() || solid.shape == nullptr) continue;
       for (const Vector3& point : sampled.contact_points) {
-        const BodySample sample{{point_offset[a], rotation_offset[a], point_offset[b], rotation_offset[b]},
-                                {a, a, point},
-                                b,
-                                solid.shape,
-                                sampled.contact.stiffness,
-                                sampled.contact.radius};
-        IncrementalPotential& potential = components[component_of[a]].potential;
-        potential.add(BodyContact{sample});
-        // As against a collider: friction is a dynamic term, A's coefficient.
-        if (sampled.contact.friction > 0.0 && !model.static_equilibrium) {
-          BodyFriction friction{sample};
-          friction.coefficient = sampled.contact.friction;
-          friction.epsilon = sampled.contact.friction_velocity * model.time_step;
-          potential.add(friction);
-        }
+        add_body_sample_terms(model, {{point_offset[a], rotation_offset[a], point_offset[b], rotation_offset[b]},
+                                      {a, a, point},
+                                      b,
+                                      solid.shape,
+                                      sampled.contact.stiffness,
+                                      sampled.contact.radius},
+                              sampled.contact, components[component_of[a]].potential);
       }
     }
   }
@@ -445,6 +450,31 @@ void add_edge_contact_terms(const Model& model, const std::vector<bool>& key, st
   }
 }
 
+// Every free node of a rod against a body's shape (a sample without a rotation: BodyContact's
+// θ_A block is no DOF), for each (rod, body) pair that touches under `key` (the entries after
+// the edge pairs); rod and body are then in one component.
+void add_rod_body_contact_terms(const Model& model, const std::vector<bool>& key, std::vector<Component>& components) {
+  const std::size_t first = model.joints.size() + model.body_pairs().size() + model.edge_pairs().size();
+  if (key.size() <= first) return;
+  const std::vector<std::pair<int, int>> pairs = model.rod_body_pairs();
+  const DofMap dofs(model, components);
+  for (std::size_t p = 0; p < pairs.size() && first + p < key.size(); ++p) {
+    if (!key[first + p]) continue;
+    const auto [r, b] = pairs[p];
+    const RodSpec& rod = model.rods[r];
+    const std::array<int, 2> body = dofs.points[b];
+    IncrementalPotential& potential = components[body[0]].potential;
+    for (int i = 0; i < rod.node_count(); ++i) {
+      const int point = model.rod_point(r, i);
+      const int offset = dofs.points[point][1];
+      if (offset < 0) continue;  // clamped
+      add_body_sample_terms(model, {{offset, -1, body[1], dofs.rotations[b][1]}, {point, -1, Vector3::Zero()}, b,
+                                    model.bodies[b].shape, rod.contact.stiffness, rod.contact.radius},
+                            rod.contact, potential);
+    }
+  }
+}
+
 }  // namespace
 
 std::vector<Component> build_components(const Model& model, int frame) {
@@ -564,6 +594,7 @@ std::vector<Component> build_components(const Model& model, const std::vector<bo
   add_joint_terms(model, key, components);
   add_body_contact_terms(model, key, point_offset, rotation_offset, component_of, components);
   add_edge_contact_terms(model, key, components);
+  add_rod_body_contact_terms(model, key, components);
   return components;
 }
 

@@ -374,6 +374,19 @@ std::vector<EdgePair> Model::edge_pairs() const {
   return out;
 }
 
+std::vector<std::pair<int, int>> Model::rod_body_pairs() const {
+  std::vector<std::pair<int, int>> out;
+  for (int r = 0; r < static_cast<int>(rods.size()); ++r) {
+    const RodSpec& rod = rods[r];
+    if (!rod.contact.enabled() || static_cast<int>(rod.fixed_nodes.size()) == rod.node_count()) continue;
+    for (int b = 0; b < static_cast<int>(bodies.size()); ++b) {
+      const RigidBody& body = bodies[b];
+      if (body.shape != nullptr && rod.contact.touches(body.name) && body.contact.touches(rod.name)) out.emplace_back(r, b);
+    }
+  }
+  return out;
+}
+
 void Model::coupling_key(int frame, const std::vector<bool>& touching, std::vector<bool>& key) const {
   key.resize(joints.size() + touching.size());  // allocates the first time only
   for (std::size_t j = 0; j < joints.size(); ++j) key[j] = joints[j].active_at(frame);
@@ -396,6 +409,11 @@ std::vector<std::pair<int, int>> Model::couplings(const std::vector<bool>* key) 
     const int n = static_cast<int>(bodies.size());
     for (std::size_t p = 0; p < edges.size() && first + p < key->size(); ++p) {
       if ((*key)[first + p] && edges[p].rod_a != edges[p].rod_b) out.emplace_back(n + edges[p].rod_a, n + edges[p].rod_b);
+    }
+    const std::vector<std::pair<int, int>> rod_bodies = rod_body_pairs();
+    const std::size_t after = first + edges.size();
+    for (std::size_t p = 0; p < rod_bodies.size() && after + p < key->size(); ++p) {
+      if ((*key)[after + p]) out.emplace_back(n + rod_bodies[p].first, rod_bodies[p].second);
     }
   }
   return out;
@@ -472,8 +490,7 @@ void Model::validate_anchoring() const {
 }
 
 void Model::validate_contact_names() const {
-  const auto check = [&](const ContactMaterial& contact, const std::string& owner, bool is_rod,
-                         const std::string& path) {
+  const auto check = [&](const ContactMaterial& contact, const std::string& owner, const std::string& path) {
     if (!contact.collides_with.empty() && !contact.ignores.empty()) {
       throw ModelError(path + ".ignores", "give \"collides_with\" or \"ignores\", not both");
     }
@@ -490,20 +507,14 @@ void Model::validate_contact_names() const {
         if (!body && !rod && !collider) {
           throw ModelError(field, "no body, rod or collider is named \"" + name + "\"");
         }
-        // Rods touch colliders and rods: a rod in a body's list, or a body in a rod's, asks
-        // for contact that is not modelled (an "ignores" of it is harmless).
-        if (std::string(member) == "collides_with" && (is_rod ? body : rod)) {
-          throw ModelError(field, "\"" + name + "\": contact between rods and bodies is not modelled yet "
-                                  "(rods touch colliders and rods)");
-        }
       }
     }
   };
   for (std::size_t i = 0; i < bodies.size(); ++i) {
-    check(bodies[i].contact, bodies[i].name, false, index_field("bodies", i, "contact"));
+    check(bodies[i].contact, bodies[i].name, index_field("bodies", i, "contact"));
   }
   for (std::size_t r = 0; r < rods.size(); ++r) {
-    check(rods[r].contact, rods[r].name, true, index_field("rods", r, "contact"));
+    check(rods[r].contact, rods[r].name, index_field("rods", r, "contact"));
   }
 }
 

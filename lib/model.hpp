@@ -166,10 +166,13 @@ struct Model {
   // the edges of two rods that both have contact and agree to touch, and a self-contact
   // rod's own edges more than its self_contact_skip apart; none whose four nodes are clamped.
   std::vector<EdgePair> edge_pairs() const;
+  // The (rod, body) pairs that may touch, after the edge pairs in a coupling key: a rod with
+  // contact (its free nodes, spheres of its contact radius) and a body with a shape, agreeing.
+  std::vector<std::pair<int, int>> rod_body_pairs() const;
   // Which couplings hold at a step, as the key of its islands (solvers/islands.hpp): one
   // entry per joint (active at `frame`, JointSpec::active_at), then one per body pair and one
-  // per edge pair (`touching`, indexed as body_pairs() then edge_pairs(); all false when
-  // empty). Written into `key`.
+  // per edge pair and one per rod–body pair (`touching`, indexed as body_pairs(), then
+  // edge_pairs(), then rod_body_pairs(); all false when empty). Written into `key`.
   void coupling_key(int frame, const std::vector<bool>& touching, std::vector<bool>& key) const;
   // The objects that springs, joints, touching bodies and touching rods couple, as (a, b) pairs: body i is
   // i, rod r is bodies.size() + r, and −1 the world. What ties objects into one island under

@@ -25,10 +25,12 @@ Simulator::Simulator(Model model, const SolverOptions& options)
   previous_step_ = step_;
   pairs_ = TouchingPairs(model_);
   edges_ = TouchingEdges(model_);
+  rod_bodies_ = TouchingRodsAndBodies(model_);
   margin_.assign(model_.bodies.size(), 0.0);
-  touching_.assign(pairs_.size() + edges_.size(), false);
+  touching_.assign(pairs_.size() + edges_.size() + rod_bodies_.size(), false);
   pairs_.find(state_, margin_, touching_);
   edges_.find(state_, Step{}, touching_, pairs_.size());
+  rod_bodies_.find(state_, Step{}, margin_, touching_, pairs_.size() + edges_.size());
   model_.coupling_key(1, touching_, key_);
   current_ = &islands_at(key_);
 }
@@ -74,13 +76,14 @@ StepReport Simulator::step() {
 
   // The step's couplings: the joints active at it and the pairs of bodies within reach of
   // each other at its start, each body's margin the distance it moved in the last step.
-  if (pairs_.size() > 0) {  // no body can touch another: nothing to look for
+  if (pairs_.size() > 0 || rod_bodies_.size() > 0) {  // else no body can touch anything that moves
     for (std::size_t i = 0; i < model_.bodies.size() && dynamic; ++i) {
       margin_[i] = step_.points[i].norm() + so3::log(step_.rotations[i]).norm() * pairs_.reach(static_cast<int>(i));
     }
     pairs_.find(state_, margin_, touching_);
   }
   if (edges_.size() > 0) edges_.find(state_, step_, touching_, pairs_.size());
+  if (rod_bodies_.size() > 0) rod_bodies_.find(state_, step_, margin_, touching_, pairs_.size() + edges_.size());
   saved_key_ = key_;  // same size: no allocation
   StepIslands* const before = current_;
   start_ = state_;
@@ -113,7 +116,8 @@ StepReport Simulator::step() {
     if (round == kMaxContactRounds) break;
     const bool bodies = pairs_.add_penetrating(state_, touching_);
     const bool edges = edges_.add_penetrating(state_, touching_, pairs_.size());
-    if (!bodies && !edges) break;
+    const bool rods_on_bodies = rod_bodies_.add_penetrating(state_, touching_, pairs_.size() + edges_.size());
+    if (!bodies && !edges && !rods_on_bodies) break;
     state_ = start_;
   }
 
@@ -193,6 +197,7 @@ int Simulator::contact_pairs() const {
   int pairs = 0;
   for (std::size_t p = 0; p < pairs_.size(); ++p) pairs += pairs_.penetrates(state_, static_cast<int>(p));
   for (std::size_t p = 0; p < edges_.size(); ++p) pairs += edges_.penetrates(state_, static_cast<int>(p));
+  for (std::size_t p = 0; p < rod_bodies_.size(); ++p) pairs += rod_bodies_.penetrates(state_, static_cast<int>(p));
   // A point at p touches collider c when it is within ρ of it.
   const auto inside = [&](const Collider& c, const ContactMaterial& m, const Vector3& p) {
     return m.touches(c.name) && m.radius - c.evaluate(p, false).distance > 0.0;

@@ -105,7 +105,8 @@ class Simulator {
   // Contact between bodies: the candidate pairs, which touch, each body's margin (m).
   TouchingPairs pairs_;
   TouchingEdges edges_;
-  std::vector<bool> touching_;  // body pairs, then edge pairs
+  TouchingRodsAndBodies rod_bodies_;
+  std::vector<bool> touching_;  // body pairs, edge pairs, then rod–body pairs
   std::vector<double> margin_;
   State start_;  // the step's start, to solve it again with pairs found within it
   static constexpr int kMaxContactRounds = 3;

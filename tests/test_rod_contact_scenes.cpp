@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <iostream>
 #include <filesystem>
 #include <limits>
@@ -156,6 +157,96 @@ TEST(RodContactAdjoint, TheGradientRunsBackThroughContactBetweenRods) {
     closest = std::min(closest, forward.min_rod_separation());
   }
   ASSERT_LT(closest, 0.0);  // the rods touch: the check runs through their contact
+  EXPECT_TRUE(test::gradient_agrees(scene));
+}
+
+// Rods on bodies: a rod's free nodes against a body's shape (BodyContact with a sample that has
+// no rotation). A rod dropped across a box resting on the floor comes to rest on the box; told
+// to ignore it, it falls through to the floor. A rod thrown at a free ball without gravity
+// keeps the total momentum of rod and ball.
+std::string rod_json(const std::string& name, const std::string& start, const std::string& end, const std::string& extra) {
+  return R"({"name": ")" + name + R"(", "shape": {"type": "line", "start": )" + start + R"(, "end": )" + end +
+         R"(, "edges": 10}, "mass": 0.05, "radius": 0.01, "stretch_stiffness": 1e3, "shear_stiffness": 1e3,
+             "bending_stiffness": [1e-3, 1e-3, 1e-3])" + extra + "}";
+}
+
+TEST(RodContactScenes, ARodDroppedOnABoxRestsOnItAndPushesABall) {
+  const auto scene = [](const std::string& filter) {
+    return parse_scene(R"({"time_step": 0.002, "frames": 400, "gravity": [0, 0, -9.81],
+        "colliders": [{"name": "floor", "type": "plane"}],
+        "bodies": [{"name": "box", "density": 500, "position": [0, 0, 0.0505],
+                    "contact": {"stiffness": 1e5, "radius": 0.001, "friction": 0.5,
+                                "shape": {"type": "box", "half_extents": [0.1, 0.1, 0.05]}, "sample_spacing": 0.05}}],
+        "rods": [)" + rod_json("rod", "[-0.25, 0.02, 0.13]", "[0.25, 0.02, 0.13]",
+                              R"(, "contact": {"stiffness": 1e4, "friction": 0.5)" + filter + "}") + "]}",
+                       "rod_on_box.json");
+  };
+  // The lowest node over the box's top (|x| < 9 cm) at the end.
+  const auto lowest_over_box = [](const Scene& s) {
+    Simulator sim(s.model, s.solver);
+    for (int k = 1; k <= s.frames; ++k) EXPECT_TRUE(sim.step().state_updated()) << k;
+    double lowest = std::numeric_limits<double>::infinity();
+    for (int i = 0; i <= 10; ++i) {
+      const Vector3& x = sim.state().points[sim.model().rod_point(0, i)];
+      if (std::abs(x.x()) < 0.09) lowest = std::min(lowest, x.z());
+    }
+    return lowest;
+  };
+  ASSERT_EQ(scene("").model.rod_body_pairs().size(), 1u);
+  // Draped over the box (its ends on the floor): no node sinks into the top, at 10.05 cm,
+  // by more than a millimetre beyond its radius.
+  EXPECT_GT(lowest_over_box(scene("")), 0.1005 + 0.01 - 1e-3);
+  EXPECT_LT(lowest_over_box(scene(R"(, "ignores": ["box"])")), 0.0105);  // through it, onto the floor
+
+  const Scene ball = parse_scene(R"({"time_step": 0.001, "frames": 200, "solver": {"tolerance": 1e-12},
+      "bodies": [{"name": "ball", "density": 1000, "contact": {"stiffness": 1e4, "shape": {"type": "sphere", "radius": 0.05}}}],
+      "rods": [)" + rod_json("rod", "[-0.2, 0.01, 0.1]", "[0.2, 0.01, 0.1]", R"(, "node_velocities": [[0, 0, -1], [0, 0, -1],
+          [0, 0, -1], [0, 0, -1], [0, 0, -1], [0, 0, -1], [0, 0, -1], [0, 0, -1], [0, 0, -1], [0, 0, -1], [0, 0, -1]],
+          "contact": {"stiffness": 1e4})") + "]}",
+      "rod_on_ball.json");
+  Simulator sim(ball.model, ball.solver);
+  const RodDiscretization d = discretize(ball.model.rods[0]);
+  const auto momentum = [&] {
+    Vector3 p = ball.model.bodies[0].mass * sim.linear_velocity(0);
+    for (int i = 0; i <= 10; ++i) p += d.node_mass[i] * sim.linear_velocity(ball.model.rod_point(0, i));
+    return p;
+  };
+  const Vector3 p0 = momentum();
+  double drift = 0.0;
+  int touching = 0;
+  for (int k = 1; k <= ball.frames; ++k) {
+    ASSERT_TRUE(sim.step().converged()) << k;
+    drift = std::max(drift, (momentum() - p0).norm());
+    touching += sim.contact_pairs() > 0;
+  }
+  EXPECT_GT(touching, 5);
+  EXPECT_LT(drift, 1e-8);
+  // The ball was pushed down: it carries a good part of the rod's momentum.
+  EXPECT_LT(ball.model.bodies[0].mass * sim.linear_velocity(0).z(), -0.3 * p0.norm());
+}
+
+// The adjoint through contact between a rod and a body: the rod thrown onto a box resting on
+// the floor, γ its initial node velocities.
+TEST(RodContactAdjoint, TheGradientRunsBackThroughARodOnABody) {
+  const Scene scene = parse_scene(R"({"time_step": 0.002, "frames": 80, "gravity": [0, 0, -9.81],
+      "solver": {"tolerance": 1e-12, "max_iterations": 100},
+      "colliders": [{"type": "plane"}],
+      "bodies": [{"name": "box", "density": 500, "position": [0, 0, 0.0505],
+                  "contact": {"stiffness": 1e4, "radius": 0.001,
+                              "shape": {"type": "box", "half_extents": [0.1, 0.1, 0.05]}, "sample_spacing": 0.05}}],
+      "rods": [)" + rod_json("thrown", "[-0.25, 0.02, 0.13]", "[0.25, 0.02, 0.13]", R"(, "contact": {"stiffness": 2e3})") + R"(],
+      "optimization": {
+        "parameters": [{"kind": "rod_node_velocities", "rod": "thrown"}],
+        "objective": [{"term": "point_targets", "rod": "thrown", "frame": -1,
+                       "polyline": [[0.1, -0.2, 0.2], [0.1, 0.2, 0.2]]}]}})",
+                                  "rod_on_box_adjoint.json");
+  Simulator forward(scene.model, scene.solver);
+  int touching = 0;
+  for (int k = 0; k < scene.frames; ++k) {
+    forward.step();
+    touching += forward.contact_pairs() > 1;  // the box on the floor, and the rod on the box
+  }
+  ASSERT_GT(touching, 5);
   EXPECT_TRUE(test::gradient_agrees(scene));
 }
 
