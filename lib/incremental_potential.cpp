@@ -130,8 +130,22 @@ std::vector<std::shared_ptr<const Collider>> shared_colliders(const Model& model
   return out;
 }
 
-// A sample's contact term with each collider it touches (ContactMaterial::touches), and its
-// friction term where μ > 0.
+// A sample's penalty term (against a collider: Contact; against a body: BodyContact), and its
+// friction term where its material's μ > 0. Static equilibria have no step to slip over:
+// friction is a dynamic term.
+template <class Penalty, class FrictionTerm, class Sample>
+void add_sample_terms(const Model& model, const Sample& sample, const ContactMaterial& material,
+                      IncrementalPotential& potential) {
+  potential.add(Penalty{sample});
+  if (material.friction > 0.0 && !model.static_equilibrium) {
+    FrictionTerm friction{sample};
+    friction.coefficient = material.friction;
+    friction.epsilon = material.friction_velocity * model.time_step;
+    potential.add(friction);
+  }
+}
+
+// A sample's terms with each collider it touches (ContactMaterial::touches).
 void add_contact_terms(const Model& model,
                        const std::vector<std::shared_ptr<const Collider>>& colliders,
                        const ContactMaterial& material, const AttachedPoint& at,
@@ -139,53 +153,56 @@ void add_contact_terms(const Model& model,
   if (!material.enabled()) return;
   for (const auto& collider : colliders) {
     if (!material.touches(collider->name)) continue;
-    const ContactSample sample{offsets, at, collider, material.stiffness, material.radius};
-    p.add(Contact{sample});
-    // Static equilibria have no step to slip over: friction is a dynamic term.
-    if (material.friction > 0.0 && !model.static_equilibrium) {
-      Friction friction{sample};
-      friction.coefficient = material.friction;
-      friction.epsilon = material.friction_velocity * model.time_step;
-      p.add(friction);
-    }
+    add_sample_terms<Contact, Friction>(
+        model, ContactSample{offsets, at, collider, material.stiffness, material.radius}, material, p);
   }
 }
 
-// A sample's contact term against another body's shape, and its friction term where its
-// material's μ > 0 (as against a collider: friction is a dynamic term).
-void add_body_sample_terms(const Model& model, const BodySample& sample, const ContactMaterial& material,
-                           IncrementalPotential& potential) {
-  potential.add(BodyContact{sample});
-  if (material.friction > 0.0 && !model.static_equilibrium) {
-    BodyFriction friction{sample};
-    friction.coefficient = material.friction;
-    friction.epsilon = material.friction_velocity * model.time_step;
-    potential.add(friction);
-  }
+// The contact candidates of a model (Model::body_pairs, edge_pairs, rod_body_pairs), listed
+// once per build, and where each kind's entries start in a coupling key.
+struct ContactCandidates {
+  std::vector<std::pair<int, int>> bodies;
+  std::vector<EdgePair> edges;
+  std::vector<std::pair<int, int>> rods_on_bodies;
+  std::size_t first_body, first_edge, first_rod_on_body;
+  explicit ContactCandidates(const Model& model)
+      : bodies(model.body_pairs()),
+        edges(model.edge_pairs()),
+        rods_on_bodies(model.rod_body_pairs()),
+        first_body(model.joints.size()),
+        first_edge(first_body + bodies.size()),
+        first_rod_on_body(first_edge + edges.size()) {}
+};
+
+// Whether candidate p of the kind whose entries start at `first` holds under `key` (a key
+// without contact entries holds none).
+bool holds(const std::vector<bool>& key, std::size_t first, std::size_t p) {
+  return first + p < key.size() && key[first + p];
 }
 
 // Every sample of A against B's shape and of B against A's, for each pair of bodies that
 // touches under `key` (Model::coupling_key), with its friction where A's μ > 0; A's and B's
 // blocks are in one component.
-void add_body_contact_terms(const Model& model, const std::vector<bool>& key,
+void add_body_contact_terms(const Model& model, const std::vector<bool>& key, const ContactCandidates& candidates,
                             const std::vector<int>& point_offset, const std::vector<int>& rotation_offset,
                             const std::vector<int>& component_of, std::vector<Component>& components) {
-  if (key.size() <= model.joints.size()) return;
-  const std::vector<std::pair<int, int>> pairs = model.body_pairs();
+  const std::vector<std::pair<int, int>>& pairs = candidates.bodies;
   for (std::size_t p = 0; p < pairs.size(); ++p) {
-    if (!key[model.joints.size() + p]) continue;
+    if (!holds(key, candidates.first_body, p)) continue;
     for (const auto& [a, b] : {pairs[p], std::pair{pairs[p].second, pairs[p].first}}) {
       const RigidBody& sampled = model.bodies[a];
       const RigidBody& solid = model.bodies[b];
       if (!sampled.contact.enabled() || solid.shape == nullptr) continue;
       for (const Vector3& point : sampled.contact_points) {
-        add_body_sample_terms(model, {{point_offset[a], rotation_offset[a], point_offset[b], rotation_offset[b]},
-                                      {a, a, point},
-                                      b,
-                                      solid.shape,
-                                      sampled.contact.stiffness,
-                                      sampled.contact.radius},
-                              sampled.contact, components[component_of[a]].potential);
+        add_sample_terms<BodyContact, BodyFriction>(
+            model,
+            BodySample{{point_offset[a], rotation_offset[a], point_offset[b], rotation_offset[b]},
+                       {a, a, point},
+                       b,
+                       solid.shape,
+                       sampled.contact.stiffness,
+                       sampled.contact.radius},
+            sampled.contact, components[component_of[a]].potential);
       }
     }
   }
@@ -233,9 +250,9 @@ struct DofMap {
 };
 
 // The joints' terms (JointSpec), added to the component of the ends.
-void add_joint_terms(const Model& model, const std::vector<bool>& key, std::vector<Component>& components) {
+void add_joint_terms(const Model& model, const std::vector<bool>& key, const DofMap& dofs,
+                     std::vector<Component>& components) {
   if (model.joints.empty()) return;
-  const DofMap dofs(model, components);
   const std::vector<std::array<int, 2>>& point_dof = dofs.points;
   const std::vector<std::array<int, 2>>& rotation_dof = dofs.rotations;
   // The rods' lumped masses and edge inertias, discretised once for all joints to them.
@@ -418,18 +435,16 @@ int find_root(std::vector<int>& parent, int i) {
 // in the component of their nodes. The stiffness per unit length is each rod's contact k over
 // its edge's rest length (so a rod lying along another presses with about k per node, as on
 // a collider), the two edges' averaged.
-void add_edge_contact_terms(const Model& model, const std::vector<bool>& key, std::vector<Component>& components) {
-  const std::size_t first = model.joints.size() + model.body_pairs().size();
-  if (key.size() <= first) return;
-  const std::vector<EdgePair> pairs = model.edge_pairs();
-  const DofMap dofs(model, components);
+void add_edge_contact_terms(const Model& model, const std::vector<bool>& key, const ContactCandidates& candidates,
+                            const DofMap& dofs, std::vector<Component>& components) {
+  const std::vector<EdgePair>& pairs = candidates.edges;
   std::vector<std::optional<RodDiscretization>> rods(model.rods.size());
   const auto rest_length = [&](int r, int e) {
     if (!rods[r]) rods[r] = discretize(model.rods[r]);
     return rods[r]->rest_length[e];
   };
-  for (std::size_t p = 0; p < pairs.size() && first + p < key.size(); ++p) {
-    if (!key[first + p]) continue;
+  for (std::size_t p = 0; p < pairs.size(); ++p) {
+    if (!holds(key, candidates.first_edge, p)) continue;
     const EdgePair& e = pairs[p];
     EdgeContact term;
     term.nodes = {model.rod_point(e.rod_a, e.edge_a), model.rod_point(e.rod_a, e.edge_a + 1),
@@ -453,13 +468,11 @@ void add_edge_contact_terms(const Model& model, const std::vector<bool>& key, st
 // Every free node of a rod against a body's shape (a sample without a rotation: BodyContact's
 // θ_A block is no DOF), for each (rod, body) pair that touches under `key` (the entries after
 // the edge pairs); rod and body are then in one component.
-void add_rod_body_contact_terms(const Model& model, const std::vector<bool>& key, std::vector<Component>& components) {
-  const std::size_t first = model.joints.size() + model.body_pairs().size() + model.edge_pairs().size();
-  if (key.size() <= first) return;
-  const std::vector<std::pair<int, int>> pairs = model.rod_body_pairs();
-  const DofMap dofs(model, components);
-  for (std::size_t p = 0; p < pairs.size() && first + p < key.size(); ++p) {
-    if (!key[first + p]) continue;
+void add_rod_body_contact_terms(const Model& model, const std::vector<bool>& key, const ContactCandidates& candidates,
+                                const DofMap& dofs, std::vector<Component>& components) {
+  const std::vector<std::pair<int, int>>& pairs = candidates.rods_on_bodies;
+  for (std::size_t p = 0; p < pairs.size(); ++p) {
+    if (!holds(key, candidates.first_rod_on_body, p)) continue;
     const auto [r, b] = pairs[p];
     const RodSpec& rod = model.rods[r];
     const std::array<int, 2> body = dofs.points[b];
@@ -468,9 +481,11 @@ void add_rod_body_contact_terms(const Model& model, const std::vector<bool>& key
       const int point = model.rod_point(r, i);
       const int offset = dofs.points[point][1];
       if (offset < 0) continue;  // clamped
-      add_body_sample_terms(model, {{offset, -1, body[1], dofs.rotations[b][1]}, {point, -1, Vector3::Zero()}, b,
-                                    model.bodies[b].shape, rod.contact.stiffness, rod.contact.radius},
-                            rod.contact, potential);
+      add_sample_terms<BodyContact, BodyFriction>(
+          model,
+          BodySample{{offset, -1, body[1], dofs.rotations[b][1]}, {point, -1, Vector3::Zero()}, b,
+                     model.bodies[b].shape, rod.contact.stiffness, rod.contact.radius},
+          rod.contact, potential);
     }
   }
 }
@@ -591,10 +606,13 @@ std::vector<Component> build_components(const Model& model, const std::vector<bo
       components.push_back(std::move(c));
     }
   }
-  add_joint_terms(model, key, components);
-  add_body_contact_terms(model, key, point_offset, rotation_offset, component_of, components);
-  add_edge_contact_terms(model, key, components);
-  add_rod_body_contact_terms(model, key, components);
+  // Every body and rod has its place: the terms between objects.
+  const DofMap dofs(model, components);
+  const ContactCandidates candidates(model);
+  add_joint_terms(model, key, dofs, components);
+  add_body_contact_terms(model, key, candidates, point_offset, rotation_offset, component_of, components);
+  add_edge_contact_terms(model, key, candidates, dofs, components);
+  add_rod_body_contact_terms(model, key, candidates, dofs, components);
   return components;
 }
 

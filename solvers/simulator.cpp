@@ -23,14 +23,9 @@ Simulator::Simulator(Model model, const SolverOptions& options)
   }
   previous_ = state_;
   previous_step_ = step_;
-  pairs_ = TouchingPairs(model_);
-  edges_ = TouchingEdges(model_);
-  rod_bodies_ = TouchingRodsAndBodies(model_);
-  margin_.assign(model_.bodies.size(), 0.0);
-  touching_.assign(pairs_.size() + edges_.size() + rod_bodies_.size(), false);
-  pairs_.find(state_, margin_, touching_);
-  edges_.find(state_, Step{}, touching_, pairs_.size());
-  rod_bodies_.find(state_, Step{}, margin_, touching_, pairs_.size() + edges_.size());
+  search_ = ContactSearch(model_);
+  touching_.assign(search_.size(), false);
+  search_.find(state_, Step{}, touching_);  // nothing has moved yet: no margins
   model_.coupling_key(1, touching_, key_);
   current_ = &islands_at(key_);
 }
@@ -74,16 +69,9 @@ StepReport Simulator::step() {
       dynamic ? 1.0 : std::min(1.0, double(frame_ + 1) / double(model_.load_steps));
   apply_prescribed_motions(load_scale);
 
-  // The step's couplings: the joints active at it and the pairs of bodies within reach of
-  // each other at its start, each body's margin the distance it moved in the last step.
-  if (pairs_.size() > 0 || rod_bodies_.size() > 0) {  // else no body can touch anything that moves
-    for (std::size_t i = 0; i < model_.bodies.size() && dynamic; ++i) {
-      margin_[i] = step_.points[i].norm() + so3::log(step_.rotations[i]).norm() * pairs_.reach(static_cast<int>(i));
-    }
-    pairs_.find(state_, margin_, touching_);
-  }
-  if (edges_.size() > 0) edges_.find(state_, step_, touching_, pairs_.size());
-  if (rod_bodies_.size() > 0) rod_bodies_.find(state_, step_, margin_, touching_, pairs_.size() + edges_.size());
+  // The step's couplings: the joints active at it and the pairs of objects within reach of
+  // each other at its start, with margins from the last step (none in static mode: Δq = 0).
+  search_.find(state_, step_, touching_);
   saved_key_ = key_;  // same size: no allocation
   StepIslands* const before = current_;
   start_ = state_;
@@ -113,11 +101,7 @@ StepReport Simulator::step() {
     if (!report.state_updated()) break;
     // Two bodies that reached each other only within the step: solve it again with them
     // coupled, from the same start (a few rounds at most: each adds pairs).
-    if (round == kMaxContactRounds) break;
-    const bool bodies = pairs_.add_penetrating(state_, touching_);
-    const bool edges = edges_.add_penetrating(state_, touching_, pairs_.size());
-    const bool rods_on_bodies = rod_bodies_.add_penetrating(state_, touching_, pairs_.size() + edges_.size());
-    if (!bodies && !edges && !rods_on_bodies) break;
+    if (round == kMaxContactRounds || !search_.add_penetrating(state_, touching_)) break;
     state_ = start_;
   }
 
@@ -194,10 +178,7 @@ double Simulator::max_penetration() const {
 }
 
 int Simulator::contact_pairs() const {
-  int pairs = 0;
-  for (std::size_t p = 0; p < pairs_.size(); ++p) pairs += pairs_.penetrates(state_, static_cast<int>(p));
-  for (std::size_t p = 0; p < edges_.size(); ++p) pairs += edges_.penetrates(state_, static_cast<int>(p));
-  for (std::size_t p = 0; p < rod_bodies_.size(); ++p) pairs += rod_bodies_.penetrates(state_, static_cast<int>(p));
+  int pairs = search_.penetrating(state_);
   // A point at p touches collider c when it is within ρ of it.
   const auto inside = [&](const Collider& c, const ContactMaterial& m, const Vector3& p) {
     return m.touches(c.name) && m.radius - c.evaluate(p, false).distance > 0.0;

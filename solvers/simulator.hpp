@@ -14,7 +14,7 @@
 #include <memory>
 #include <vector>
 
-#include "../lib/edge_contact.hpp"
+#include "../lib/contact_search.hpp"
 #include "free_directions.hpp"
 #include "islands.hpp"
 #include "step_solver.hpp"
@@ -71,8 +71,8 @@ class Simulator {
   int contact_pairs() const;
   // The smallest distance between the surfaces of two rod edges that may touch
   // (TouchingEdges::min_separation), +∞ without rod–rod contact in the model.
-  double min_rod_separation() const { return edges_.min_separation(state_); }
-  bool has_rod_contact() const { return edges_.size() > 0; }
+  double min_rod_separation() const { return search_.min_rod_separation(state_); }
+  bool has_rod_contact() const { return search_.has_rod_pairs(); }
 
  private:
   // Calls f(point, mass, rotation, body_inertia) for every lumped mass and rotational
@@ -103,11 +103,8 @@ class Simulator {
   std::vector<bool> key_;           // their couplings (Model::coupling_key)
   std::vector<bool> saved_key_;     // key_ at the start of a step (restored if it fails)
   // Contact between bodies: the candidate pairs, which touch, each body's margin (m).
-  TouchingPairs pairs_;
-  TouchingEdges edges_;
-  TouchingRodsAndBodies rod_bodies_;
-  std::vector<bool> touching_;  // body pairs, edge pairs, then rod–body pairs
-  std::vector<double> margin_;
+  ContactSearch search_;
+  std::vector<bool> touching_;  // the contact part of key_
   State start_;  // the step's start, to solve it again with pairs found within it
   static constexpr int kMaxContactRounds = 3;
 };
