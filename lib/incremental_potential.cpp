@@ -182,7 +182,7 @@ bool holds(const std::vector<bool>& key, std::size_t first, std::size_t p) {
 
 // Every sample of A against B's shape and of B against A's, for each pair of bodies that
 // touches under `key` (Model::coupling_key), with its friction where A's μ > 0; A's and B's
-// blocks are in one component.
+// blocks are in one component (a kinematic body's are no DOF).
 void add_body_contact_terms(const Model& model, const std::vector<bool>& key, const ContactCandidates& candidates,
                             const std::vector<int>& point_offset, const std::vector<int>& rotation_offset,
                             const std::vector<int>& component_of, std::vector<Component>& components) {
@@ -202,7 +202,7 @@ void add_body_contact_terms(const Model& model, const std::vector<bool>& key, co
                        solid.shape,
                        sampled.contact.stiffness,
                        sampled.contact.radius},
-            sampled.contact, components[component_of[a]].potential);
+            sampled.contact, components[component_of[a] >= 0 ? component_of[a] : component_of[b]].potential);
       }
     }
   }
@@ -264,7 +264,7 @@ void add_joint_terms(const Model& model, const std::vector<bool>& key, const Dof
   // An end's mass (what its point moves) and largest rotational inertia, 0 for the world.
   const auto end_mass = [&](const JointEnd& e) {
     switch (e.kind) {
-      case JointEnd::Kind::kBody: return model.bodies[e.object].mass;
+      case JointEnd::Kind::kBody: return model.bodies[e.object].kinematic ? 0.0 : model.bodies[e.object].mass;
       case JointEnd::Kind::kRodNode:
       case JointEnd::Kind::kRodEdge: return rod(e.object).node_mass[e.element];
       default: return 0.0;
@@ -272,7 +272,9 @@ void add_joint_terms(const Model& model, const std::vector<bool>& key, const Dof
   };
   const auto end_inertia = [&](const JointEnd& e) {
     switch (e.kind) {
-      case JointEnd::Kind::kBody: return rotational_mass(model.bodies[e.object].inertia).diagonal().maxCoeff();
+      case JointEnd::Kind::kBody:
+        return model.bodies[e.object].kinematic ? 0.0
+                                                : rotational_mass(model.bodies[e.object].inertia).diagonal().maxCoeff();
       case JointEnd::Kind::kRodEdge: return rotational_mass(rod(e.object).edge_inertia[e.element]).diagonal().maxCoeff();
       default: return 0.0;
     }
@@ -476,7 +478,11 @@ void add_rod_body_contact_terms(const Model& model, const std::vector<bool>& key
     const auto [r, b] = pairs[p];
     const RodSpec& rod = model.rods[r];
     const std::array<int, 2> body = dofs.points[b];
-    IncrementalPotential& potential = components[body[0]].potential;
+    // The body's component, or for a kinematic body (no DOF) the rod's (Model::rod_body_pairs:
+    // it has a free node).
+    int component = body[0];
+    for (int i = 0; component < 0 && i < rod.node_count(); ++i) component = dofs.points[model.rod_point(r, i)][0];
+    IncrementalPotential& potential = components[component].potential;
     for (int i = 0; i < rod.node_count(); ++i) {
       const int point = model.rod_point(r, i);
       const int offset = dofs.points[point][1];
@@ -513,6 +519,7 @@ std::vector<Component> build_components(const Model& model, const std::vector<bo
   std::vector<int> point_offset(n, -1), rotation_offset(n, -1);
   std::vector<int> component_of_root(objects, -1);
   for (int i = 0; i < n; ++i) {
+    if (model.bodies[i].kinematic) continue;  // no DOF (lib/kinematic.hpp)
     const int root = find_root(parent, i);
     if (component_of_root[root] < 0) {
       component_of_root[root] = static_cast<int>(components.size());
@@ -530,6 +537,7 @@ std::vector<Component> build_components(const Model& model, const std::vector<bo
   const double inv_h2 = 1.0 / (model.time_step * model.time_step);
   for (int i = 0; i < n; ++i) {
     const RigidBody& body = model.bodies[i];
+    if (body.kinematic) continue;  // no inertia, no load
     IncrementalPotential& p = components[component_of[i]].potential;
     if (!model.static_equilibrium) {
       TranslationalInertia ti;
@@ -583,12 +591,14 @@ std::vector<Component> build_components(const Model& model, const std::vector<bo
     term.stiffness = s.stiffness;
     term.rest_length = s.rest_length;
     term.stiffness_slot = s.stiffness_slot;
-    const int body = s.a.body >= 0 ? s.a.body : s.b.body;
+    // The component of the end that moves (Model::validate: one does).
+    const int body = s.a.body >= 0 && component_of[s.a.body] >= 0 ? s.a.body : s.b.body;
     components[component_of[body]].potential.add(term);
   }
   const std::vector<std::shared_ptr<const Collider>> colliders = shared_colliders(model);
   for (int i = 0; i < n; ++i) {
     const RigidBody& body = model.bodies[i];
+    if (body.kinematic) continue;  // a static collider and a kinematic body move nothing
     for (const Vector3& sample : body.contact_points) {
       add_contact_terms(model, colliders, body.contact, {i, i, sample},
                         {point_offset[i], rotation_offset[i]},

@@ -68,6 +68,13 @@ void validate_joint_end(const Model& m, const JointEnd& end, const std::string& 
   require_finite(end.point, field(end_name + ".point"));
 }
 
+// Loads on a kinematic body would push nothing: it follows its motion.
+void require_moving_body(const Model& m, int body, const std::string& field) {
+  if (m.bodies[body].kinematic) {
+    throw ModelError(field, "\"" + m.bodies[body].name + "\" is kinematic: it follows its motion, and a load on it would do nothing");
+  }
+}
+
 // Whether a joint end has a DOF: a body, or a rod node or edge that is not clamped.
 bool joint_end_moves(const Model& m, const JointEnd& end) {
   const auto free = [](const std::vector<int>& fixed, int i) {
@@ -75,7 +82,7 @@ bool joint_end_moves(const Model& m, const JointEnd& end) {
   };
   switch (end.kind) {
     case JointEnd::Kind::kWorld: return false;
-    case JointEnd::Kind::kBody: return true;
+    case JointEnd::Kind::kBody: return !m.bodies[end.object].kinematic;
     case JointEnd::Kind::kRodNode: return free(m.rods[end.object].fixed_nodes, end.element);
     case JointEnd::Kind::kRodEdge:
       return free(m.rods[end.object].fixed_nodes, end.element) ||
@@ -103,6 +110,25 @@ void validate_inertia(const Matrix3& I, const std::string& field) {
   }
 }
 
+void require_rotation(const Matrix3& R, const std::string& field) {
+  require_finite(R, field);
+  if ((R.transpose() * R - Matrix3::Identity()).norm() > 1e-9 || R.determinant() <= 0.0) {
+    throw ModelError(field, "must be a rotation matrix");
+  }
+}
+
+// A body's contact samples: finite, and only with contact enabled.
+void validate_body_contact(const RigidBody& b, const std::string& path) {
+  Model::validate_contact(b.contact, path + ".contact");
+  if (b.shape != nullptr) b.shape->validate(path + ".contact.shape");
+  for (std::size_t k = 0; k < b.contact_points.size(); ++k) {
+    require_finite(b.contact_points[k], path + ".contact.points[" + std::to_string(k) + "]");
+  }
+  if (!b.contact_points.empty() && !b.contact.enabled()) {
+    throw ModelError(path + ".contact.stiffness", "must be positive: the body has contact points");
+  }
+}
+
 }  // namespace
 
 ModelError::ModelError(std::string field, const std::string& reason)
@@ -119,6 +145,18 @@ void Model::validate() const {
   require_finite(gravity, "gravity");
   for (std::size_t i = 0; i < bodies.size(); ++i) {
     const RigidBody& b = bodies[i];
+    if (b.kinematic) {
+      // Only its pose, motion and contact matter (lib/kinematic.hpp).
+      require_finite(b.position, index_field("bodies", i, "position"));
+      require_rotation(b.orientation, index_field("bodies", i, "orientation"));
+      if (!b.linear_velocity.isZero(0.0) || !b.angular_velocity.isZero(0.0)) {
+        throw ModelError(index_field("bodies", i, "linear_velocity"),
+                         "a kinematic body moves as its motion says: give velocities there");
+      }
+      b.kinematic->validate(b.orientation, time_step, static_equilibrium, index_field("bodies", i, "kinematic"));
+      validate_body_contact(b, index_field("bodies", i, ""));
+      continue;
+    }
     if (!std::isfinite(b.mass) || b.mass <= 0.0) {
       throw ModelError(index_field("bodies", i, "mass"), "must be a finite positive number");
     }
@@ -127,11 +165,7 @@ void Model::validate() const {
       require_finite_over_h2(b.mass, b.inertia, inv_h2, index_field("bodies", i, ""));
     }
     require_finite(b.position, index_field("bodies", i, "position"));
-    require_finite(b.orientation, index_field("bodies", i, "orientation"));
-    const double drift = (b.orientation.transpose() * b.orientation - Matrix3::Identity()).norm();
-    if (drift > 1e-9 || b.orientation.determinant() <= 0.0) {
-      throw ModelError(index_field("bodies", i, "orientation"), "must be a rotation matrix");
-    }
+    require_rotation(b.orientation, index_field("bodies", i, "orientation"));
     require_finite(b.linear_velocity, index_field("bodies", i, "linear_velocity"));
     require_finite(b.angular_velocity, index_field("bodies", i, "angular_velocity"));
     // ΔR_0 = exp(h ω_0) and the reported ω = log(ΔR)/h only represent |ω| h < π: a faster
@@ -152,15 +186,7 @@ void Model::validate() const {
       throw ModelError(index_field("bodies", i, "angular_velocity"),
                        "the kinetic energy ½ ωᵀ I ω overflows a double");
     }
-    validate_contact(b.contact, index_field("bodies", i, "contact"));
-    for (std::size_t k = 0; k < b.contact_points.size(); ++k) {
-      require_finite(b.contact_points[k], index_field("bodies", i, "contact.points") + "[" +
-                                              std::to_string(k) + "]");
-    }
-    if (!b.contact_points.empty() && !b.contact.enabled()) {
-      throw ModelError(index_field("bodies", i, "contact.stiffness"),
-                       "must be positive: the body has contact points");
-    }
+    validate_body_contact(b, index_field("bodies", i, ""));
   }
   for (std::size_t c = 0; c < colliders.size(); ++c) {
     colliders[c].validate(index_field("colliders", c, ""));
@@ -173,6 +199,11 @@ void Model::validate() const {
       throw ModelError(index_field("springs", i, "body_b"),
                        s.a.body == -1 ? "connects two world anchors"
                                       : "connects a body to itself (the spring would do nothing)");
+    }
+    const auto moves = [&](int body) { return body >= 0 && !bodies[body].kinematic; };
+    if (!moves(s.a.body) && !moves(s.b.body)) {
+      throw ModelError(index_field("springs", i, "body_b"),
+                       "neither end can move (the world or kinematic bodies): the spring would do nothing");
     }
     require_finite(s.a.point, index_field("springs", i, "point_a"));
     require_finite(s.b.point, index_field("springs", i, "point_b"));
@@ -199,7 +230,7 @@ void Model::validate() const {
       throw ModelError(field("b"), "joins an end to itself (the joint would do nothing)");
     }
     if (!joint_end_moves(*this, j.a) && !joint_end_moves(*this, j.b)) {
-      throw ModelError(field("b"), "neither end can move (the world, or clamped rod nodes and edges): "
+      throw ModelError(field("b"), "neither end can move (the world, kinematic bodies, or clamped rod nodes and edges): "
                                    "the joint would hold nothing");
     }
     if (j.type == JointSpec::Type::kSplice) {
@@ -285,11 +316,13 @@ void Model::validate() const {
   }
   for (std::size_t i = 0; i < forces.size(); ++i) {
     require_body(forces[i].at.body, bodies.size(), index_field("forces", i, "body"), false);
+    require_moving_body(*this, forces[i].at.body, index_field("forces", i, "body"));
     require_finite(forces[i].at.point, index_field("forces", i, "point"));
     require_finite(forces[i].force, index_field("forces", i, "force"));
   }
   for (std::size_t i = 0; i < torques.size(); ++i) {
     require_body(torques[i].body, bodies.size(), index_field("torques", i, "body"), false);
+    require_moving_body(*this, torques[i].body, index_field("torques", i, "body"));
     require_finite(torques[i].torque, index_field("torques", i, "torque"));
   }
   for (std::size_t r = 0; r < rods.size(); ++r) {
@@ -340,6 +373,7 @@ std::vector<std::pair<int, int>> Model::body_pairs() const {
     for (int b = a + 1; b < static_cast<int>(bodies.size()); ++b) {
       const RigidBody& A = bodies[a];
       const RigidBody& B = bodies[b];
+      if (A.kinematic && B.kinematic) continue;  // neither moves the other
       if (!A.contact.touches(B.name) || !B.contact.touches(A.name)) continue;  // both must agree
       if (faces(A, B) || faces(B, A)) out.emplace_back(a, b);
     }
@@ -416,6 +450,13 @@ std::vector<std::pair<int, int>> Model::couplings(const std::vector<bool>* key) 
       if ((*key)[after + p]) out.emplace_back(n + rod_bodies[p].first, rod_bodies[p].second);
     }
   }
+  // A kinematic body ties what touches or is joined to it to nothing: it is moved, as the
+  // world is fixed.
+  for (auto& [a, b] : out) {
+    for (int* o : {&a, &b}) {
+      if (*o >= 0 && *o < static_cast<int>(bodies.size()) && bodies[*o].kinematic) *o = -1;
+    }
+  }
   return out;
 }
 
@@ -475,6 +516,9 @@ void Model::validate_anchoring() const {
   }
   for (std::size_t r = 0; r < rods.size(); ++r) {
     if (!rods[r].fixed_nodes.empty()) anchored[root(n + static_cast<int>(r))] = true;
+  }
+  for (int i = 0; i < n; ++i) {
+    if (bodies[i].kinematic) anchored[i] = true;  // coupled to nothing (couplings): its own root
   }
   for (int i = 0; i < static_cast<int>(parent.size()); ++i) {
     if (anchored[root(i)]) continue;
@@ -747,6 +791,14 @@ State Model::initial_state() const {
 Step Model::initial_step() const {
   Step dq;
   for (const RigidBody& b : bodies) {
+    if (b.kinematic) {  // the motion over the first step
+      Vector3 x;
+      Matrix3 R;
+      b.kinematic->pose(time_step, b.position, b.orientation, x, R);
+      dq.points.push_back(x - b.position);
+      dq.rotations.push_back(so3::orthonormalize(R * b.orientation.transpose()));
+      continue;
+    }
     dq.points.push_back(time_step * b.linear_velocity);
     dq.rotations.push_back(so3::exp(time_step * b.angular_velocity));
   }

@@ -8,9 +8,11 @@
 #include <string>
 #include <utility>
 #include <limits>
+#include <optional>
 #include <vector>
 
 #include "contact.hpp"
+#include "kinematic.hpp"
 #include "rod.hpp"
 #include "sdf.hpp"
 #include "state.hpp"
@@ -49,6 +51,10 @@ struct RigidBody {
   // The body's solid for other bodies' samples (lib/body_contact.hpp): an SDF in body
   // coordinates (the collider's pose within the body), or none: other bodies pass through it.
   std::shared_ptr<const Collider> shape;
+  // A kinematic body follows this motion from its pose at t = 0 (lib/kinematic.hpp): it is
+  // no DOF, holds no inertia (mass, inertia and velocities unused) and feels no load; what
+  // it touches and what is joined to it are coupled to it as to the world.
+  std::optional<KinematicMotion> kinematic;
 };
 
 // End of a spring or point of application of a force: a body point given in body

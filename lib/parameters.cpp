@@ -152,6 +152,10 @@ void ParameterSet::add(const Model& model, ParameterKind kind, int index, int su
   if (on_body(kind) && (index < 0 || index >= static_cast<int>(model.bodies.size()))) {
     out_of_range("body", model.bodies.size());
   }
+  if (on_body(kind) && model.bodies[index].kinematic) {
+    throw ModelError(field, "\"" + model.bodies[index].name +
+                                "\" is kinematic: its motion is given, and its initial state is not a control");
+  }
   if (on_rod(kind) && (index < 0 || index >= static_cast<int>(model.rods.size()))) {
     out_of_range("rod", model.rods.size());
   }

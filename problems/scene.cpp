@@ -403,6 +403,40 @@ Matrix3 orientation_of(ObjectReader& r, const std::string& key) {
   return so3::from_quaternion(Eigen::Quaterniond(wxyz(0), wxyz(1), wxyz(2), wxyz(3)));
 }
 
+// A "kinematic" block (lib/kinematic.hpp) of an object that starts at (x0, R0): constant
+// "linear_velocity" / "angular_velocity", or "keyframes" of "time", "position" and
+// "orientation" (each pose member defaults to the keyframe before, or the object's own pose).
+KinematicMotion parse_kinematic(const json& value, const std::string& path, const std::string& source,
+                                const Vector3& x0, const Matrix3& R0) {
+  ObjectReader k(value, path, source, {"linear_velocity", "angular_velocity", "keyframes"});
+  KinematicMotion motion;
+  if (k.has("keyframes")) {
+    for (const char* key : {"linear_velocity", "angular_velocity"}) {
+      if (k.has(key)) k.fail(k.field(key), "give velocities or \"keyframes\", not both");
+    }
+    const json& keys = k.array("keyframes");
+    if (keys.empty()) k.fail(k.field("keyframes"), "must list at least one pose");
+    for (std::size_t i = 0; i < keys.size(); ++i) {
+      ObjectReader f(keys[i], item_path(k.field("keyframes"), i), source, {"time", "position", "orientation"});
+      KinematicPose pose;
+      pose.time = f.number("time");
+      pose.position = f.has("position") ? f.vector<3>("position") : (i == 0 ? x0 : motion.keyframes.back().position);
+      pose.orientation =
+          f.has("orientation") ? orientation_of(f, "orientation") : (i == 0 ? R0 : motion.keyframes.back().orientation);
+      f.finish();
+      motion.keyframes.push_back(pose);
+    }
+  } else {
+    if (!k.has("linear_velocity") && !k.has("angular_velocity")) {
+      k.fail(path, "needs \"linear_velocity\", \"angular_velocity\" or \"keyframes\"");
+    }
+    motion.linear_velocity = k.vector<3>("linear_velocity", Vector3::Zero());
+    motion.angular_velocity = k.vector<3>("angular_velocity", Vector3::Zero());
+  }
+  k.finish();
+  return motion;
+}
+
 // Most points a scene's generated contact samples and tube polylines may hold together.
 constexpr int kMaxContactSamples = 1000000;
 
@@ -491,6 +525,17 @@ Collider parse_collider(const json& value, const std::string& path, const std::s
   return collider;
 }
 
+// The shapes a body can have (what its contact search bounds, lib/body_contact.hpp); `type`
+// names the field for the shape's type ("inside" beside it).
+void require_body_shape(const ObjectReader& r, const Collider& solid, const std::string& type) {
+  if (!std::holds_alternative<SphereShape>(solid.shape) && !std::holds_alternative<BoxShape>(solid.shape) &&
+      !std::holds_alternative<CapsuleShape>(solid.shape)) {
+    r.fail(type, "a body's shape must be a sphere, a box or a capsule");
+  }
+  const std::string inside = type.substr(0, type.size() - 4) + "inside";
+  if (solid.inside) r.fail(inside, "a body's shape is a solid, not its complement");
+}
+
 // "contact" of a body (with "points", a "box" sample generator, or a "shape" for other bodies
 // to touch with its "sample_spacing") or of a rod (every free node, and its edges against
 // other rods' and, with "self_contact", its own; radius defaults to the rod's). Units and
@@ -563,11 +608,7 @@ ContactMaterial parse_contact(ObjectReader& owner, double default_radius,
       // samples on its surface.
       int no_points = 0;
       Collider solid = parse_collider(c.get("shape"), c.field("shape"), owner.source(), no_points);
-      if (!std::holds_alternative<SphereShape>(solid.shape) && !std::holds_alternative<BoxShape>(solid.shape) &&
-          !std::holds_alternative<CapsuleShape>(solid.shape)) {
-        c.fail(c.field("shape") + ".type", "a body's shape must be a sphere, a box or a capsule");
-      }
-      if (solid.inside) c.fail(c.field("shape") + ".inside", "a body's shape is a solid, not its complement");
+      require_body_shape(c, solid, c.field("shape") + ".type");
       if (c.has("sample_spacing")) {
         try {
           const std::vector<Vector3> on_surface =
@@ -827,7 +868,7 @@ Scene parse(const json& root, const std::string& source) {
   for (std::size_t i = 0; i < bodies.size(); ++i) {
     ObjectReader b(bodies[i], item_path("bodies", i), source,
                    {"name", "mass", "inertia", "density", "position", "orientation", "linear_velocity",
-                    "angular_velocity", "contact"});
+                    "angular_velocity", "contact", "kinematic"});
     RigidBody body;
     body.name = b.string("name");
     claim_name(b, body.name, b.field("name"), item_path("bodies", i), taken);
@@ -839,7 +880,15 @@ Scene parse(const json& root, const std::string& source) {
     if (b.has("contact")) {
       body.contact = parse_contact(b, 0.0, &body.contact_points, &body.shape, contact_budget);
     }
-    if (b.has("density")) {
+    if (b.has("kinematic")) {
+      for (const char* key : {"mass", "inertia", "density", "linear_velocity", "angular_velocity"}) {
+        if (b.has(key)) {
+          b.fail(b.field(key), "a kinematic body follows its motion: it has no mass or inertia, and its "
+                               "velocities are given in \"kinematic\"");
+        }
+      }
+      body.kinematic = parse_kinematic(b.get("kinematic"), b.field("kinematic"), source, body.position, body.orientation);
+    } else if (b.has("density")) {
       // Mass and inertia of the body's shape, filled with that density.
       for (const char* key : {"mass", "inertia"}) {
         if (b.has(key)) b.fail(b.field(key), "give \"density\" or \"mass\" and \"inertia\", not both");
@@ -874,8 +923,39 @@ Scene parse(const json& root, const std::string& source) {
   if (top.has("colliders")) {
     const json& colliders = top.array("colliders");
     for (std::size_t i = 0; i < colliders.size(); ++i) {
-      scene.model.colliders.push_back(
-          parse_collider(colliders[i], item_path("colliders", i), source, contact_budget));
+      const std::string path = item_path("colliders", i);
+      if (!colliders[i].is_object() || !colliders[i].contains("kinematic")) {
+        scene.model.colliders.push_back(parse_collider(colliders[i], path, source, contact_budget));
+        continue;
+      }
+      // A moving collider is a kinematic body with that shape and no samples (appended after
+      // the scene's bodies, under the collider's name): what touches it, touches its shape.
+      json fixed = colliders[i];
+      fixed.erase("kinematic");
+      Collider solid = parse_collider(fixed, path, source, contact_budget);
+      json motion_part = json::object();  // what the collider reader above did not read
+      for (const char* key : {"name", "kinematic"}) {
+        if (colliders[i].contains(key)) motion_part[key] = colliders[i][key];
+      }
+      ObjectReader c(motion_part, path, source, {"name", "kinematic"});
+      require_body_shape(c, solid, c.field("type"));
+      if (!c.has("name")) c.fail(c.field("name"), "a kinematic collider needs a name (it is reported as a body)");
+      try {
+        solid.validate(path);  // here, while its fields are the collider's
+      } catch (const ModelError& e) {
+        c.fail(e.field(), std::string(e.what()).substr(e.field().size() + 2));
+      }
+      claim_name(c, solid.name, c.field("name"), path, taken);
+      RigidBody body;
+      body.name = solid.name;
+      body.position = solid.position;
+      body.orientation = solid.orientation;
+      body.kinematic = parse_kinematic(c.get("kinematic"), c.field("kinematic"), source, body.position, body.orientation);
+      solid.position = Vector3::Zero();
+      solid.orientation = Matrix3::Identity();
+      body.shape = std::make_shared<const Collider>(std::move(solid));
+      names.emplace(body.name, static_cast<int>(scene.model.bodies.size()));
+      scene.model.bodies.push_back(std::move(body));
     }
   }
 

@@ -124,6 +124,12 @@ StepReport Simulator::step() {
 }
 
 void Simulator::apply_prescribed_motions(double load_scale) {
+  for (std::size_t i = 0; i < model_.bodies.size(); ++i) {
+    const RigidBody& b = model_.bodies[i];
+    if (!b.kinematic) continue;
+    const double time = model_.static_equilibrium ? load_scale * b.kinematic->duration() : (frame_ + 1) * model_.time_step;
+    b.kinematic->pose(time, initial_.points[i], initial_.rotations[i], state_.points[i], state_.rotations[i]);
+  }
   for (std::size_t r = 0; r < model_.rods.size(); ++r) {
     const int rod = static_cast<int>(r);
     for (const PrescribedMotion& motion : model_.rods[r].prescribed_motions) {
@@ -186,7 +192,7 @@ int Simulator::contact_pairs() const {
   for (const Collider& c : model_.colliders) {
     for (std::size_t i = 0; i < model_.bodies.size(); ++i) {
       const RigidBody& b = model_.bodies[i];
-      if (!b.contact.enabled()) continue;
+      if (!b.contact.enabled() || b.kinematic) continue;  // no terms: it moves nothing
       pairs += std::any_of(b.contact_points.begin(), b.contact_points.end(), [&](const Vector3& s) {
         return inside(c, b.contact, state_.points[i] + state_.rotations[i] * s);
       });
@@ -243,6 +249,7 @@ template <class Function>
 void Simulator::for_each_mass(Function&& f) const {
   const Matrix3 none = Matrix3::Zero();
   for (std::size_t i = 0; i < model_.bodies.size(); ++i) {
+    if (model_.bodies[i].kinematic) continue;  // driven: not part of the system's energy or momentum
     const int index = static_cast<int>(i);
     f(index, model_.bodies[i].mass, index, model_.bodies[i].inertia);
   }

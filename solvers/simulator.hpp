@@ -2,14 +2,16 @@
 // Forward simulation of a Model by backward Euler: each step minimises the incremental
 // potential of every independent component with the chosen back-end (step_solver.hpp) (paper §4);
 // in static mode each step is a load step without inertia (Model::static_equilibrium).
-// Clamped rod nodes and edges with a prescribed motion are moved before each step.
+// Clamped rod nodes and edges with a prescribed motion, and kinematic bodies, are moved before
+// each step.
 //
 //   q_k = argmin Ψ(q; q_{k−1}, Δq_{k−1}),  starting from the extrapolation
 //   x = x_{k−1} + Δx_{k−1},  R = ΔR_{k−1} R_{k−1};  then Δx_k = x_k − x_{k−1}, ΔR_k = R_k R_{k−1}ᵀ.
 //
 // Reported quantities (docs/design.md §2.2): v_k = Δx_k/h, ω_k = log(ΔR_k)/h (world frame);
 // kinetic energy Σ ½ m‖v‖² + ½ ωᵀ (R I_b Rᵀ) ω and angular momentum about the world origin
-// Σ m x × v + R I_b Rᵀ ω, over bodies and over rods' lumped node masses and edge inertias.
+// Σ m x × v + R I_b Rᵀ ω, over bodies and over rods' lumped node masses and edge inertias
+// (not over kinematic bodies: they are driven from outside the system).
 
 #include <memory>
 #include <vector>
@@ -80,8 +82,9 @@ class Simulator {
   template <class Function>
   void for_each_mass(Function&& f) const;
 
-  // Moves the clamped nodes and edges of prescribed motions to their place at the end of
-  // the coming step (time (frame + 1) h, or λ of the motion in static mode).
+  // Moves the clamped nodes and edges of prescribed motions, and the kinematic bodies, to
+  // their place at the end of the coming step (time (frame + 1) h, or λ of the motion in
+  // static mode).
   void apply_prescribed_motions(double load_scale);
 
   Model model_;
