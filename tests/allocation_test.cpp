@@ -649,3 +649,43 @@ TEST(Allocation, StepsWhoseRodContactsHoldDoNotAllocate) {
 }
 
 }  // namespace
+
+namespace liedyn {
+namespace {
+
+// Kinematic bodies (lib/kinematic.hpp): a box carried on a moving belt, with friction. Once the
+// pair holds, moving the belt to its pose (keyframes: the span search) and solving the box's
+// island allocate nothing.
+TEST(Allocation, StepsDrivenByAKinematicBodyDoNotAllocate) {
+  Model model;
+  model.time_step = 0.005;
+  model.gravity = Vector3(0.0, 0.0, -9.81);
+  RigidBody box;
+  box.name = "box";
+  box.mass = 1.0;
+  box.inertia = Matrix3::Identity() * 1e-3;
+  box.position = Vector3(0.0, 0.0, 0.05);
+  box.shape = std::make_shared<const Collider>(Collider{"", BoxShape{Vector3::Constant(0.05), 0.0}});
+  for (int s = 0; s < 8; ++s) {
+    box.contact_points.push_back(Vector3(s & 1 ? 0.05 : -0.05, s & 2 ? 0.05 : -0.05, s & 4 ? 0.05 : -0.05));
+  }
+  box.contact.stiffness = 1e5;
+  box.contact.friction = 0.5;
+  RigidBody belt;
+  belt.name = "belt";
+  belt.position = Vector3(0.0, 0.0, -0.05);
+  belt.shape = std::make_shared<const Collider>(Collider{"", BoxShape{Vector3(5.0, 1.0, 0.05), 0.0}});
+  belt.kinematic = KinematicMotion{};
+  belt.kinematic->keyframes = {{1.0, Vector3(0.5, 0.0, -0.05), Matrix3::Identity()},
+                               {10.0, Vector3(5.0, 0.0, -0.05), Matrix3::Identity()}};
+  model.bodies = {box, belt};
+  Simulator sim(model, SolverOptions{});
+  for (int k = 1; k <= 20; ++k) ASSERT_TRUE(sim.step().converged()) << k;  // the box settles on it
+  const int sets = sim.island_sets();
+  expect_no_allocation(run_counted(sim, kSteps), kSteps);
+  EXPECT_EQ(sim.island_sets(), sets);
+  EXPECT_GT(sim.state().points[0].x(), 0.05);  // carried along
+}
+
+}  // namespace
+}  // namespace liedyn
