@@ -300,17 +300,7 @@ bool TouchingPairs::near(const State& q, int p, double margin) const {
 
 void TouchingPairs::find(const State& q, const std::vector<double>& margin,
                          std::vector<bool>& touching) const {
-  for (std::size_t p = 0; p < pairs_.size(); ++p) {
-    touching[p] = near(q, static_cast<int>(p), margin[pairs_[p].first] + margin[pairs_[p].second]);
-  }
-}
-
-bool TouchingPairs::add_penetrating(const State& q, std::vector<bool>& touching) const {
-  bool added = false;
-  for (std::size_t p = 0; p < pairs_.size(); ++p) {
-    if (!touching[p] && near(q, static_cast<int>(p), 0.0)) touching[p] = added = true;
-  }
-  return added;
+  for (std::size_t p = 0; p < pairs_.size(); ++p) touching[p] = touches(q, static_cast<int>(p), margin);
 }
 
 TouchingRodsAndBodies::TouchingRodsAndBodies(const Model& model) {
@@ -344,22 +334,17 @@ double TouchingRodsAndBodies::overlap(const State& q, std::size_t index, double 
   return deepest;
 }
 
-void TouchingRodsAndBodies::find(const State& q, const Step& step, const std::vector<double>& body_margin,
-                                 std::vector<bool>& touching, std::size_t first) const {
-  for (std::size_t i = 0; i < pairs_.size(); ++i) {
-    double moved = 0.0;
-    for (int node : pairs_[i].nodes) moved = std::max(moved, step.points.empty() ? 0.0 : step.points[node].norm());
-    const double margin = body_margin[pairs_[i].body] + moved;
-    touching[first + i] = overlap(q, i, margin) > -margin;
-  }
+bool TouchingRodsAndBodies::touches(const State& q, const Step& step, const std::vector<double>& body_margin,
+                                    std::size_t p) const {
+  double moved = 0.0;
+  for (int node : pairs_[p].nodes) moved = std::max(moved, step.points.empty() ? 0.0 : step.points[node].norm());
+  const double margin = body_margin[pairs_[p].body] + moved;
+  return overlap(q, p, margin) > -margin;
 }
 
-bool TouchingRodsAndBodies::add_penetrating(const State& q, std::vector<bool>& touching, std::size_t first) const {
-  bool added = false;
-  for (std::size_t i = 0; i < pairs_.size(); ++i) {
-    if (!touching[first + i] && overlap(q, i, 0.0) > 0.0) touching[first + i] = added = true;
-  }
-  return added;
+void TouchingRodsAndBodies::find(const State& q, const Step& step, const std::vector<double>& body_margin,
+                                 std::vector<bool>& touching, std::size_t first) const {
+  for (std::size_t p = 0; p < pairs_.size(); ++p) touching[first + p] = touches(q, step, body_margin, p);
 }
 
 }  // namespace liedyn

@@ -150,13 +150,17 @@ class TouchingPairs {
   std::size_t size() const { return pairs_.size(); }
   // The radius about body i's centre of mass that its samples' spheres and its shape fit in.
   double reach(int body) const { return reach_[body]; }
-  // touching[p] for every candidate pair p at q, with margin[i] (m) per body (`touching` holds
-  // at least size() entries: the body pairs come first in a coupling key).
+  // The two bodies of candidate pair p.
+  const std::pair<int, int>& pair(int p) const { return pairs_[p]; }
+  // Whether candidate pair p is within reach at q, with margin[i] (m) per body.
+  bool touches(const State& q, int p, const std::vector<double>& margin) const {
+    return near(q, p, margin[pairs_[p].first] + margin[pairs_[p].second]);
+  }
+  // touching[p] for every candidate pair p (`touching` holds at least size() entries: the
+  // body pairs come first in a coupling key). Tests every pair: the reference for
+  // ContactSearch's broad phase.
   void find(const State& q, const std::vector<double>& margin, std::vector<bool>& touching) const;
-  // Marks the pairs that penetrate at q (a sample deeper than its radius) but are not yet in
-  // `touching`; true if there were any.
-  bool add_penetrating(const State& q, std::vector<bool>& touching) const;
-  // Whether pair p penetrates at q.
+  // Whether pair p penetrates at q (a sample deeper than its radius).
   bool penetrates(const State& q, int p) const { return near(q, p, 0.0); }
 
  private:
@@ -186,9 +190,12 @@ class TouchingRodsAndBodies {
   explicit TouchingRodsAndBodies(const Model& model);
 
   std::size_t size() const { return pairs_.size(); }
+  // Whether pair p is within reach at q (`step`: the last step's node motions).
+  bool touches(const State& q, const Step& step, const std::vector<double>& body_margin, std::size_t p) const;
+  // touching[first + p] for every pair p: tests every pair, the reference for ContactSearch's
+  // broad phase.
   void find(const State& q, const Step& step, const std::vector<double>& body_margin,
             std::vector<bool>& touching, std::size_t first) const;
-  bool add_penetrating(const State& q, std::vector<bool>& touching, std::size_t first) const;
   bool penetrates(const State& q, int p) const { return overlap(q, static_cast<std::size_t>(p), 0.0) > 0.0; }
 
  private:

@@ -257,24 +257,18 @@ double TouchingEdges::gap(const State& q, std::size_t p) const {
   return segment_distance(x[c.nodes[0]], x[c.nodes[1]], x[c.nodes[2]], x[c.nodes[3]]) - c.radii;
 }
 
-void TouchingEdges::find(const State& q, const Step& step, std::vector<bool>& touching, std::size_t first) const {
+bool TouchingEdges::touches(const State& q, const Step& step, std::size_t p) const {
   const auto& x = q.points;
   const auto moved = [&](int i) { return step.points.empty() ? 0.0 : step.points[i].norm(); };
-  for (std::size_t p = 0; p < candidates_.size(); ++p) {
-    const auto& n = candidates_[p].nodes;
-    const double margin = std::max(moved(n[0]), moved(n[1])) + std::max(moved(n[2]), moved(n[3]));
-    const double reach = 0.5 * ((x[n[1]] - x[n[0]]).norm() + (x[n[3]] - x[n[2]]).norm()) + candidates_[p].radii + margin;
-    const Vector3 between = 0.5 * (x[n[0]] + x[n[1]] - x[n[2]] - x[n[3]]);  // midpoint to midpoint
-    touching[first + p] = between.squaredNorm() <= reach * reach && gap(q, p) < margin;
-  }
+  const auto& n = candidates_[p].nodes;
+  const double margin = std::max(moved(n[0]), moved(n[1])) + std::max(moved(n[2]), moved(n[3]));
+  const double reach = 0.5 * ((x[n[1]] - x[n[0]]).norm() + (x[n[3]] - x[n[2]]).norm()) + candidates_[p].radii + margin;
+  const Vector3 between = 0.5 * (x[n[0]] + x[n[1]] - x[n[2]] - x[n[3]]);  // midpoint to midpoint
+  return between.squaredNorm() <= reach * reach && gap(q, p) < margin;
 }
 
-bool TouchingEdges::add_penetrating(const State& q, std::vector<bool>& touching, std::size_t first) const {
-  bool added = false;
-  for (std::size_t p = 0; p < candidates_.size(); ++p) {
-    if (!touching[first + p] && gap(q, p) < 0.0) touching[first + p] = added = true;
-  }
-  return added;
+void TouchingEdges::find(const State& q, const Step& step, std::vector<bool>& touching, std::size_t first) const {
+  for (std::size_t p = 0; p < candidates_.size(); ++p) touching[first + p] = touches(q, step, p);
 }
 
 double TouchingEdges::min_separation(const State& q) const {

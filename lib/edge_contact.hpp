@@ -153,15 +153,17 @@ class TouchingEdges {
   explicit TouchingEdges(const Model& model);
 
   std::size_t size() const { return candidates_.size(); }
-  // touching[first + p] for every candidate p at q; `step` holds the last step's node
-  // motions (Step::points).
+  // Whether candidate p is within reach at q; `step` holds the last step's node motions
+  // (Step::points).
+  bool touches(const State& q, const Step& step, std::size_t p) const;
+  // touching[first + p] for every candidate p: tests every pair, the reference for
+  // ContactSearch's broad phase.
   void find(const State& q, const Step& step, std::vector<bool>& touching, std::size_t first) const;
-  // Marks the candidates whose capsules overlap at q but are not yet in `touching`; true if
-  // there were any.
-  bool add_penetrating(const State& q, std::vector<bool>& touching, std::size_t first) const;
   bool penetrates(const State& q, int p) const { return gap(q, static_cast<std::size_t>(p)) < 0.0; }
-  // The smallest distance between the surfaces of two candidate edges at q (segment_distance
-  // less both radii; < 0 where they overlap), +∞ without candidates.
+  // The distance between the surfaces of candidate p's edges at q (segment_distance less
+  // both radii; < 0 where they overlap).
+  double gap(const State& q, std::size_t p) const;
+  // The smallest gap over every candidate, +∞ without candidates.
   double min_separation(const State& q) const;
 
  private:
@@ -169,7 +171,6 @@ class TouchingEdges {
     std::array<int, 4> nodes;  // State::points of a0, a1, b0, b1
     double radii;              // ρ_a + ρ_b
   };
-  double gap(const State& q, std::size_t p) const;
   std::vector<Candidate> candidates_;
 };
 

@@ -8,6 +8,7 @@ packages=(
   nlohmann-json3-dev libcli11-dev
   libcairo2-dev fonts-dejavu-core libtinyobjloader-dev
   libgtest-dev libgmock-dev libbenchmark-dev
+  libfcl-dev
 )
 missing=()
 for p in "${packages[@]}"; do

@@ -105,8 +105,9 @@ class Simulator {
   StepIslands* current_ = nullptr;  // the islands of the state (last step's, or step 1's)
   std::vector<bool> key_;           // their couplings (Model::coupling_key)
   std::vector<bool> saved_key_;     // key_ at the start of a step (restored if it fails)
-  // Contact between bodies: the candidate pairs, which touch, each body's margin (m).
-  ContactSearch search_;
+  // Contact between objects: the candidate pairs and which touch. Mutable: its broad phase
+  // keeps the order of its last query (a cache), also for the const reports.
+  mutable ContactSearch search_;
   std::vector<bool> touching_;  // the contact part of key_
   State start_;  // the step's start, to solve it again with pairs found within it
   static constexpr int kMaxContactRounds = 3;

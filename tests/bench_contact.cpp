@@ -13,7 +13,7 @@
 #include <filesystem>
 #include <vector>
 
-#include "lib/edge_contact.hpp"
+#include "lib/contact_search.hpp"
 #include "problems/scene.hpp"
 #include "solvers/simulator.hpp"
 
@@ -54,15 +54,20 @@ void BM_RodCoil_Detection(benchmark::State& state) {
       steps.push_back(sim.last_step());
     }
   }
-  const liedyn::TouchingEdges edges(scene.model);
-  std::vector<bool> touching(edges.size());
+  liedyn::ContactSearch search(scene.model);
+  std::vector<bool> touching(search.size());
+  const bool broad_phase = state.range(0) != 0;
   std::size_t i = 0;
   for (auto _ : state) {
-    edges.find(states[i], steps[i], touching, 0);
+    if (broad_phase) {
+      search.find(states[i], steps[i], touching);
+    } else {
+      search.find_exhaustively(states[i], steps[i], touching);
+    }
     benchmark::DoNotOptimize(touching);
     i = (i + 1) % states.size();
   }
 }
-BENCHMARK(BM_RodCoil_Detection)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_RodCoil_Detection)->Arg(1)->Arg(0)->Unit(benchmark::kMicrosecond);
 
 }  // namespace
