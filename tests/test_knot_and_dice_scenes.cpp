@@ -27,7 +27,8 @@ Scene bundled(const char* name) {
 
 std::vector<Vector3> rod_nodes(const Simulator& sim, int rod) {
   std::vector<Vector3> x;
-  for (int i = 0; i < sim.model().rods[rod].node_count(); ++i) x.push_back(sim.state().points[sim.model().rod_point(rod, i)]);
+  for (int i = 0; i < sim.model().rods[rod].node_count(); ++i)
+    x.push_back(sim.state().points[sim.model().rod_point(rod, i)]);
   return x;
 }
 
@@ -129,12 +130,13 @@ TEST(KnotAndDiceScenes, AnOverhandKnotPulledTightNeverPassesThroughItself) {
   EXPECT_LT(tight.radius, loose.radius / 3.0);
   EXPECT_LT(sim.min_rod_separation(), 0.0);
   EXPECT_GT(total_turning(end), 2.0 * std::numbers::pi);
-  std::cout << "knot: closest surfaces " << closest << " m (frame " << closest_frame << "; radius " << radius
-            << "), largest node motion in a step " << fastest << " m (frame " << fastest_frame << "); rope in the knot "
-            << loose.length << " -> " << tight.length << " m, sphere about it " << loose.radius << " -> " << tight.radius
-            << " m; ends " << (start.back() - start.front()).norm() << " -> " << (end.back() - end.front()).norm()
-            << " m apart; total turning " << total_turning(end) / std::numbers::pi << " pi; " << sim.contact_pairs()
-            << " pairs of edges in contact at the end\n";
+  std::cout << "knot: closest surfaces " << closest << " m (frame " << closest_frame << "; radius "
+            << radius << "), largest node motion in a step " << fastest << " m (frame "
+            << fastest_frame << "); rope in the knot " << loose.length << " -> " << tight.length
+            << " m, sphere about it " << loose.radius << " -> " << tight.radius << " m; ends "
+            << (start.back() - start.front()).norm() << " -> " << (end.back() - end.front()).norm()
+            << " m apart; total turning " << total_turning(end) / std::numbers::pi << " pi; "
+            << sim.contact_pairs() << " pairs of edges in contact at the end\n";
 }
 
 // The bundled dice: the thrown die lands on the resting one's top face at 0.87 m/s, moving
@@ -166,7 +168,8 @@ TEST(KnotAndDiceScenes, ADieThrownOntoARestingDieComesToRestOnIt) {
   const TouchingPairs dice(scene.model);
   const Vector3 bottom_start = sim.state().points[bottom];
   const double energy0 = sim.kinetic_energy() + sim.potential_energy();
-  double energy = energy0, rise = 0.0, deepest = 0.0, lowest_top_sample = std::numeric_limits<double>::infinity();
+  double energy = energy0, rise = 0.0, deepest = 0.0,
+         lowest_top_sample = std::numeric_limits<double>::infinity();
   double bottom_moved = 0.0;
   int touching = 0, rest_since = 0;
   Vector3 landing = Vector3::Constant(std::numeric_limits<double>::quiet_NaN());
@@ -182,19 +185,22 @@ TEST(KnotAndDiceScenes, ADieThrownOntoARestingDieComesToRestOnIt) {
       if (touching++ == 0) landing = sim.state().points[top];
     }
     for (const Vector3& s : die.contact_points) {
-      lowest_top_sample = std::min(lowest_top_sample, (sim.state().points[top] + sim.state().rotations[top] * s).z());
+      lowest_top_sample = std::min(lowest_top_sample,
+                                   (sim.state().points[top] + sim.state().rotations[top] * s).z());
     }
     bottom_moved = std::max(bottom_moved, (sim.state().points[bottom] - bottom_start).norm());
     bool at_rest = true;
     for (int b : {bottom, top}) {
-      at_rest = at_rest && sim.linear_velocity(b).norm() < 1e-5 && sim.angular_velocity(b).norm() < 1e-3;
+      at_rest =
+          at_rest && sim.linear_velocity(b).norm() < 1e-5 && sim.angular_velocity(b).norm() < 1e-3;
     }
     if (!at_rest) rest_since = k;
   }
   const Vector3 x_bottom = sim.state().points[bottom], x_top = sim.state().points[top];
   // The axis of each die nearest the vertical, and how far it is from it.
   const auto tilt = [&](int b) {
-    return std::acos(std::min(1.0, (sim.state().rotations[b].transpose() * Vector3::UnitZ()).cwiseAbs().maxCoeff()));
+    return std::acos(std::min(
+        1.0, (sim.state().rotations[b].transpose() * Vector3::UnitZ()).cwiseAbs().maxCoeff()));
   };
 
   EXPECT_LT(rise, 1e-12);
@@ -208,12 +214,15 @@ TEST(KnotAndDiceScenes, ADieThrownOntoARestingDieComesToRestOnIt) {
   EXPECT_LT(tilt(bottom), 1e-3);
   EXPECT_LT(bottom_moved, 1e-3);
   EXPECT_LE(rest_since, scene.frames - static_cast<int>(0.1 / scene.model.time_step));
-  std::cout << "dice: the thrown die rests at (" << x_top.transpose() << "), " << (x_top - x_bottom).head<2>().norm()
-            << " m off the bottom die's axis and " << x_top.z() - x_bottom.z() << " m above its centre, having slid "
-            << (x_top - landing).head<2>().norm() << " m after landing; the bottom die at (" << x_bottom.transpose()
-            << "), moved at most " << bottom_moved << " m; both at rest from frame " << rest_since + 1 << " of "
-            << scene.frames << "; deepest sample " << deepest << " m; energy rose by at most " << rise << " J in a step ("
-            << energy0 << " -> " << energy << " J); dice in contact for " << touching << " frames\n";
+  std::cout << "dice: the thrown die rests at (" << x_top.transpose() << "), "
+            << (x_top - x_bottom).head<2>().norm() << " m off the bottom die's axis and "
+            << x_top.z() - x_bottom.z() << " m above its centre, having slid "
+            << (x_top - landing).head<2>().norm() << " m after landing; the bottom die at ("
+            << x_bottom.transpose() << "), moved at most " << bottom_moved
+            << " m; both at rest from frame " << rest_since + 1 << " of " << scene.frames
+            << "; deepest sample " << deepest << " m; energy rose by at most " << rise
+            << " J in a step (" << energy0 << " -> " << energy << " J); dice in contact for "
+            << touching << " frames\n";
 }
 
 }  // namespace
