@@ -181,8 +181,10 @@ double bounding_radius(const Collider& shape) {
                         using S = std::decay_t<decltype(s)>;
                         if constexpr (std::is_same_v<S, SphereShape>) return s.radius;
                         if constexpr (std::is_same_v<S, BoxShape>) return s.half_extents.norm();
-                        if constexpr (std::is_same_v<S, CapsuleShape>) return s.half_length + s.radius;
-                        if constexpr (std::is_same_v<S, TorusShape>) return s.major_radius + s.minor_radius;
+                        if constexpr (std::is_same_v<S, CapsuleShape>)
+                          return s.half_length + s.radius;
+                        if constexpr (std::is_same_v<S, TorusShape>)
+                          return s.major_radius + s.minor_radius;
                         if constexpr (std::is_same_v<S, CylinderShape>) {
                           return Eigen::Vector2d(s.radius, s.half_length).norm();
                         }
@@ -191,11 +193,13 @@ double bounding_radius(const Collider& shape) {
                         }
                         if constexpr (std::is_same_v<S, MeshShape>) {
                           double farthest = 0.0;
-                          for (const Vector3& v : s.mesh->vertices) farthest = std::max(farthest, v.norm());
+                          for (const Vector3& v : s.mesh->vertices)
+                            farthest = std::max(farthest, v.norm());
                           return farthest + std::sqrt(3.0) * s.grid->cell_size();
                         }
                         // Not body shapes: validate_body_shape refused them above.
-                        if constexpr (std::is_same_v<S, PlaneShape> || std::is_same_v<S, TubeShape>) return 0.0;
+                        if constexpr (std::is_same_v<S, PlaneShape> || std::is_same_v<S, TubeShape>)
+                          return 0.0;
                       },
                       shape.shape);
 }
@@ -235,7 +239,8 @@ struct LinkRings {
 
 double link_count(double L, double R, double r, double spacing) {
   const double pi = std::numbers::pi;
-  return 2.0 * (std::ceil(pi * (R + r) / spacing) + 2.0 + (L > 0.0 ? 2.0 * L / spacing + 1.0 : 0.0)) *
+  return 2.0 *
+         (std::ceil(pi * (R + r) / spacing) + 2.0 + (L > 0.0 ? 2.0 * L / spacing + 1.0 : 0.0)) *
          (2.0 * pi * r / spacing + 3.0);
 }
 
@@ -249,7 +254,8 @@ void link_samples(double L, double R, double r, double spacing, std::vector<Vect
       ring(Vector3(side * L, 0, 0) + R * normal, normal, r, n.around, out);
     }
     for (int k = 0; k < n.straight; ++k) {
-      ring(Vector3(side * (L - 2.0 * L * k / n.straight), side * R, 0.0), side * Vector3::UnitY(), r, n.around, out);
+      ring(Vector3(side * (L - 2.0 * L * k / n.straight), side * R, 0.0), side * Vector3::UnitY(),
+           r, n.around, out);
     }
   }
 }
@@ -302,18 +308,22 @@ double mesh_area(const TriangleMesh& mesh) {
   double area = 0.0;
   for (const std::array<int, 3>& t : mesh.triangles) {
     const Vector3& a = mesh.vertices[static_cast<std::size_t>(t[0])];
-    area += 0.5 * (mesh.vertices[static_cast<std::size_t>(t[1])] - a).cross(mesh.vertices[static_cast<std::size_t>(t[2])] - a).norm();
+    area += 0.5 * (mesh.vertices[static_cast<std::size_t>(t[1])] - a)
+                      .cross(mesh.vertices[static_cast<std::size_t>(t[2])] - a)
+                      .norm();
   }
   return area;
 }
 
 class Thinning {
  public:
-  Thinning(double gap, int budget, std::vector<Vector3>& out) : gap_(gap), budget_(budget), out_(out) {}
+  Thinning(double gap, int budget, std::vector<Vector3>& out)
+      : gap_(gap), budget_(budget), out_(out) {}
   // Keeps p unless a kept sample is within the gap; false once more than the budget is kept.
   bool offer(const Vector3& p) {
     const Eigen::Array3d cell = (p / gap_).array().floor();
-    const Key key{static_cast<long long>(cell.x()), static_cast<long long>(cell.y()), static_cast<long long>(cell.z())};
+    const Key key{static_cast<long long>(cell.x()), static_cast<long long>(cell.y()),
+                  static_cast<long long>(cell.z())};
     for (long long i = -1; i <= 1; ++i) {
       for (long long j = -1; j <= 1; ++j) {
         for (long long k = -1; k <= 1; ++k) {
@@ -347,14 +357,17 @@ class Thinning {
 bool mesh_samples(const TriangleMesh& mesh, double spacing, int budget, std::vector<Vector3>& out) {
   const double delta = spacing / 4.0;
   Thinning thin(kMeshSampleGap * spacing, budget, out);
-  const auto point = [&mesh](int i) -> const Vector3& { return mesh.vertices[static_cast<std::size_t>(i)]; };
+  const auto point = [&mesh](int i) -> const Vector3& {
+    return mesh.vertices[static_cast<std::size_t>(i)];
+  };
   for (const Vector3& v : mesh.vertices) {
     if (!thin.offer(v)) return false;
   }
   // Each edge once: closed and consistently oriented, the mesh runs along it once each way.
   for (const std::array<int, 3>& t : mesh.triangles) {
     for (int k = 0; k < 3; ++k) {
-      const int from = t[static_cast<std::size_t>(k)], to = t[static_cast<std::size_t>((k + 1) % 3)];
+      const int from = t[static_cast<std::size_t>(k)],
+                to = t[static_cast<std::size_t>((k + 1) % 3)];
       if (from > to) continue;
       const Vector3 &a = point(from), &b = point(to);
       const int m = divisions((b - a).norm(), delta);
@@ -385,8 +398,9 @@ std::vector<Vector3> surface_samples(const Collider& shape, double spacing, int 
   validate_body_shape(shape, path + ".shape");
   // Counts first, in doubles (a tiny spacing must fail here, not in an allocation).
   const auto too_many = [&](double count) {
-    return ModelError(path + ".sample_spacing", "would give about " + std::to_string(static_cast<long long>(count)) +
-                                                    " samples, more than the scene's budget of " + std::to_string(budget));
+    return ModelError(path + ".sample_spacing",
+                      "would give about " + std::to_string(static_cast<long long>(count)) +
+                          " samples, more than the scene's budget of " + std::to_string(budget));
   };
   const auto check = [&](double count) {
     if (count > budget) throw too_many(count);
@@ -403,16 +417,19 @@ std::vector<Vector3> surface_samples(const Collider& shape, double spacing, int 
         }
         if constexpr (std::is_same_v<S, BoxShape>) {
           const Vector3 n = 2.0 * s.half_extents / spacing;
-          check(2.0 * ((n.x() + 2) * (n.y() + 2) + (n.y() + 2) * (n.z() + 2) + (n.x() + 2) * (n.z() + 2)));
+          check(2.0 * ((n.x() + 2) * (n.y() + 2) + (n.y() + 2) * (n.z() + 2) +
+                       (n.x() + 2) * (n.z() + 2)));
           // A grid on each face: n_i + 1 coordinates along axis i, the points with at least one
           // coordinate on a face (each once).
           const Vector3& h = s.half_extents;
-          const int nx = divisions(2 * h.x(), spacing), ny = divisions(2 * h.y(), spacing), nz = divisions(2 * h.z(), spacing);
+          const int nx = divisions(2 * h.x(), spacing), ny = divisions(2 * h.y(), spacing),
+                    nz = divisions(2 * h.z(), spacing);
           for (int i = 0; i <= nx; ++i) {
             for (int j = 0; j <= ny; ++j) {
               for (int k = 0; k <= nz; ++k) {
                 if (i != 0 && i != nx && j != 0 && j != ny && k != 0 && k != nz) continue;
-                points.emplace_back(-h.x() + 2 * h.x() * i / nx, -h.y() + 2 * h.y() * j / ny, -h.z() + 2 * h.z() * k / nz);
+                points.emplace_back(-h.x() + 2 * h.x() * i / nx, -h.y() + 2 * h.y() * j / ny,
+                                    -h.z() + 2 * h.z() * k / nz);
               }
             }
           }
@@ -434,7 +451,8 @@ std::vector<Vector3> surface_samples(const Collider& shape, double spacing, int 
           const double cap_area = (s.half_length > 0.0 ? 2.0 : 4.0) * pi * s.radius * s.radius;
           const int cap = std::max(1, static_cast<int>(std::ceil(cap_area / (spacing * spacing))));
           const std::size_t first = points.size();
-          fibonacci(cap, s.half_length > 0.0 ? 0.0 : -1.0, Vector3(0, 0, s.half_length), s.radius, points);
+          fibonacci(cap, s.half_length > 0.0 ? 0.0 : -1.0, Vector3(0, 0, s.half_length), s.radius,
+                    points);
           if (s.half_length > 0.0) {
             for (std::size_t i = first, n = points.size(); i < n; ++i) {
               const Vector3 p = points[i];
@@ -457,7 +475,8 @@ std::vector<Vector3> surface_samples(const Collider& shape, double spacing, int 
         if constexpr (std::is_same_v<S, MeshShape>) {
           // About one sample per (gap × spacing)² of area; the thinning stops past the budget.
           check(mesh_area(*s.mesh) / std::pow(kMeshSampleGap * spacing, 2));
-          if (!mesh_samples(*s.mesh, spacing, budget, points)) throw too_many(static_cast<double>(points.size()));
+          if (!mesh_samples(*s.mesh, spacing, budget, points))
+            throw too_many(static_cast<double>(points.size()));
         }
         // Plane and tube: not body shapes, refused by validate_body_shape above.
       },

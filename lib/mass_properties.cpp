@@ -20,10 +20,13 @@ struct Moments {
   Matrix3 second = Matrix3::Zero();  // S = ∫ x xᵀ about the centre, shape axes
 };
 
-Moments diagonal(double volume, const Vector3& second) { return {volume, Matrix3(second.asDiagonal())}; }
+Moments diagonal(double volume, const Vector3& second) {
+  return {volume, Matrix3(second.asDiagonal())};
+}
 
 Moments sphere(double r) {
-  return diagonal(4.0 * kPi * r * r * r / 3.0, Vector3::Constant(4.0 * kPi * std::pow(r, 5) / 15.0));
+  return diagonal(4.0 * kPi * r * r * r / 3.0,
+                  Vector3::Constant(4.0 * kPi * std::pow(r, 5) / 15.0));
 }
 
 // Along z, flat ends at z = ±h.
@@ -39,7 +42,8 @@ Moments capsule(double h, double r) {
   Moments m = cylinder(h, r);
   m.volume += 2.0 * half_sphere;
   const double across = 2.0 * (2.0 * kPi * r5 / 15.0);
-  const double along = 2.0 * (h * h * half_sphere + 2.0 * h * kPi * r4 / 4.0 + 2.0 * kPi * r5 / 15.0);
+  const double along =
+      2.0 * (h * h * half_sphere + 2.0 * h * kPi * r4 / 4.0 + 2.0 * kPi * r5 / 15.0);
   m.second.diagonal() += Vector3(across, across, along);
   return m;
 }
@@ -79,9 +83,9 @@ Moments link(double L, double R, double r) {
   const double side_across = side.second(0, 0), side_along = side.second(2, 2);
   Moments m;
   m.volume = 2.0 * side.volume + 2.0 * half_torus;
-  m.second.diagonal() = Vector3(2.0 * side_along + torus_across + 4.0 * L * first + 2.0 * L * L * half_torus,
-                                2.0 * (side_across + R * R * side.volume) + torus_across,
-                                2.0 * side_across + torus_along);
+  m.second.diagonal() = Vector3(
+      2.0 * side_along + torus_across + 4.0 * L * first + 2.0 * L * L * half_torus,
+      2.0 * (side_across + R * R * side.volume) + torus_across, 2.0 * side_across + torus_along);
   return m;
 }
 
@@ -110,7 +114,8 @@ Moments mesh(const TriangleMesh& mesh, const std::string& field) {
     const Vector3 s = a + b + c;
     m.volume += v;
     first += (v / 4.0) * s;
-    m.second += (v / 20.0) * (a * a.transpose() + b * b.transpose() + c * c.transpose() + s * s.transpose());
+    m.second += (v / 20.0) *
+                (a * a.transpose() + b * b.transpose() + c * c.transpose() + s * s.transpose());
   }
   if (m.volume < 0.0) {
     m.volume = -m.volume;
@@ -120,12 +125,13 @@ Moments mesh(const TriangleMesh& mesh, const std::string& field) {
   const Vector3 centroid = first / m.volume;
   const double size = 0.5 * (high - low).norm();
   if (!(centroid.norm() <= kMeshCentroidTolerance * size)) {
-    throw ModelError(field, "the mesh's centroid (" + text(centroid.x()) + ", " + text(centroid.y()) + ", " +
-                                text(centroid.z()) + ") is " + text(centroid.norm()) +
-                                " m from its origin, more than " + text(kMeshCentroidTolerance) +
-                                " × its size " + text(size) +
-                                " m (half its bounding box's diagonal): a body's origin is its centre "
-                                "of mass, so the mesh must be centred on its centroid");
+    throw ModelError(
+        field, "the mesh's centroid (" + text(centroid.x()) + ", " + text(centroid.y()) + ", " +
+                   text(centroid.z()) + ") is " + text(centroid.norm()) +
+                   " m from its origin, more than " + text(kMeshCentroidTolerance) +
+                   " × its size " + text(size) +
+                   " m (half its bounding box's diagonal): a body's origin is its centre "
+                   "of mass, so the mesh must be centred on its centroid");
   }
   m.second -= m.volume * centroid * centroid.transpose();  // about the centroid
   return m;
@@ -148,12 +154,16 @@ MassProperties mass_properties(const Collider& shape, double density, const std:
         if constexpr (std::is_same_v<S, SphereShape>) return sphere(s.radius);
         if constexpr (std::is_same_v<S, CapsuleShape>) return capsule(s.half_length, s.radius);
         if constexpr (std::is_same_v<S, BoxShape>) return rounded_box(s.half_extents, s.rounding);
-        if constexpr (std::is_same_v<S, TorusShape>) return link(0.0, s.major_radius, s.minor_radius);
+        if constexpr (std::is_same_v<S, TorusShape>)
+          return link(0.0, s.major_radius, s.minor_radius);
         if constexpr (std::is_same_v<S, CylinderShape>) return cylinder(s.half_length, s.radius);
-        if constexpr (std::is_same_v<S, LinkShape>) return link(s.half_length, s.major_radius, s.minor_radius);
-        if constexpr (std::is_same_v<S, MeshShape>) return mesh(*s.mesh, path + ".contact.shape.file");
+        if constexpr (std::is_same_v<S, LinkShape>)
+          return link(s.half_length, s.major_radius, s.minor_radius);
+        if constexpr (std::is_same_v<S, MeshShape>)
+          return mesh(*s.mesh, path + ".contact.shape.file");
         // Not body shapes: validate_body_shape refused them above.
-        if constexpr (std::is_same_v<S, PlaneShape> || std::is_same_v<S, TubeShape>) return Moments{};
+        if constexpr (std::is_same_v<S, PlaneShape> || std::is_same_v<S, TubeShape>)
+          return Moments{};
       },
       shape.shape);
   MassProperties out;

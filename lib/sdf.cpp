@@ -309,7 +309,8 @@ void Collider::validate(const std::string& path) const {
           require_non_negative(s.half_length, field("half_length"));
           require_positive(s.radius, field("radius"));
         }
-        if constexpr (std::is_same_v<S, TorusShape>) require_radii(s.major_radius, s.minor_radius, path);
+        if constexpr (std::is_same_v<S, TorusShape>)
+          require_radii(s.major_radius, s.minor_radius, path);
         if constexpr (std::is_same_v<S, CylinderShape>) {
           require_positive(s.radius, field("radius"));
           require_positive(s.half_length, field("half_length"));
@@ -358,10 +359,12 @@ void validate_body_shape(const Collider& shape, const std::string& path) {
       },
       shape.shape);
   if (!body) {
-    throw ModelError(path + ".type",
-                     "a body's shape must be a sphere, box, capsule, torus, cylinder, link or mesh");
+    throw ModelError(
+        path + ".type",
+        "a body's shape must be a sphere, box, capsule, torus, cylinder, link or mesh");
   }
-  if (shape.inside) throw ModelError(path + ".inside", "a body's shape is a solid, not its complement");
+  if (shape.inside)
+    throw ModelError(path + ".inside", "a body's shape is a solid, not its complement");
 }
 
 std::vector<Vector3> catmull_rom_polyline(const std::vector<Vector3>& control_points,

@@ -507,7 +507,8 @@ Collider parse_collider(const json& value, const std::string& path, const std::s
   } else if (type == "cylinder") {
     collider.shape = CylinderShape{c.number("radius"), c.number("half_length")};
   } else if (type == "link") {
-    collider.shape = LinkShape{c.number("half_length"), c.number("major_radius"), c.number("minor_radius")};
+    collider.shape =
+        LinkShape{c.number("half_length"), c.number("major_radius"), c.number("minor_radius")};
   } else if (type == "mesh") {
     // A closed OBJ mesh ("file", relative to the scene file's folder, times "scale") sampled on
     // a grid of "cell_size" over its bounding box grown by "padding" (lib/mesh_sdf.hpp).
@@ -529,8 +530,9 @@ Collider parse_collider(const json& value, const std::string& path, const std::s
       c.fail(c.field("file"), e.what());
     }
   } else {
-    c.fail(c.field("type"), "unknown collider type \"" + type +
-                                "\" (expected plane, sphere, box, capsule, tube, torus, cylinder, link or mesh)");
+    c.fail(c.field("type"),
+           "unknown collider type \"" + type +
+               "\" (expected plane, sphere, box, capsule, tube, torus, cylinder, link or mesh)");
   }
   c.finish();
   return collider;

@@ -167,14 +167,16 @@ TEST(SurfaceSamples, LieOnTheShapeAndCoverItAtTheirSpacing) {
     double area;  // of the surface, m²
   };
   const double pi = std::numbers::pi;
-  for (const Case& k : {Case{SphereShape{0.3}, 4 * pi * 0.09}, Case{BoxShape{Vector3(0.2, 0.3, 0.1), 0.0}, 8 * 0.11},
-                        Case{BoxShape{Vector3(0.2, 0.3, 0.1), 0.03}, 0.0}, Case{CapsuleShape{0.25, 0.1}, 0.0},
-                        Case{CapsuleShape{0.0, 0.1}, 0.0}, Case{TorusShape{0.25, 0.1}, 4 * pi * pi * 0.025},
-                        Case{TorusShape{0.3, 0.02}, 4 * pi * pi * 0.006},  // a tube thinner than the spacing
-                        Case{LinkShape{0.2, 0.2, 0.07}, 2 * pi * 0.07 * (0.8 + 2 * pi * 0.2)},
-                        Case{CylinderShape{0.15, 0.3}, 2 * pi * 0.15 * (0.6 + 0.15)},
-                        Case{CylinderShape{0.3, 0.01}, 2 * pi * 0.3 * (0.02 + 0.3)},  // a disc
-                        Case{CylinderShape{0.02, 0.2}, 2 * pi * 0.02 * (0.4 + 0.02)}}) {  // a needle
+  for (const Case& k :
+       {Case{SphereShape{0.3}, 4 * pi * 0.09},
+        Case{BoxShape{Vector3(0.2, 0.3, 0.1), 0.0}, 8 * 0.11},
+        Case{BoxShape{Vector3(0.2, 0.3, 0.1), 0.03}, 0.0}, Case{CapsuleShape{0.25, 0.1}, 0.0},
+        Case{CapsuleShape{0.0, 0.1}, 0.0}, Case{TorusShape{0.25, 0.1}, 4 * pi * pi * 0.025},
+        Case{TorusShape{0.3, 0.02}, 4 * pi * pi * 0.006},  // a tube thinner than the spacing
+        Case{LinkShape{0.2, 0.2, 0.07}, 2 * pi * 0.07 * (0.8 + 2 * pi * 0.2)},
+        Case{CylinderShape{0.15, 0.3}, 2 * pi * 0.15 * (0.6 + 0.15)},
+        Case{CylinderShape{0.3, 0.01}, 2 * pi * 0.3 * (0.02 + 0.3)},      // a disc
+        Case{CylinderShape{0.02, 0.2}, 2 * pi * 0.02 * (0.4 + 0.02)}}) {  // a needle
     Collider c;
     c.shape = k.shape;
     c.position = fd::random_vector(rng, 0.3);
@@ -215,9 +217,15 @@ TEST(SurfaceSamples, LieOnTheShapeAndCoverItAtTheirSpacing) {
 TriangleMesh box_mesh(const Vector3& h) {
   TriangleMesh m;
   for (int i = 0; i < 8; ++i) {
-    m.vertices.emplace_back((i & 1 ? 1 : -1) * h.x(), (i & 2 ? 1 : -1) * h.y(), (i & 4 ? 1 : -1) * h.z());
+    m.vertices.emplace_back((i & 1 ? 1 : -1) * h.x(), (i & 2 ? 1 : -1) * h.y(),
+                            (i & 4 ? 1 : -1) * h.z());
   }
-  for (const auto& q : {std::array<int, 4>{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4}, {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}}) {
+  for (const auto& q : {std::array<int, 4>{0, 2, 3, 1},
+                        {4, 5, 7, 6},
+                        {0, 1, 5, 4},
+                        {2, 6, 7, 3},
+                        {0, 4, 6, 2},
+                        {1, 3, 7, 5}}) {
     m.triangles.push_back({q[0], q[1], q[2]});
     m.triangles.push_back({q[0], q[2], q[3]});
   }
@@ -232,7 +240,8 @@ TriangleMesh uv_sphere(double r, int rings, int around) {
     const double theta = std::numbers::pi * i / rings;
     for (int j = 0; j < around; ++j) {
       const double phi = 2 * std::numbers::pi * j / around;
-      m.vertices.emplace_back(r * std::sin(theta) * std::cos(phi), r * std::sin(theta) * std::sin(phi), r * std::cos(theta));
+      m.vertices.emplace_back(r * std::sin(theta) * std::cos(phi),
+                              r * std::sin(theta) * std::sin(phi), r * std::cos(theta));
     }
   }
   m.vertices.emplace_back(0, 0, -r);
@@ -253,7 +262,8 @@ double triangle_distance(const Vector3& p, const Vector3& a, const Vector3& b, c
   // The nearest point of the plane if it falls inside, else of the three edges.
   const Vector3 n = (b - a).cross(c - a).normalized();
   const Vector3 q = p - n.dot(p - a) * n;
-  const bool inside = n.dot((b - a).cross(q - a)) >= 0 && n.dot((c - b).cross(q - b)) >= 0 && n.dot((a - c).cross(q - c)) >= 0;
+  const bool inside = n.dot((b - a).cross(q - a)) >= 0 && n.dot((c - b).cross(q - b)) >= 0 &&
+                      n.dot((a - c).cross(q - c)) >= 0;
   if (inside) return std::abs(n.dot(p - a));
   const auto segment = [&p](const Vector3& u, const Vector3& v) {
     const double t = std::clamp((p - u).dot(v - u) / (v - u).squaredNorm(), 0.0, 1.0);
@@ -267,7 +277,8 @@ TEST(SurfaceSamples, OnAMeshAreThinnedCandidatesOnItsTriangles) {
   const double spacing = 0.05;
   for (const TriangleMesh& mesh : {box_mesh(Vector3(0.2, 0.15, 0.1)), uv_sphere(0.2, 40, 80)}) {
     Collider c;
-    c.shape = MeshShape{std::make_shared<const GridSdf>(mesh, 0.02, 0.04), std::make_shared<const TriangleMesh>(mesh)};
+    c.shape = MeshShape{std::make_shared<const GridSdf>(mesh, 0.02, 0.04),
+                        std::make_shared<const TriangleMesh>(mesh)};
     c.position = fd::random_vector(rng, 0.3);
     c.orientation = rotation_at(2.0, rng);
     const std::vector<Vector3> samples = surface_samples(c, spacing, 100000, "bodies[0].contact");
@@ -277,7 +288,9 @@ TEST(SurfaceSamples, OnAMeshAreThinnedCandidatesOnItsTriangles) {
     double area = 0.0;
     std::vector<double> cumulative;
     for (const auto& t : mesh.triangles) {
-      area += 0.5 * (mesh.vertices[t[1]] - mesh.vertices[t[0]]).cross(mesh.vertices[t[2]] - mesh.vertices[t[0]]).norm();
+      area += 0.5 * (mesh.vertices[t[1]] - mesh.vertices[t[0]])
+                        .cross(mesh.vertices[t[2]] - mesh.vertices[t[0]])
+                        .norm();
       cumulative.push_back(area);
     }
     EXPECT_GE(local.size(), area / (spacing * spacing));
@@ -285,7 +298,8 @@ TEST(SurfaceSamples, OnAMeshAreThinnedCandidatesOnItsTriangles) {
     for (std::size_t i = 0; i < local.size(); ++i) {
       double on = std::numeric_limits<double>::infinity();
       for (const auto& t : mesh.triangles) {
-        on = std::min(on, triangle_distance(local[i], mesh.vertices[t[0]], mesh.vertices[t[1]], mesh.vertices[t[2]]));
+        on = std::min(on, triangle_distance(local[i], mesh.vertices[t[0]], mesh.vertices[t[1]],
+                                            mesh.vertices[t[2]]));
       }
       EXPECT_LE(on, 1e-12) << local[i].transpose();
       for (std::size_t j = 0; j < i; ++j) EXPECT_GE((local[i] - local[j]).norm(), 0.7 * spacing);
@@ -298,13 +312,16 @@ TEST(SurfaceSamples, OnAMeshAreThinnedCandidatesOnItsTriangles) {
         EXPECT_LE(nearest, 1e-12) << v.transpose();
       }
     }
-    // Area-uniform random points of the triangles (and the vertices) have a sample within the spacing.
+    // Area-uniform random points of the triangles (and the vertices) have a sample within the
+    // spacing.
     double farthest_gap = 0.0;
     std::vector<Vector3> probes = mesh.vertices;
     for (int i = 0; i < 2000; ++i) {
       const double pick = std::uniform_real_distribution<double>(0, area)(rng);
-      const auto& t = mesh.triangles[std::lower_bound(cumulative.begin(), cumulative.end(), pick) - cumulative.begin()];
-      double u = std::uniform_real_distribution<double>(0, 1)(rng), v = std::uniform_real_distribution<double>(0, 1)(rng);
+      const auto& t = mesh.triangles[std::lower_bound(cumulative.begin(), cumulative.end(), pick) -
+                                     cumulative.begin()];
+      double u = std::uniform_real_distribution<double>(0, 1)(rng),
+             v = std::uniform_real_distribution<double>(0, 1)(rng);
       if (u + v > 1) u = 1 - u, v = 1 - v;
       probes.push_back(mesh.vertices[t[0]] + u * (mesh.vertices[t[1]] - mesh.vertices[t[0]]) +
                        v * (mesh.vertices[t[2]] - mesh.vertices[t[0]]));
@@ -329,7 +346,8 @@ TEST(SurfaceSamples, AndTheShapeFitInTheBodysReach) {
   };
   for (const Case& k : {Case{TorusShape{0.25, 0.1}, 0.35}, Case{LinkShape{0.2, 0.2, 0.07}, 0.47},
                         Case{CylinderShape{0.15, 0.3}, std::hypot(0.15, 0.3)},
-                        Case{MeshShape{std::make_shared<const GridSdf>(box, 0.02, 0.04), std::make_shared<const TriangleMesh>(box)},
+                        Case{MeshShape{std::make_shared<const GridSdf>(box, 0.02, 0.04),
+                                       std::make_shared<const TriangleMesh>(box)},
                              Vector3(0.2, 0.15, 0.1).norm()}}) {
     Model model;
     RigidBody body;

@@ -1093,9 +1093,10 @@ TEST(SceneParse, RodContactDefaultsToTheRodRadiusAndRegionPushes) {
 
 TEST(SceneParse, TorusCylinderAndLinkCollidersBodiesAndMovingColliders) {
   const Scene s = parse_scene(
-      scene(R"("name": "chain", "density": 7800, "contact": {"stiffness": 1e4, "sample_spacing": 0.01,
+      scene(
+          R"("name": "chain", "density": 7800, "contact": {"stiffness": 1e4, "sample_spacing": 0.01,
                 "shape": {"type": "link", "half_length": 0.02, "major_radius": 0.015, "minor_radius": 0.004}})",
-            R"("colliders": [
+          R"("colliders": [
                  {"name": "ring", "type": "torus", "major_radius": 1, "minor_radius": 0.25, "position": [0, 0, 1]},
                  {"type": "cylinder", "radius": 0.5, "half_length": 2, "inside": true},
                  {"name": "spool", "type": "cylinder", "radius": 0.1, "half_length": 0.3,
@@ -1126,21 +1127,31 @@ TEST(SceneErrors, BodyShapesAreTheSolidsABodyMayHave) {
   const auto with_shape = [](const std::string& shape) {
     return scene(kBody + R"(, "contact": {"stiffness": 1, "shape": )" + shape + "}");
   };
-  const std::string allowed = "a body's shape must be a sphere, box, capsule, torus, cylinder, link or mesh";
+  const std::string allowed =
+      "a body's shape must be a sphere, box, capsule, torus, cylinder, link or mesh";
   expect_rejected(with_shape(R"({"type": "plane"})"), "bodies[0].contact.shape.type", allowed);
-  expect_rejected(with_shape(R"({"type": "torus", "major_radius": 1, "minor_radius": 0.1, "inside": true})"),
-                  "bodies[0].contact.shape.inside", "solid");
-  expect_rejected(with_shape(R"({"type": "link", "half_length": 1, "major_radius": 1, "minor_radius": 1.5})"),
-                  "bodies[0].contact.shape.minor_radius", "below major_radius");
+  expect_rejected(
+      with_shape(R"({"type": "torus", "major_radius": 1, "minor_radius": 0.1, "inside": true})"),
+      "bodies[0].contact.shape.inside", "solid");
+  expect_rejected(
+      with_shape(R"({"type": "link", "half_length": 1, "major_radius": 1, "minor_radius": 1.5})"),
+      "bodies[0].contact.shape.minor_radius", "below major_radius");
   expect_rejected(with_shape(R"({"type": "cylinder", "radius": 1, "half_length": -1})"),
                   "bodies[0].contact.shape.half_length", "positive");
   const std::string moving = R"(, "kinematic": {"linear_velocity": [1, 0, 0]}}], )";
-  expect_rejected(scene(kBody, R"("colliders": [{"name": "p", "type": "plane")" + moving), "colliders[0].type", allowed);
-  expect_rejected(scene(kBody, R"("colliders": [{"name": "t", "type": "torus", "major_radius": 1, "minor_radius": 0.1,
-                                                 "inside": true)" + moving),
-                  "colliders[0].inside", "solid");
-  expect_rejected(scene(kBody, R"("colliders": [{"name": "t", "type": "torus", "major_radius": 1, "minor_radius": 0)" + moving),
-                  "colliders[0].minor_radius", "positive");
+  expect_rejected(scene(kBody, R"("colliders": [{"name": "p", "type": "plane")" + moving),
+                  "colliders[0].type", allowed);
+  expect_rejected(
+      scene(kBody,
+            R"("colliders": [{"name": "t", "type": "torus", "major_radius": 1, "minor_radius": 0.1,
+                                                 "inside": true)" +
+                moving),
+      "colliders[0].inside", "solid");
+  expect_rejected(
+      scene(kBody,
+            R"("colliders": [{"name": "t", "type": "torus", "major_radius": 1, "minor_radius": 0)" +
+                moving),
+      "colliders[0].minor_radius", "positive");
 }
 
 TEST(SceneErrors, BadCollidersAndContact) {
@@ -1176,25 +1187,33 @@ TEST(SceneErrors, BadCollidersAndContact) {
   expect_rejected(with_collider(R"({"type": "mesh", "cell_size": 0.1})"), "colliders[0].file",
                   "missing");
   // Torus, cylinder, link: their keys, ranges, and no key of another type.
-  expect_rejected(with_collider(R"({"type": "torus", "minor_radius": 0.1})"), "colliders[0].major_radius", "missing");
-  expect_rejected(with_collider(R"({"type": "torus", "major_radius": 1})"), "colliders[0].minor_radius", "missing");
+  expect_rejected(with_collider(R"({"type": "torus", "minor_radius": 0.1})"),
+                  "colliders[0].major_radius", "missing");
+  expect_rejected(with_collider(R"({"type": "torus", "major_radius": 1})"),
+                  "colliders[0].minor_radius", "missing");
   expect_rejected(with_collider(R"({"type": "torus", "major_radius": 1, "minor_radius": 1})"),
                   "colliders[0].minor_radius", "below major_radius");
   expect_rejected(with_collider(R"({"type": "torus", "major_radius": -1, "minor_radius": 0.1})"),
                   "colliders[0].major_radius", "positive");
-  expect_rejected(with_collider(R"({"type": "torus", "major_radius": 1, "minor_radius": 0.1, "radius": 1})"),
-                  "colliders[0].radius", "unknown key");
-  expect_rejected(with_collider(R"({"type": "cylinder", "radius": 1})"), "colliders[0].half_length", "missing");
-  expect_rejected(with_collider(R"({"type": "cylinder", "radius": 0, "half_length": 1})"), "colliders[0].radius",
-                  "positive");
+  expect_rejected(
+      with_collider(R"({"type": "torus", "major_radius": 1, "minor_radius": 0.1, "radius": 1})"),
+      "colliders[0].radius", "unknown key");
+  expect_rejected(with_collider(R"({"type": "cylinder", "radius": 1})"), "colliders[0].half_length",
+                  "missing");
+  expect_rejected(with_collider(R"({"type": "cylinder", "radius": 0, "half_length": 1})"),
+                  "colliders[0].radius", "positive");
   expect_rejected(with_collider(R"({"type": "cylinder", "radius": 1, "half_length": 0})"),
                   "colliders[0].half_length", "positive");
   expect_rejected(with_collider(R"({"type": "link", "major_radius": 1, "minor_radius": 0.1})"),
                   "colliders[0].half_length", "missing");
-  expect_rejected(with_collider(R"({"type": "link", "half_length": -0.5, "major_radius": 1, "minor_radius": 0.1})"),
-                  "colliders[0].half_length", "≥ 0");
-  expect_rejected(with_collider(R"({"type": "link", "half_length": 0.5, "major_radius": 1, "minor_radius": 2})"),
-                  "colliders[0].minor_radius", "below major_radius");
+  expect_rejected(
+      with_collider(
+          R"({"type": "link", "half_length": -0.5, "major_radius": 1, "minor_radius": 0.1})"),
+      "colliders[0].half_length", "≥ 0");
+  expect_rejected(
+      with_collider(
+          R"({"type": "link", "half_length": 0.5, "major_radius": 1, "minor_radius": 2})"),
+      "colliders[0].minor_radius", "below major_radius");
 
   const auto with_contact = [](const std::string& c) {
     return scene(kBody + R"(, "contact": )" + c);

@@ -157,8 +157,9 @@ Probe probe_link(double L, double R, double r, const Vector3& x) {
   const double D = std::hypot(s - R, x.z());
   Probe p;
   p.distance = D - r;
-  p.region = with_side(std::string(std::abs(x.x()) < L ? "straight" : "arc") + (s < R ? "-hole" : "-outer"),
-                       p.distance);
+  p.region = with_side(
+      std::string(std::abs(x.x()) < L ? "straight" : "arc") + (s < R ? "-hole" : "-outer"),
+      p.distance);
   // ∇²φ grows as 1/D at the core curve; as 1/s at a torus's axis (a link's strip s = 0 is
   // where ∇φ jumps: kept as far).
   p.core = std::min(D, s);
@@ -176,8 +177,9 @@ Probe probe_cylinder(const CylinderShape& c, const Vector3& x) {
   p.region = with_side(rim ? "rim" : (side ? "side" : "cap"), p.distance);
   p.zero_hessian = !rim && !side;
   p.core = std::min(s, std::hypot(q(0), q(1)));  // the axis, the rim
-  if (q(1) > 0.0) p.seam = std::abs(q(0));                   // s = ρ beyond a cap (cap | rim)
-  if (q(0) > 0.0) p.seam = std::min(p.seam, std::abs(q(1)));  // |z| = h beside the side (side | rim)
+  if (q(1) > 0.0) p.seam = std::abs(q(0));       // s = ρ beyond a cap (cap | rim)
+  if (q(0) > 0.0)
+    p.seam = std::min(p.seam, std::abs(q(1)));  // |z| = h beside the side (side | rim)
   if (q.maxCoeff() <= 0.0) {  // inside: the cone q_1 = q_2, the disc z = 0 under the caps
     p.seam = std::min(p.seam, std::abs(q(0) - q(1)) / std::sqrt(2.0));
     if (!side) p.seam = std::min(p.seam, std::abs(x.z()));
@@ -307,14 +309,15 @@ std::vector<Fixture> fixtures() {
                  }});
   // Tori and links: both sides of the core curve (the hole and the outside), in and out of
   // the solid, about the arcs and beside the straight sides; far points now and then.
-  const std::vector<std::string> arc_regions = {"arc-outer/solid", "arc-outer/free", "arc-hole/solid",
-                                                "arc-hole/free"};
+  const std::vector<std::string> arc_regions = {"arc-outer/solid", "arc-outer/free",
+                                                "arc-hole/solid", "arc-hole/free"};
   out.push_back({"torus", TorusShape{0.6, 0.2}, arc_regions, [](std::mt19937& rng) -> Vector3 {
                    if (std::bernoulli_distribution(0.1)(rng)) return random_vector(rng, 2.0);
                    return near_stadium(0.0, 0.6, 0.55, rng);
                  }});
   std::vector<std::string> link_regions = arc_regions;
-  for (const char* r : {"straight-outer/solid", "straight-outer/free", "straight-hole/solid", "straight-hole/free"}) {
+  for (const char* r : {"straight-outer/solid", "straight-outer/free", "straight-hole/solid",
+                        "straight-hole/free"}) {
     link_regions.push_back(r);
   }
   out.push_back({"link", LinkShape{0.5, 0.4, 0.12}, link_regions, [](std::mt19937& rng) -> Vector3 {
@@ -323,13 +326,14 @@ std::vector<Fixture> fixtures() {
                  }});
   // Cylinders longer than wide (the side is nearest on a stretch of the axis) and flat (the
   // caps are nearest about the centre).
-  const std::vector<std::string> cylinder_regions = {"side/solid", "side/free", "cap/solid", "cap/free",
-                                                     "rim/free"};
+  const std::vector<std::string> cylinder_regions = {"side/solid", "side/free", "cap/solid",
+                                                     "cap/free", "rim/free"};
   for (const CylinderShape& cylinder : {CylinderShape{0.5, 0.8}, CylinderShape{0.7, 0.3}}) {
-    out.push_back({"cylinder", cylinder, cylinder_regions, [cylinder](std::mt19937& rng) -> Vector3 {
-                     const double a = 1.5 * cylinder.radius, b = cylinder.half_length + 0.6;
-                     return Vector3(uniform(rng, -a, a), uniform(rng, -a, a), uniform(rng, -b, b));
-                   }});
+    out.push_back(
+        {"cylinder", cylinder, cylinder_regions, [cylinder](std::mt19937& rng) -> Vector3 {
+           const double a = 1.5 * cylinder.radius, b = cylinder.half_length + 0.6;
+           return Vector3(uniform(rng, -a, a), uniform(rng, -a, a), uniform(rng, -b, b));
+         }});
   }
   return out;
 }
@@ -567,7 +571,9 @@ TEST(Sdf, TubeValuesAndTieRule) {
 }
 
 TEST(Sdf, TorusLinkAndCylinderValues) {
-  const auto diagonal = [](double a, double b, double c) { return Matrix3(Vector3(a, b, c).asDiagonal()); };
+  const auto diagonal = [](double a, double b, double c) {
+    return Matrix3(Vector3(a, b, c).asDiagonal());
+  };
   // Torus R = 2, r = 0.5: on the outer equator 1 beyond the surface, D = 1.5, and the
   // curvature along the parallel is 1/(distance from the axis) = 1/3.5.
   const Collider torus = make(TorusShape{2.0, 0.5});
@@ -620,8 +626,10 @@ TEST(Sdf, TorusLinkAndCylinderValues) {
   EXPECT_EQ(v.distance, 5.0);
   expect_vector(v.gradient, Vector3(0.6, 0, 0.8));
   const Vector3 u(0.6, 0, 0.8);
-  const Matrix3 rim = (Matrix3::Identity() - Vector3::UnitY() * Vector3::UnitY().transpose() - u * u.transpose()) / 5 +
-                      diagonal(0, 3.0 / (4 * 5), 0);
+  const Matrix3 rim =
+      (Matrix3::Identity() - Vector3::UnitY() * Vector3::UnitY().transpose() - u * u.transpose()) /
+          5 +
+      diagonal(0, 3.0 / (4 * 5), 0);
   EXPECT_LE((v.hessian - rim).norm(), 1e-15);
   // Inside: nearer the side (a curved wall: ∇²φ = (I − e_z e_zᵀ − n nᵀ)/s) or a cap.
   v = cylinder.evaluate(Vector3(0.5, 0, 0.2));
@@ -683,7 +691,8 @@ TEST(Sdf, ContinuousAcrossRegionBoundaries) {
   for (const double x : {0.5, -0.5}) {
     for (const Vector3& y : {Vector3(0, 0.45, 0.1), Vector3(0, 0.2, -0.05), Vector3(0, -0.35, 0.02),
                              Vector3(0, -0.9, 0.3)}) {
-      expect_continuous(link, link.orientation * (Vector3(x, 0, 0) + y), link.orientation * Vector3::UnitX());
+      expect_continuous(link, link.orientation * (Vector3(x, 0, 0) + y),
+                        link.orientation * Vector3::UnitX());
     }
   }
   // Cylinder: side | rim at |z| = h, cap | rim at s = ρ (C¹); inside, the cone and the disc
@@ -691,7 +700,8 @@ TEST(Sdf, ContinuousAcrossRegionBoundaries) {
   Collider cylinder = make(CylinderShape{0.7, 0.3});
   cylinder.orientation = rotation_at(1.5, rng);
   const Matrix3& R = cylinder.orientation;
-  for (const double z : {0.3, -0.3}) expect_continuous(cylinder, R * Vector3(0.9, 0.2, z), R * Vector3::UnitZ());
+  for (const double z : {0.3, -0.3})
+    expect_continuous(cylinder, R * Vector3(0.9, 0.2, z), R * Vector3::UnitZ());
   expect_continuous(cylinder, R * Vector3(0, 0.7, 0.5), R * Vector3::UnitY());
   expect_continuous(cylinder, R * Vector3(0.6, 0, 0.2), R * Vector3(1, 0, -1).normalized(), false);
   expect_continuous(cylinder, R * Vector3(0.1, 0.2, 0), R * Vector3::UnitZ(), false);
@@ -787,11 +797,12 @@ TEST(Sdf, NonDifferentiablePointsAreFinite) {
       Shape shape;
       Vector3 x, n;
     };
-    for (const OnCurve& k : {OnCurve{TorusShape{0.75, 0.25}, Vector3(0.75, 0, 0), Vector3::UnitX()},
-                             OnCurve{TorusShape{0.75, 0.25}, Vector3(0, -0.75, 0), -Vector3::UnitY()},
-                             OnCurve{LinkShape{0.5, 0.75, 0.25}, Vector3(0.25, 0.75, 0), Vector3::UnitY()},
-                             OnCurve{LinkShape{0.5, 0.75, 0.25}, Vector3(-1.25, 0, 0), -Vector3::UnitX()},
-                             OnCurve{LinkShape{0.5, 0.75, 0.25}, Vector3(-0.5, -0.75, 0), -Vector3::UnitY()}}) {
+    for (const OnCurve& k :
+         {OnCurve{TorusShape{0.75, 0.25}, Vector3(0.75, 0, 0), Vector3::UnitX()},
+          OnCurve{TorusShape{0.75, 0.25}, Vector3(0, -0.75, 0), -Vector3::UnitY()},
+          OnCurve{LinkShape{0.5, 0.75, 0.25}, Vector3(0.25, 0.75, 0), Vector3::UnitY()},
+          OnCurve{LinkShape{0.5, 0.75, 0.25}, Vector3(-1.25, 0, 0), -Vector3::UnitX()},
+          OnCurve{LinkShape{0.5, 0.75, 0.25}, Vector3(-0.5, -0.75, 0), -Vector3::UnitY()}}) {
       c.shape = k.shape;
       v = local(k.x);
       expect_finite(v);
@@ -810,7 +821,9 @@ TEST(Sdf, NonDifferentiablePointsAreFinite) {
         EXPECT_EQ(v.distance, s * 1.0);
         const Vector3 u = Vector3(0, -0.75, x.z()) / 1.25;
         EXPECT_LE((v.gradient - s * (P * u)).norm(), 1e-15);
-        const Matrix3 H = (Matrix3::Identity() - Vector3::UnitX() * Vector3::UnitX().transpose() - u * u.transpose()) / 1.25;
+        const Matrix3 H = (Matrix3::Identity() - Vector3::UnitX() * Vector3::UnitX().transpose() -
+                           u * u.transpose()) /
+                          1.25;
         EXPECT_LE((v.hessian - s * (P * H * P.transpose())).norm(), 1e-15);
       }
     }
@@ -853,11 +866,14 @@ TEST(Sdf, NonDifferentiablePointsAreFinite) {
       cores.insert(cores.end(), {Vector3(t->major_radius, 0, 0), Vector3(0, -t->major_radius, 0)});
     }
     if (const auto* l = std::get_if<LinkShape>(&fx.shape)) {  // the stadium, its strip
-      cores.insert(cores.end(), {Vector3(0.1, l->major_radius, 0), Vector3(l->half_length + l->major_radius, 0, 0),
-                                 Vector3(l->half_length, -l->major_radius, 0), Vector3(0.3, 0, 0.1)});
+      cores.insert(
+          cores.end(),
+          {Vector3(0.1, l->major_radius, 0), Vector3(l->half_length + l->major_radius, 0, 0),
+           Vector3(l->half_length, -l->major_radius, 0), Vector3(0.3, 0, 0.1)});
     }
     if (const auto* y = std::get_if<CylinderShape>(&fx.shape)) {  // the rims
-      cores.insert(cores.end(), {Vector3(y->radius, 0, y->half_length), Vector3(0, -y->radius, -y->half_length)});
+      cores.insert(cores.end(), {Vector3(y->radius, 0, y->half_length),
+                                 Vector3(0, -y->radius, -y->half_length)});
     }
     for (const Vector3& x : cores) {
       SCOPED_TRACE(fx.name);
@@ -917,7 +933,8 @@ long double reference_distance(const Collider& c, const Vector3& p) {
         if constexpr (std::is_same_v<S, CylinderShape>) {
           const long double q1 = std::hypot(x.x(), x.y()) - s.radius;
           const long double q2 = std::abs(x.z()) - s.half_length;
-          return std::hypot(std::max(q1, 0.0L), std::max(q2, 0.0L)) + std::min(std::max(q1, q2), 0.0L);
+          return std::hypot(std::max(q1, 0.0L), std::max(q2, 0.0L)) +
+                 std::min(std::max(q1, q2), 0.0L);
         }
         if constexpr (std::is_same_v<S, MeshShape>) throw std::logic_error("not an analytic shape");
       },
@@ -982,7 +999,8 @@ std::vector<Vector3> stadium_polyline(double L, double R, int n) {
       out.emplace_back(side * (L + R * std::cos(theta)), side * R * std::sin(theta), 0.0);
     }
     const int straight = static_cast<int>(n * 2 * L / length) + 1;
-    for (int k = 0; k < straight; ++k) out.emplace_back(side * (L - 2 * L * k / straight), side * R, 0.0);
+    for (int k = 0; k < straight; ++k)
+      out.emplace_back(side * (L - 2 * L * k / straight), side * R, 0.0);
   }
   out.push_back(out.front());
   return out;
@@ -1019,7 +1037,8 @@ TEST(Sdf, TorusLinkAndCylinderAgreeWithBruteForceDistances) {
       }
     }
     for (int i = 0; i < 60; ++i) {
-      const Vector3 x = i % 3 == 0 ? random_vector(rng, L + R + 2 * r) : near_stadium(L, R, 1.5 * r, rng);
+      const Vector3 x =
+          i % 3 == 0 ? random_vector(rng, L + R + 2 * r) : near_stadium(L, R, 1.5 * r, rng);
       const SdfValue v = c.evaluate(x, false);
       const double to_core = polyline_distance(core, x);
       EXPECT_NEAR(v.distance, to_core - r, 1e-8) << x.transpose();
@@ -1044,7 +1063,8 @@ TEST(Sdf, TorusLinkAndCylinderAgreeWithBruteForceDistances) {
   }
   for (double x = -rho; x <= rho; x += step) {
     for (double y = -rho; y <= rho; y += step) {
-      if (std::hypot(x, y) <= rho) surface.insert(surface.end(), {Vector3(x, y, h), Vector3(x, y, -h)});
+      if (std::hypot(x, y) <= rho)
+        surface.insert(surface.end(), {Vector3(x, y, h), Vector3(x, y, -h)});
     }
   }
   for (int i = 0; i < 60; ++i) {
@@ -1053,15 +1073,18 @@ TEST(Sdf, TorusLinkAndCylinderAgreeWithBruteForceDistances) {
     for (const Vector3& y : surface) to_surface = std::min(to_surface, (x - y).norm());
     const SdfValue v = c.evaluate(x, false);
     EXPECT_NEAR(std::abs(v.distance), to_surface, 1.5e-3) << x.transpose();
-    EXPECT_EQ(v.distance < 0.0, std::hypot(x.x(), x.y()) < rho && std::abs(x.z()) < h) << x.transpose();
+    EXPECT_EQ(v.distance < 0.0, std::hypot(x.x(), x.y()) < rho && std::abs(x.z()) < h)
+        << x.transpose();
   }
 }
 
 TEST(Sdf, TorusLinkAndCylinderDerivativesAtTheSurfaceFarAwayAndAcrossSeams) {
   std::mt19937 rng(29);
   for (const Fixture& fx : fixtures()) {
-    if (std::holds_alternative<PlaneShape>(fx.shape) || std::holds_alternative<SphereShape>(fx.shape) ||
-        std::holds_alternative<BoxShape>(fx.shape) || std::holds_alternative<CapsuleShape>(fx.shape) ||
+    if (std::holds_alternative<PlaneShape>(fx.shape) ||
+        std::holds_alternative<SphereShape>(fx.shape) ||
+        std::holds_alternative<BoxShape>(fx.shape) ||
+        std::holds_alternative<CapsuleShape>(fx.shape) ||
         std::holds_alternative<TubeShape>(fx.shape)) {
       continue;
     }
@@ -1098,13 +1121,14 @@ TEST(Sdf, TorusLinkAndCylinderDerivativesAtTheSurfaceFarAwayAndAcrossSeams) {
       SCOPED_TRACE(fx.name + fd::trace(", far", p.x(), p.y(), p.z()));
       EXPECT_NEAR(v.gradient.norm(), 1.0, 1e-12);
       EXPECT_LE((v.hessian * v.gradient).norm(), 1e-12 * v.hessian.norm());
-      EXPECT_TRUE(fd::check_lie_gradient([&c](const State& q) { return c.evaluate(q.points[0], false).distance; },
-                                         at_point(p), kPointDof, v.gradient, far));
+      EXPECT_TRUE(fd::check_lie_gradient(
+          [&c](const State& q) { return c.evaluate(q.points[0], false).distance; }, at_point(p),
+          kPointDof, v.gradient, far));
       const bool cap = probe(fx.shape, c.orientation.transpose() * (p - c.position)).zero_hessian;
       if (cap) far.require_nonzero = fd::NonZero::kNone;
       EXPECT_TRUE(fd::check_lie_hessian(
-          [&c](const State& q) { return Eigen::VectorXd(c.evaluate(q.points[0], false).gradient); }, at_point(p),
-          kPointDof, v.hessian, far));
+          [&c](const State& q) { return Eigen::VectorXd(c.evaluate(q.points[0], false).gradient); },
+          at_point(p), kPointDof, v.hessian, far));
       far.require_nonzero = fd::NonZero::kEveryBlock;
     }
   }
@@ -1202,7 +1226,8 @@ TEST(Sdf, ValidateRejectsEachBadField) {
   // The tube may not reach the axis (torus) or the segment (link): minor < major.
   for (const double minor : {1.0, 1.5}) {
     EXPECT_EQ(rejected_field(with(TorusShape{1.0, minor})), "colliders[0].minor_radius") << minor;
-    EXPECT_EQ(rejected_field(with(LinkShape{0.5, 1.0, minor})), "colliders[0].minor_radius") << minor;
+    EXPECT_EQ(rejected_field(with(LinkShape{0.5, 1.0, minor})), "colliders[0].minor_radius")
+        << minor;
   }
 }
 
