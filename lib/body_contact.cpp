@@ -1,11 +1,17 @@
 #include "body_contact.hpp"
 
-#include <cmath>
+#include <Eigen/Geometry>  // cross
 #include <algorithm>
+#include <array>
+#include <cmath>
+#include <functional>
 #include <limits>
 #include <numbers>
+#include <type_traits>
+#include <unordered_map>
 #include <variant>
 
+#include "mesh_sdf.hpp"
 #include "point_pair.hpp"
 #include "so3.hpp"
 
@@ -163,18 +169,40 @@ void BodyFriction::add_step_adjoint(const State& q, const State& previous, const
 
 namespace {
 
-// The radius about the body's origin that the shape fits in.
+// The radius about the body's origin that the shape fits in: every point where φ ≤ 0 is
+// within it. A mesh's grid interpolant is within √3 h of the mesh's true distance (the
+// Lipschitz bound of lib/mesh_sdf.hpp, also outside the grid), so φ ≤ 0 only within √3 h of
+// the triangles, which lie within the largest vertex norm.
 double bounding_radius(const Collider& shape) {
+  validate_body_shape(shape, "contact.shape");
   const double offset = shape.position.norm();
-  if (const auto* s = std::get_if<SphereShape>(&shape.shape)) return offset + s->radius;
-  if (const auto* b = std::get_if<BoxShape>(&shape.shape)) return offset + b->half_extents.norm();
-  if (const auto* c = std::get_if<CapsuleShape>(&shape.shape)) return offset + c->half_length + c->radius;
-  throw ModelError("contact.shape", "a body's shape must be a sphere, a box or a capsule");
+  return offset + std::visit(
+                      [](const auto& s) -> double {
+                        using S = std::decay_t<decltype(s)>;
+                        if constexpr (std::is_same_v<S, SphereShape>) return s.radius;
+                        if constexpr (std::is_same_v<S, BoxShape>) return s.half_extents.norm();
+                        if constexpr (std::is_same_v<S, CapsuleShape>)
+                          return s.half_length + s.radius;
+                        if constexpr (std::is_same_v<S, TorusShape>)
+                          return s.major_radius + s.minor_radius;
+                        if constexpr (std::is_same_v<S, CylinderShape>) {
+                          return Eigen::Vector2d(s.radius, s.half_length).norm();
+                        }
+                        if constexpr (std::is_same_v<S, LinkShape>) {
+                          return s.half_length + s.major_radius + s.minor_radius;
+                        }
+                        if constexpr (std::is_same_v<S, MeshShape>) {
+                          double farthest = 0.0;
+                          for (const Vector3& v : s.mesh->vertices)
+                            farthest = std::max(farthest, v.norm());
+                          return farthest + std::sqrt(3.0) * s.grid->cell_size();
+                        }
+                        // Not body shapes: validate_body_shape refused them above.
+                        if constexpr (std::is_same_v<S, PlaneShape> || std::is_same_v<S, TubeShape>)
+                          return 0.0;
+                      },
+                      shape.shape);
 }
-
-}  // namespace
-
-namespace {
 
 // n points on the unit sphere, the part with z ≥ z_min (−1: all of it), by the Fibonacci
 // lattice: evenly spread, no poles doubled.
@@ -189,6 +217,177 @@ void fibonacci(int n, double z_min, const Vector3& centre, double radius, std::v
 
 int divisions(double length, double spacing) { return std::max(1, static_cast<int>(std::ceil(length / spacing))); }
 
+// Points about a circle of the tube (radius r) about the core point c, whose plane is spanned
+// by the unit n (⟂ e_z) and e_z: c + r (cos v n + sin v e_z), v = 2π j/around.
+void ring(const Vector3& c, const Vector3& n, double r, int around, std::vector<Vector3>& out) {
+  for (int j = 0; j < around; ++j) {
+    const double v = 2.0 * std::numbers::pi * j / around;
+    out.push_back(c + r * (std::cos(v) * n + std::sin(v) * Vector3::UnitZ()));
+  }
+}
+
+// Rings about the core curve of a link (a torus: L = 0): for each side σ = ±1, the half
+// circle about (σL, 0, 0) (arc_rings steps, from the outer equator's length), then the
+// straight side at y = σR back to the other arc; each ring ends where the next part starts.
+struct LinkRings {
+  int arc = 0, straight = 0, around = 0;
+  LinkRings(double L, double R, double r, double spacing)
+      : arc(std::max(2, static_cast<int>(std::ceil(std::numbers::pi * (R + r) / spacing)))),
+        straight(L > 0.0 ? divisions(2.0 * L, spacing) : 0),
+        around(std::max(3, static_cast<int>(std::ceil(2.0 * std::numbers::pi * r / spacing)))) {}
+};
+
+double link_count(double L, double R, double r, double spacing) {
+  const double pi = std::numbers::pi;
+  return 2.0 *
+         (std::ceil(pi * (R + r) / spacing) + 2.0 + (L > 0.0 ? 2.0 * L / spacing + 1.0 : 0.0)) *
+         (2.0 * pi * r / spacing + 3.0);
+}
+
+void link_samples(double L, double R, double r, double spacing, std::vector<Vector3>& out) {
+  const LinkRings n(L, R, r, spacing);
+  const double pi = std::numbers::pi;
+  for (const double side : {1.0, -1.0}) {
+    for (int k = 0; k < n.arc; ++k) {
+      const double theta = -pi / 2 + (side < 0.0 ? pi : 0.0) + pi * k / n.arc;
+      const Vector3 normal(std::cos(theta), std::sin(theta), 0.0);
+      ring(Vector3(side * L, 0, 0) + R * normal, normal, r, n.around, out);
+    }
+    for (int k = 0; k < n.straight; ++k) {
+      ring(Vector3(side * (L - 2.0 * L * k / n.straight), side * R, 0.0), side * Vector3::UnitY(),
+           r, n.around, out);
+    }
+  }
+}
+
+// A cylinder: rings along the side (both rims included), then on each cap its centre and
+// concentric rings inside the rim.
+double cylinder_count(double radius, double h, double spacing) {
+  const double pi = std::numbers::pi;
+  const double rings = std::ceil(radius / spacing);  // on a cap, the rim's included
+  return (2.0 * h / spacing + 2.0) * (2.0 * pi * radius / spacing + 3.0) +
+         2.0 * (1.0 + (rings - 1.0) * (pi * radius / spacing + 3.0));
+}
+
+void cylinder_samples(double radius, double h, double spacing, std::vector<Vector3>& out) {
+  const double pi = std::numbers::pi;
+  const int rings = divisions(2.0 * h, spacing);
+  const int around = std::max(3, static_cast<int>(std::ceil(2.0 * pi * radius / spacing)));
+  for (int i = 0; i <= rings; ++i) {
+    const double z = -h + 2.0 * h * i / rings;
+    for (int j = 0; j < around; ++j) {
+      const double a = 2.0 * pi * j / around;
+      out.emplace_back(radius * std::cos(a), radius * std::sin(a), z);
+    }
+  }
+  const int circles = divisions(radius, spacing);
+  for (const double z : {h, -h}) {
+    out.emplace_back(0.0, 0.0, z);
+    for (int k = 1; k < circles; ++k) {
+      const double rho = radius * k / circles;
+      const int count = std::max(3, static_cast<int>(std::ceil(2.0 * pi * rho / spacing)));
+      for (int j = 0; j < count; ++j) {
+        const double a = 2.0 * pi * j / count;
+        out.emplace_back(rho * std::cos(a), rho * std::sin(a), z);
+      }
+    }
+  }
+}
+
+// A mesh: greedy thinning of dense candidates (below), a candidate kept unless a kept sample
+// is within kMeshSampleGap × spacing of it. Candidates δ = spacing/4 apart, in this order: the
+// vertices, the points dividing each edge into ⌈len/δ⌉ equal parts, and on each triangle
+// (a, b, c) the inner points (i a + j b + k c)/m, i, j, k ≥ 1, i + j + k = m = ⌈longest
+// edge/δ⌉. Every point of a triangle lies in a sub-triangle of sides ≤ δ, within δ/√3 of one
+// of its corners, which is a candidate or on an edge within δ/2 of one: within 1.08 δ = 0.27
+// spacing of a candidate, so within (kMeshSampleGap + 0.27) spacing < spacing of a sample.
+// The samples are ≥ kMeshSampleGap × spacing apart; the vertices (corners) come first.
+constexpr double kMeshSampleGap = 0.7;
+
+double mesh_area(const TriangleMesh& mesh) {
+  double area = 0.0;
+  for (const std::array<int, 3>& t : mesh.triangles) {
+    const Vector3& a = mesh.vertices[static_cast<std::size_t>(t[0])];
+    area += 0.5 * (mesh.vertices[static_cast<std::size_t>(t[1])] - a)
+                      .cross(mesh.vertices[static_cast<std::size_t>(t[2])] - a)
+                      .norm();
+  }
+  return area;
+}
+
+class Thinning {
+ public:
+  Thinning(double gap, int budget, std::vector<Vector3>& out)
+      : gap_(gap), budget_(budget), out_(out) {}
+  // Keeps p unless a kept sample is within the gap; false once more than the budget is kept.
+  bool offer(const Vector3& p) {
+    const Eigen::Array3d cell = (p / gap_).array().floor();
+    const Key key{static_cast<long long>(cell.x()), static_cast<long long>(cell.y()),
+                  static_cast<long long>(cell.z())};
+    for (long long i = -1; i <= 1; ++i) {
+      for (long long j = -1; j <= 1; ++j) {
+        for (long long k = -1; k <= 1; ++k) {
+          const auto found = cells_.find(Key{key[0] + i, key[1] + j, key[2] + k});
+          if (found == cells_.end()) continue;
+          for (const std::size_t s : found->second) {
+            if ((out_[s] - p).squaredNorm() < gap_ * gap_) return true;
+          }
+        }
+      }
+    }
+    cells_[key].push_back(out_.size());
+    out_.push_back(p);
+    return static_cast<long long>(out_.size()) <= budget_;
+  }
+
+ private:
+  using Key = std::array<long long, 3>;
+  struct Hash {
+    std::size_t operator()(const Key& k) const {
+      return std::hash<long long>()(k[0] * 73856093LL ^ k[1] * 19349663LL ^ k[2] * 83492791LL);
+    }
+  };
+  double gap_;
+  int budget_;
+  std::vector<Vector3>& out_;
+  std::unordered_map<Key, std::vector<std::size_t>, Hash> cells_;
+};
+
+// false once the budget is passed.
+bool mesh_samples(const TriangleMesh& mesh, double spacing, int budget, std::vector<Vector3>& out) {
+  const double delta = spacing / 4.0;
+  Thinning thin(kMeshSampleGap * spacing, budget, out);
+  const auto point = [&mesh](int i) -> const Vector3& {
+    return mesh.vertices[static_cast<std::size_t>(i)];
+  };
+  for (const Vector3& v : mesh.vertices) {
+    if (!thin.offer(v)) return false;
+  }
+  // Each edge once: closed and consistently oriented, the mesh runs along it once each way.
+  for (const std::array<int, 3>& t : mesh.triangles) {
+    for (int k = 0; k < 3; ++k) {
+      const int from = t[static_cast<std::size_t>(k)],
+                to = t[static_cast<std::size_t>((k + 1) % 3)];
+      if (from > to) continue;
+      const Vector3 &a = point(from), &b = point(to);
+      const int m = divisions((b - a).norm(), delta);
+      for (int i = 1; i < m; ++i) {
+        if (!thin.offer(a + (static_cast<double>(i) / m) * (b - a))) return false;
+      }
+    }
+  }
+  for (const std::array<int, 3>& t : mesh.triangles) {
+    const Vector3 &a = point(t[0]), &b = point(t[1]), &c = point(t[2]);
+    const int m = divisions(std::max({(b - a).norm(), (c - b).norm(), (a - c).norm()}), delta);
+    for (int i = 1; i < m; ++i) {
+      for (int j = 1; i + j < m; ++j) {
+        if (!thin.offer((i * a + j * b + (m - i - j) * c) / m)) return false;
+      }
+    }
+  }
+  return true;
+}
+
 }  // namespace
 
 std::vector<Vector3> surface_samples(const Collider& shape, double spacing, int budget,
@@ -196,61 +395,92 @@ std::vector<Vector3> surface_samples(const Collider& shape, double spacing, int 
   if (!(spacing > 0.0) || !std::isfinite(spacing)) {
     throw ModelError(path + ".sample_spacing", "must be a positive number of metres");
   }
+  validate_body_shape(shape, path + ".shape");
   // Counts first, in doubles (a tiny spacing must fail here, not in an allocation).
-  double count = 0.0;
+  const auto too_many = [&](double count) {
+    return ModelError(path + ".sample_spacing",
+                      "would give about " + std::to_string(static_cast<long long>(count)) +
+                          " samples, more than the scene's budget of " + std::to_string(budget));
+  };
+  const auto check = [&](double count) {
+    if (count > budget) throw too_many(count);
+  };
   const double pi = std::numbers::pi;
-  if (const auto* s = std::get_if<SphereShape>(&shape.shape)) {
-    count = std::ceil(4.0 * pi * s->radius * s->radius / (spacing * spacing));
-  } else if (const auto* b = std::get_if<BoxShape>(&shape.shape)) {
-    const Vector3 n = 2.0 * b->half_extents / spacing;
-    count = 2.0 * ((n.x() + 2) * (n.y() + 2) + (n.y() + 2) * (n.z() + 2) + (n.x() + 2) * (n.z() + 2));
-  } else if (const auto* c = std::get_if<CapsuleShape>(&shape.shape)) {
-    count = 4.0 * pi * c->radius * c->radius / (spacing * spacing) +
-            (2.0 * c->half_length / spacing + 2) * (2.0 * pi * c->radius / spacing + 1);
-  } else {
-    throw ModelError(path + ".shape", "a body's shape must be a sphere, a box or a capsule");
-  }
-  if (count > budget) {
-    throw ModelError(path + ".sample_spacing", "would give about " + std::to_string(static_cast<long long>(count)) +
-                                                   " samples, more than the scene's budget of " + std::to_string(budget));
-  }
   std::vector<Vector3> points;
-  if (const auto* s = std::get_if<SphereShape>(&shape.shape)) {
-    fibonacci(static_cast<int>(count), -1.0, Vector3::Zero(), s->radius, points);
-  } else if (const auto* b = std::get_if<BoxShape>(&shape.shape)) {
-    // A grid on each face: n_i + 1 coordinates along axis i, the points with at least one
-    // coordinate on a face (each once).
-    const Vector3& h = b->half_extents;
-    const int nx = divisions(2 * h.x(), spacing), ny = divisions(2 * h.y(), spacing), nz = divisions(2 * h.z(), spacing);
-    for (int i = 0; i <= nx; ++i) {
-      for (int j = 0; j <= ny; ++j) {
-        for (int k = 0; k <= nz; ++k) {
-          if (i != 0 && i != nx && j != 0 && j != ny && k != 0 && k != nz) continue;
-          points.emplace_back(-h.x() + 2 * h.x() * i / nx, -h.y() + 2 * h.y() * j / ny, -h.z() + 2 * h.z() * k / nz);
+  std::visit(
+      [&](const auto& s) {
+        using S = std::decay_t<decltype(s)>;
+        if constexpr (std::is_same_v<S, SphereShape>) {
+          const double count = std::ceil(4.0 * pi * s.radius * s.radius / (spacing * spacing));
+          check(count);
+          fibonacci(static_cast<int>(count), -1.0, Vector3::Zero(), s.radius, points);
         }
-      }
-    }
-  } else if (const auto* c = std::get_if<CapsuleShape>(&shape.shape)) {
-    // Rings along the side (both ends included), then the two caps beyond them.
-    const int rings = divisions(2 * c->half_length, spacing);
-    const int around = std::max(3, static_cast<int>(std::ceil(2 * pi * c->radius / spacing)));
-    for (int i = 0; i <= rings && c->half_length > 0.0; ++i) {
-      const double z = -c->half_length + 2 * c->half_length * i / rings;
-      for (int j = 0; j < around; ++j) {
-        const double a = 2 * pi * j / around;
-        points.emplace_back(c->radius * std::cos(a), c->radius * std::sin(a), z);
-      }
-    }
-    const int cap = std::max(1, static_cast<int>(std::ceil(2 * pi * c->radius * c->radius / (spacing * spacing))));
-    const std::size_t first = points.size();
-    fibonacci(cap, c->half_length > 0.0 ? 0.0 : -1.0, Vector3(0, 0, c->half_length), c->radius, points);
-    if (c->half_length > 0.0) {
-      for (std::size_t i = first, n = points.size(); i < n; ++i) {
-        const Vector3 p = points[i];
-        points.emplace_back(p.x(), -p.y(), -p.z());  // the other cap, turned by π about x
-      }
-    }
-  }
+        if constexpr (std::is_same_v<S, BoxShape>) {
+          const Vector3 n = 2.0 * s.half_extents / spacing;
+          check(2.0 * ((n.x() + 2) * (n.y() + 2) + (n.y() + 2) * (n.z() + 2) +
+                       (n.x() + 2) * (n.z() + 2)));
+          // A grid on each face: n_i + 1 coordinates along axis i, the points with at least one
+          // coordinate on a face (each once).
+          const Vector3& h = s.half_extents;
+          const int nx = divisions(2 * h.x(), spacing), ny = divisions(2 * h.y(), spacing),
+                    nz = divisions(2 * h.z(), spacing);
+          for (int i = 0; i <= nx; ++i) {
+            for (int j = 0; j <= ny; ++j) {
+              for (int k = 0; k <= nz; ++k) {
+                if (i != 0 && i != nx && j != 0 && j != ny && k != 0 && k != nz) continue;
+                points.emplace_back(-h.x() + 2 * h.x() * i / nx, -h.y() + 2 * h.y() * j / ny,
+                                    -h.z() + 2 * h.z() * k / nz);
+              }
+            }
+          }
+        }
+        if constexpr (std::is_same_v<S, CapsuleShape>) {
+          check(4.0 * pi * s.radius * s.radius / (spacing * spacing) +
+                (2.0 * s.half_length / spacing + 2) * (2.0 * pi * s.radius / spacing + 1));
+          // Rings along the side (both ends included), then the two caps beyond them.
+          const int rings = divisions(2 * s.half_length, spacing);
+          const int around = std::max(3, static_cast<int>(std::ceil(2 * pi * s.radius / spacing)));
+          for (int i = 0; i <= rings && s.half_length > 0.0; ++i) {
+            const double z = -s.half_length + 2 * s.half_length * i / rings;
+            for (int j = 0; j < around; ++j) {
+              const double a = 2 * pi * j / around;
+              points.emplace_back(s.radius * std::cos(a), s.radius * std::sin(a), z);
+            }
+          }
+          // A hemisphere's worth of points per cap; a capsule of zero length is one whole sphere.
+          const double cap_area = (s.half_length > 0.0 ? 2.0 : 4.0) * pi * s.radius * s.radius;
+          const int cap = std::max(1, static_cast<int>(std::ceil(cap_area / (spacing * spacing))));
+          const std::size_t first = points.size();
+          fibonacci(cap, s.half_length > 0.0 ? 0.0 : -1.0, Vector3(0, 0, s.half_length), s.radius,
+                    points);
+          if (s.half_length > 0.0) {
+            for (std::size_t i = first, n = points.size(); i < n; ++i) {
+              const Vector3 p = points[i];
+              points.emplace_back(p.x(), -p.y(), -p.z());  // the other cap, turned by π about x
+            }
+          }
+        }
+        if constexpr (std::is_same_v<S, TorusShape>) {
+          check(link_count(0.0, s.major_radius, s.minor_radius, spacing));
+          link_samples(0.0, s.major_radius, s.minor_radius, spacing, points);
+        }
+        if constexpr (std::is_same_v<S, LinkShape>) {
+          check(link_count(s.half_length, s.major_radius, s.minor_radius, spacing));
+          link_samples(s.half_length, s.major_radius, s.minor_radius, spacing, points);
+        }
+        if constexpr (std::is_same_v<S, CylinderShape>) {
+          check(cylinder_count(s.radius, s.half_length, spacing));
+          cylinder_samples(s.radius, s.half_length, spacing, points);
+        }
+        if constexpr (std::is_same_v<S, MeshShape>) {
+          // About one sample per (gap × spacing)² of area; the thinning stops past the budget.
+          check(mesh_area(*s.mesh) / std::pow(kMeshSampleGap * spacing, 2));
+          if (!mesh_samples(*s.mesh, spacing, budget, points))
+            throw too_many(static_cast<double>(points.size()));
+        }
+        // Plane and tube: not body shapes, refused by validate_body_shape above.
+      },
+      shape.shape);
   for (Vector3& p : points) p = shape.position + shape.orientation * p;
   if (const auto* b = std::get_if<BoxShape>(&shape.shape); b != nullptr && b->rounding > 0.0) {
     // The grid is on the outer box; a rounded box's edges and corners lie inside it. Each

@@ -127,12 +127,18 @@ struct BodyFriction : BodySample {
   SmoothedSlip slip(const State& q, Vector3& lever_b) const;
 };
 
-// Points on the surface of a body's shape (a sphere, a box or a capsule; its coordinates, the
-// shape's pose within the body applied), about `spacing` (m, > 0) apart: a Fibonacci lattice
-// on a sphere and on a capsule's caps, rings along its side, a grid on each face of a box
-// (edges and corners included; on a rounded box, moved onto its rounded edges and corners). Throws ModelError(path + ".sample_spacing") if the spacing is
-// not positive or would give more than `budget` points, and (path + ".shape") for another
-// shape.
+// Points on the surface of a body's shape (its coordinates, the shape's pose within the body
+// applied), about `spacing` (m, > 0) apart, deterministic, every point of the surface within
+// `spacing` of one: a Fibonacci lattice on a sphere and on a capsule's caps, rings along its
+// side; a grid on each face of a box (edges and corners included; on a rounded box, moved
+// onto its rounded edges and corners); rings about the tube of a torus or link (as many along
+// each half circle as its outer equator needs, and along the straight sides); rings along a
+// cylinder's side (the rims included) and concentric rings on its caps about their centres;
+// on a mesh's triangles, a greedy thinning of candidates a quarter spacing apart (vertices,
+// then edges, then faces: corners and edges are sampled first), keeping those ≥ 0.7 spacing
+// from every kept one (area-uniform). Throws ModelError(path + ".sample_spacing") if the
+// spacing is not positive or would give more than `budget` points, and (path + ".shape…")
+// for a shape a body may not have (validate_body_shape).
 std::vector<Vector3> surface_samples(const Collider& shape, double spacing, int budget,
                                      const std::string& path);
 

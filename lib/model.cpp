@@ -120,7 +120,10 @@ void require_rotation(const Matrix3& R, const std::string& field) {
 // A body's contact samples: finite, and only with contact enabled.
 void validate_body_contact(const RigidBody& b, const std::string& path) {
   Model::validate_contact(b.contact, path + ".contact");
-  if (b.shape != nullptr) b.shape->validate(path + ".contact.shape");
+  if (b.shape != nullptr) {
+    b.shape->validate(path + ".contact.shape");
+    validate_body_shape(*b.shape, path + ".contact.shape");
+  }
   for (std::size_t k = 0; k < b.contact_points.size(); ++k) {
     require_finite(b.contact_points[k], path + ".contact.points[" + std::to_string(k) + "]");
   }

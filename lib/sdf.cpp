@@ -1,6 +1,7 @@
 #include "sdf.hpp"
 
-#include <Eigen/LU>  // determinant
+#include <Eigen/Geometry>  // cross
+#include <Eigen/LU>        // determinant
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -140,6 +141,74 @@ void tube_sdf(const TubeShape& s, const Vector3& x, bool with_hessian, SdfValue&
   }
 }
 
+// The planar offset of x from the segment S = [−L, L] × {0} × {0} (header, "Link"):
+// s = ‖w‖, w = (x − clamp(x, −L, L), y, 0), its unit gradient n = w/s (e_y for s ≤
+// kCoreDistance, header "Non-smooth points"), and whether S's nearest point is an end
+// (|x| ≥ L, where ∇²s = τ τᵀ/s; beside the interior ∇²s = 0). L = 0: the distance from the z
+// axis.
+struct PlanarOffset {
+  double s = 0.0;
+  Vector3 n = Vector3::UnitY();
+  bool arc = true;
+};
+
+PlanarOffset planar_offset(double L, const Vector3& x) {
+  PlanarOffset o;
+  const Vector3 w(x.x() - std::clamp(x.x(), -L, L), x.y(), 0.0);
+  o.s = w.norm();
+  if (o.s > kCoreDistance) o.n = w / o.s;
+  o.arc = !(-L < x.x() && x.x() < L);  // |x| = L counts as an arc (header)
+  return o;
+}
+
+// The distance D from x to the stadium curve at distance R from S (L = 0: the circle of
+// radius R about the z axis), its gradient and Hessian (header, "Link").
+void stadium_distance(double L, double R, const Vector3& x, bool with_hessian, SdfValue& out) {
+  const PlanarOffset o = planar_offset(L, x);
+  const double a = o.s - R;
+  const double D = Eigen::Vector2d(a, x.z()).norm();
+  out.distance = D;
+  if (D <= kCoreDistance) {  // on the curve: conical kink, the outward planar normal
+    out.gradient = o.n;
+    return;
+  }
+  out.gradient = (a * o.n + x.z() * Vector3::UnitZ()) / D;
+  if (with_hessian) {
+    const Vector3 tau = Vector3::UnitZ().cross(o.n);
+    out.hessian = cylinder_hessian(tau, out.gradient, D);
+    // About an end of S (and not on the torus's axis, where the term is dropped): a ∇²s / D.
+    if (o.arc && o.s > kCoreDistance) out.hessian += (a / (o.s * D)) * tau * tau.transpose();
+  }
+}
+
+// Link (torus: L = 0): φ = D − r.
+void link_sdf(double L, double R, double r, const Vector3& x, bool with_hessian, SdfValue& out) {
+  stadium_distance(L, R, x, with_hessian, out);
+  out.distance -= r;
+}
+
+// Cylinder: the rectangle q = (s − ρ, |z| − h) of the (s, z) half-plane (header).
+void cylinder_sdf(const CylinderShape& c, const Vector3& x, bool with_hessian, SdfValue& out) {
+  const PlanarOffset o = planar_offset(0.0, x);
+  const double q1 = o.s - c.radius, q2 = std::abs(x.z()) - c.half_length;
+  const double sign_z = std::signbit(x.z()) ? -1.0 : 1.0;
+  if (q1 > 0.0 && q2 > 0.0) {  // beyond the rim: the torus of minor radius 0 at the rim
+    stadium_distance(0.0, c.radius, x - sign_z * c.half_length * Vector3::UnitZ(), with_hessian,
+                     out);
+    return;
+  }
+  if (q1 >= q2) {  // the side (ties inside: the side)
+    out.distance = q1;
+    out.gradient = o.n;
+    if (with_hessian && o.s > kCoreDistance) {
+      out.hessian = cylinder_hessian(Vector3::UnitZ(), o.n, o.s);
+    }
+    return;
+  }
+  out.distance = q2;  // a cap
+  out.gradient = sign_z * Vector3::UnitZ();
+}
+
 std::string number(double v) {
   std::ostringstream s;
   s.precision(17);
@@ -157,6 +226,23 @@ void require_positive(double v, const std::string& field) {
   }
 }
 
+void require_non_negative(double v, const std::string& field) {
+  if (!std::isfinite(v) || !(v >= 0.0)) {
+    throw ModelError(field, "must be finite and ≥ 0 (found " + number(v) + ")");
+  }
+}
+
+// A torus or link: 0 < minor < major (the tube may not reach the axis or the segment: the
+// SDF would no longer be a distance inside, header).
+void require_radii(double major, double minor, const std::string& path) {
+  require_positive(major, path + ".major_radius");
+  require_positive(minor, path + ".minor_radius");
+  if (!(minor < major)) {
+    throw ModelError(path + ".minor_radius", "must be below major_radius " + number(major) +
+                                                 " (found " + number(minor) + ")");
+  }
+}
+
 }  // namespace
 
 SdfValue Collider::evaluate(const Vector3& p, bool with_hessian) const {
@@ -170,6 +256,13 @@ SdfValue Collider::evaluate(const Vector3& p, bool with_hessian) const {
         if constexpr (std::is_same_v<S, BoxShape>) box_sdf(s, x, with_hessian, local);
         if constexpr (std::is_same_v<S, CapsuleShape>) capsule_sdf(s, x, with_hessian, local);
         if constexpr (std::is_same_v<S, TubeShape>) tube_sdf(s, x, with_hessian, local);
+        if constexpr (std::is_same_v<S, TorusShape>) {
+          link_sdf(0.0, s.major_radius, s.minor_radius, x, with_hessian, local);
+        }
+        if constexpr (std::is_same_v<S, CylinderShape>) cylinder_sdf(s, x, with_hessian, local);
+        if constexpr (std::is_same_v<S, LinkShape>) {
+          link_sdf(s.half_length, s.major_radius, s.minor_radius, x, with_hessian, local);
+        }
         if constexpr (std::is_same_v<S, MeshShape>) local = s.grid->evaluate(x, with_hessian);
       },
       shape);
@@ -213,11 +306,18 @@ void Collider::validate(const std::string& path) const {
           }
         }
         if constexpr (std::is_same_v<S, CapsuleShape>) {
-          if (!std::isfinite(s.half_length) || !(s.half_length >= 0.0)) {
-            throw ModelError(field("half_length"),
-                             "must be finite and ≥ 0 (found " + number(s.half_length) + ")");
-          }
+          require_non_negative(s.half_length, field("half_length"));
           require_positive(s.radius, field("radius"));
+        }
+        if constexpr (std::is_same_v<S, TorusShape>)
+          require_radii(s.major_radius, s.minor_radius, path);
+        if constexpr (std::is_same_v<S, CylinderShape>) {
+          require_positive(s.radius, field("radius"));
+          require_positive(s.half_length, field("half_length"));
+        }
+        if constexpr (std::is_same_v<S, LinkShape>) {
+          require_non_negative(s.half_length, field("half_length"));
+          require_radii(s.major_radius, s.minor_radius, path);
         }
         if constexpr (std::is_same_v<S, TubeShape>) {
           if (s.polyline.size() < 2) {
@@ -248,6 +348,23 @@ void Collider::validate(const std::string& path) const {
         }
       },
       shape);
+}
+
+void validate_body_shape(const Collider& shape, const std::string& path) {
+  const bool body = std::visit(
+      [](const auto& s) {
+        using S = std::decay_t<decltype(s)>;
+        if constexpr (std::is_same_v<S, MeshShape>) return s.mesh != nullptr;
+        return !std::is_same_v<S, PlaneShape> && !std::is_same_v<S, TubeShape>;
+      },
+      shape.shape);
+  if (!body) {
+    throw ModelError(
+        path + ".type",
+        "a body's shape must be a sphere, box, capsule, torus, cylinder, link or mesh");
+  }
+  if (shape.inside)
+    throw ModelError(path + ".inside", "a body's shape is a solid, not its complement");
 }
 
 std::vector<Vector3> catmull_rom_polyline(const std::vector<Vector3>& control_points,

@@ -440,8 +440,9 @@ KinematicMotion parse_kinematic(const json& value, const std::string& path, cons
 // Most points a scene's generated contact samples and tube polylines may hold together.
 constexpr int kMaxContactSamples = 1000000;
 
-// A collider (lib/sdf.hpp): "type" plane | sphere | box | capsule | tube, its parameters,
-// pose ("position", "orientation"; a plane may give its "normal" instead) and "inside".
+// A collider (lib/sdf.hpp): "type" plane | sphere | box | capsule | tube | torus | cylinder |
+// link | mesh, its parameters, pose ("position", "orientation"; a plane may give its "normal"
+// instead) and "inside".
 Collider parse_collider(const json& value, const std::string& path, const std::string& source,
                         int& budget) {
   ObjectReader c(value, path, source, {"name", "position", "orientation", "inside"},
@@ -451,6 +452,9 @@ Collider parse_collider(const json& value, const std::string& path, const std::s
                    {"box", {"half_extents", "rounding"}},
                    {"capsule", {"half_length", "radius"}},
                    {"tube", {"points", "samples_per_segment", "radius"}},
+                   {"torus", {"major_radius", "minor_radius"}},
+                   {"cylinder", {"radius", "half_length"}},
+                   {"link", {"half_length", "major_radius", "minor_radius"}},
                    {"mesh", {"file", "scale", "cell_size", "padding"}}}});
   Collider collider;
   collider.name = c.string("name", path);
@@ -498,6 +502,13 @@ Collider parse_collider(const json& value, const std::string& path, const std::s
     tube.radius = c.number("radius");
     tube.polyline = samples == 1 ? control : catmull_rom_polyline(control, samples);
     collider.shape = std::move(tube);
+  } else if (type == "torus") {
+    collider.shape = TorusShape{c.number("major_radius"), c.number("minor_radius")};
+  } else if (type == "cylinder") {
+    collider.shape = CylinderShape{c.number("radius"), c.number("half_length")};
+  } else if (type == "link") {
+    collider.shape =
+        LinkShape{c.number("half_length"), c.number("major_radius"), c.number("minor_radius")};
   } else if (type == "mesh") {
     // A closed OBJ mesh ("file", relative to the scene file's folder, times "scale") sampled on
     // a grid of "cell_size" over its bounding box grown by "padding" (lib/mesh_sdf.hpp).
@@ -510,30 +521,31 @@ Collider parse_collider(const json& value, const std::string& path, const std::s
     const double padding = c.number("padding", 2.0 * cell_size);
     if (!(padding >= 0.0)) c.fail(c.field("padding"), "must be ≥ 0");
     try {
-      collider.shape = MeshShape{std::make_shared<const GridSdf>(load_obj_mesh(file, scale),
-                                                                 cell_size, padding)};
+      // The triangles stay with the grid: a body with this shape is sampled and weighed on them.
+      auto mesh = std::make_shared<const TriangleMesh>(load_obj_mesh(file, scale));
+      collider.shape = MeshShape{std::make_shared<const GridSdf>(*mesh, cell_size, padding), mesh};
     } catch (const GridSdfTooCostly& e) {  // too many cells, or too much work: cell_size
       c.fail(c.field("cell_size"), e.what());
     } catch (const std::exception& e) {
       c.fail(c.field("file"), e.what());
     }
   } else {
-    c.fail(c.field("type"), "unknown collider type \"" + type +
-                                "\" (expected plane, sphere, box, capsule, tube or mesh)");
+    c.fail(c.field("type"),
+           "unknown collider type \"" + type +
+               "\" (expected plane, sphere, box, capsule, tube, torus, cylinder, link or mesh)");
   }
   c.finish();
   return collider;
 }
 
-// The shapes a body can have (what its contact search bounds, lib/body_contact.hpp); `type`
-// names the field for the shape's type ("inside" beside it).
-void require_body_shape(const ObjectReader& r, const Collider& solid, const std::string& type) {
-  if (!std::holds_alternative<SphereShape>(solid.shape) && !std::holds_alternative<BoxShape>(solid.shape) &&
-      !std::holds_alternative<CapsuleShape>(solid.shape)) {
-    r.fail(type, "a body's shape must be a sphere, a box or a capsule");
+// The shapes a body can have (lib/sdf.hpp, validate_body_shape decides); `path` is the
+// shape's object (its "type" and "inside" are named in the error).
+void require_body_shape(const ObjectReader& r, const Collider& solid, const std::string& path) {
+  try {
+    validate_body_shape(solid, path);
+  } catch (const ModelError& e) {
+    r.fail(e.field(), std::string(e.what()).substr(e.field().size() + 2));
   }
-  const std::string inside = type.substr(0, type.size() - 4) + "inside";
-  if (solid.inside) r.fail(inside, "a body's shape is a solid, not its complement");
 }
 
 // "contact" of a body (with "points", a "box" sample generator, or a "shape" for other bodies
@@ -608,7 +620,7 @@ ContactMaterial parse_contact(ObjectReader& owner, double default_radius,
       // samples on its surface.
       int no_points = 0;
       Collider solid = parse_collider(c.get("shape"), c.field("shape"), owner.source(), no_points);
-      require_body_shape(c, solid, c.field("shape") + ".type");
+      require_body_shape(c, solid, c.field("shape"));
       if (c.has("sample_spacing")) {
         try {
           const std::vector<Vector3> on_surface =
@@ -938,7 +950,7 @@ Scene parse(const json& root, const std::string& source) {
         if (colliders[i].contains(key)) motion_part[key] = colliders[i][key];
       }
       ObjectReader c(motion_part, path, source, {"name", "kinematic"});
-      require_body_shape(c, solid, c.field("type"));
+      require_body_shape(c, solid, path);
       if (!c.has("name")) c.fail(c.field("name"), "a kinematic collider needs a name (it is reported as a body)");
       try {
         solid.validate(path);  // here, while its fields are the collider's

@@ -11,14 +11,19 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <array>
+#include <cmath>
 #include <limits>
 #include <memory>
+#include <numbers>
 #include <random>
 #include <string>
 #include <vector>
 
 #include "fd_check.hpp"
 #include "lib/body_contact.hpp"
+#include "lib/mesh_sdf.hpp"
 #include "lib/sdf.hpp"
 #include "lib/so3.hpp"
 
@@ -157,30 +162,215 @@ TEST(BodyContact, InternalForcesBalanceAndTheResidualFormAgrees) {
 TEST(SurfaceSamples, LieOnTheShapeAndCoverItAtTheirSpacing) {
   std::mt19937 rng(51);
   const double spacing = 0.05;
-  for (const Shape& shape : {Shape(SphereShape{0.3}), Shape(BoxShape{Vector3(0.2, 0.3, 0.1), 0.0}),
-                             Shape(BoxShape{Vector3(0.2, 0.3, 0.1), 0.03}), Shape(CapsuleShape{0.25, 0.1}),
-                             Shape(CapsuleShape{0.0, 0.1})}) {
+  struct Case {
+    Shape shape;
+    double area;  // of the surface, m²
+  };
+  const double pi = std::numbers::pi;
+  for (const Case& k :
+       {Case{SphereShape{0.3}, 4 * pi * 0.09},
+        Case{BoxShape{Vector3(0.2, 0.3, 0.1), 0.0}, 8 * 0.11},
+        Case{BoxShape{Vector3(0.2, 0.3, 0.1), 0.03}, 0.0}, Case{CapsuleShape{0.25, 0.1}, 0.0},
+        Case{CapsuleShape{0.0, 0.1}, 0.0}, Case{TorusShape{0.25, 0.1}, 4 * pi * pi * 0.025},
+        Case{TorusShape{0.3, 0.02}, 4 * pi * pi * 0.006},  // a tube thinner than the spacing
+        Case{LinkShape{0.2, 0.2, 0.07}, 2 * pi * 0.07 * (0.8 + 2 * pi * 0.2)},
+        Case{CylinderShape{0.15, 0.3}, 2 * pi * 0.15 * (0.6 + 0.15)},
+        Case{CylinderShape{0.3, 0.01}, 2 * pi * 0.3 * (0.02 + 0.3)},      // a disc
+        Case{CylinderShape{0.02, 0.2}, 2 * pi * 0.02 * (0.4 + 0.02)}}) {  // a needle
     Collider c;
-    c.shape = shape;
+    c.shape = k.shape;
     c.position = fd::random_vector(rng, 0.3);
     c.orientation = rotation_at(1.2, rng);
     const std::vector<Vector3> samples = surface_samples(c, spacing, 100000, "bodies[0].contact");
     ASSERT_GT(samples.size(), 20u);
+    EXPECT_EQ(samples, surface_samples(c, spacing, 100000, "bodies[0].contact"));  // deterministic
+    // About `spacing` apart: about one sample per spacing² (rings about a fat torus crowd
+    // on its inner side).
+    if (k.area > 0.0) {
+      EXPECT_GE(samples.size(), k.area / (spacing * spacing));
+      EXPECT_LE(samples.size(), 3.0 * k.area / (spacing * spacing) + 40);
+    }
     double farthest_gap = 0.0;
     for (const Vector3& p : samples) EXPECT_NEAR(c.evaluate(p, false).distance, 0.0, 1e-12);
     // Every point of the surface (random points walked onto it) has a sample within about
-    // the spacing: the lattices' and grids' largest gaps are below it.
-    for (int i = 0; i < 500; ++i) {
-      Vector3 p = c.position + fd::random_unit(rng);
-      for (int k = 0; k < 50; ++k) {
+    // the spacing: the lattices' and grids' largest gaps are below it. The points start in a
+    // box about the shape, reaching the inner side of a torus or link through its hole.
+    for (int i = 0; i < 1000; ++i) {
+      Vector3 p = c.position + c.orientation * fd::random_vector(rng, 0.6);
+      for (int j = 0; j < 50; ++j) {
         const SdfValue s = c.evaluate(p, false);
         p -= s.distance * s.gradient;
       }
+      ASSERT_NEAR(c.evaluate(p, false).distance, 0.0, 1e-12);
       double nearest = std::numeric_limits<double>::infinity();
       for (const Vector3& q : samples) nearest = std::min(nearest, (q - p).norm());
       farthest_gap = std::max(farthest_gap, nearest);
     }
+    EXPECT_LT(farthest_gap, spacing) << k.shape.index();
+  }
+}
+
+// A mesh's samples: on its triangles, ≥ 0.7 spacing apart (a thinning), every point of its
+// triangles within the spacing of one, its corners sampled, deterministic; one per ~(0.7
+// spacing)² of area. A box mesh (large faces), and a finely meshed sphere (triangles much
+// smaller than the spacing).
+TriangleMesh box_mesh(const Vector3& h) {
+  TriangleMesh m;
+  for (int i = 0; i < 8; ++i) {
+    m.vertices.emplace_back((i & 1 ? 1 : -1) * h.x(), (i & 2 ? 1 : -1) * h.y(),
+                            (i & 4 ? 1 : -1) * h.z());
+  }
+  for (const auto& q : {std::array<int, 4>{0, 2, 3, 1},
+                        {4, 5, 7, 6},
+                        {0, 1, 5, 4},
+                        {2, 6, 7, 3},
+                        {0, 4, 6, 2},
+                        {1, 3, 7, 5}}) {
+    m.triangles.push_back({q[0], q[1], q[2]});
+    m.triangles.push_back({q[0], q[2], q[3]});
+  }
+  return m;
+}
+
+// A UV sphere of radius r: `rings` latitudes (poles apart), `around` longitudes.
+TriangleMesh uv_sphere(double r, int rings, int around) {
+  TriangleMesh m;
+  m.vertices.emplace_back(0, 0, r);
+  for (int i = 1; i < rings; ++i) {
+    const double theta = std::numbers::pi * i / rings;
+    for (int j = 0; j < around; ++j) {
+      const double phi = 2 * std::numbers::pi * j / around;
+      m.vertices.emplace_back(r * std::sin(theta) * std::cos(phi),
+                              r * std::sin(theta) * std::sin(phi), r * std::cos(theta));
+    }
+  }
+  m.vertices.emplace_back(0, 0, -r);
+  const int south = static_cast<int>(m.vertices.size()) - 1;
+  const auto at = [around](int i, int j) { return 1 + (i - 1) * around + (j % around); };
+  for (int j = 0; j < around; ++j) {
+    m.triangles.push_back({0, at(1, j), at(1, j + 1)});
+    for (int i = 1; i + 1 < rings; ++i) {
+      m.triangles.push_back({at(i, j), at(i + 1, j), at(i + 1, j + 1)});
+      m.triangles.push_back({at(i, j), at(i + 1, j + 1), at(i, j + 1)});
+    }
+    m.triangles.push_back({south, at(rings - 1, j + 1), at(rings - 1, j)});
+  }
+  return m;
+}
+
+double triangle_distance(const Vector3& p, const Vector3& a, const Vector3& b, const Vector3& c) {
+  // The nearest point of the plane if it falls inside, else of the three edges.
+  const Vector3 n = (b - a).cross(c - a).normalized();
+  const Vector3 q = p - n.dot(p - a) * n;
+  const bool inside = n.dot((b - a).cross(q - a)) >= 0 && n.dot((c - b).cross(q - b)) >= 0 &&
+                      n.dot((a - c).cross(q - c)) >= 0;
+  if (inside) return std::abs(n.dot(p - a));
+  const auto segment = [&p](const Vector3& u, const Vector3& v) {
+    const double t = std::clamp((p - u).dot(v - u) / (v - u).squaredNorm(), 0.0, 1.0);
+    return (p - u - t * (v - u)).norm();
+  };
+  return std::min({segment(a, b), segment(b, c), segment(c, a)});
+}
+
+TEST(SurfaceSamples, OnAMeshAreThinnedCandidatesOnItsTriangles) {
+  std::mt19937 rng(61);
+  const double spacing = 0.05;
+  for (const TriangleMesh& mesh : {box_mesh(Vector3(0.2, 0.15, 0.1)), uv_sphere(0.2, 40, 80)}) {
+    Collider c;
+    c.shape = MeshShape{std::make_shared<const GridSdf>(mesh, 0.02, 0.04),
+                        std::make_shared<const TriangleMesh>(mesh)};
+    c.position = fd::random_vector(rng, 0.3);
+    c.orientation = rotation_at(2.0, rng);
+    const std::vector<Vector3> samples = surface_samples(c, spacing, 100000, "bodies[0].contact");
+    EXPECT_EQ(samples, surface_samples(c, spacing, 100000, "bodies[0].contact"));
+    std::vector<Vector3> local;
+    for (const Vector3& p : samples) local.push_back(c.orientation.transpose() * (p - c.position));
+    double area = 0.0;
+    std::vector<double> cumulative;
+    for (const auto& t : mesh.triangles) {
+      area += 0.5 * (mesh.vertices[t[1]] - mesh.vertices[t[0]])
+                        .cross(mesh.vertices[t[2]] - mesh.vertices[t[0]])
+                        .norm();
+      cumulative.push_back(area);
+    }
+    EXPECT_GE(local.size(), area / (spacing * spacing));
+    EXPECT_LE(local.size(), 3.0 * area / (spacing * spacing));
+    for (std::size_t i = 0; i < local.size(); ++i) {
+      double on = std::numeric_limits<double>::infinity();
+      for (const auto& t : mesh.triangles) {
+        on = std::min(on, triangle_distance(local[i], mesh.vertices[t[0]], mesh.vertices[t[1]],
+                                            mesh.vertices[t[2]]));
+      }
+      EXPECT_LE(on, 1e-12) << local[i].transpose();
+      for (std::size_t j = 0; j < i; ++j) EXPECT_GE((local[i] - local[j]).norm(), 0.7 * spacing);
+    }
+    // The box's corners are samples.
+    if (mesh.vertices.size() == 8) {
+      for (const Vector3& v : mesh.vertices) {
+        double nearest = std::numeric_limits<double>::infinity();
+        for (const Vector3& q : local) nearest = std::min(nearest, (q - v).norm());
+        EXPECT_LE(nearest, 1e-12) << v.transpose();
+      }
+    }
+    // Area-uniform random points of the triangles (and the vertices) have a sample within the
+    // spacing.
+    double farthest_gap = 0.0;
+    std::vector<Vector3> probes = mesh.vertices;
+    for (int i = 0; i < 2000; ++i) {
+      const double pick = std::uniform_real_distribution<double>(0, area)(rng);
+      const auto& t = mesh.triangles[std::lower_bound(cumulative.begin(), cumulative.end(), pick) -
+                                     cumulative.begin()];
+      double u = std::uniform_real_distribution<double>(0, 1)(rng),
+             v = std::uniform_real_distribution<double>(0, 1)(rng);
+      if (u + v > 1) u = 1 - u, v = 1 - v;
+      probes.push_back(mesh.vertices[t[0]] + u * (mesh.vertices[t[1]] - mesh.vertices[t[0]]) +
+                       v * (mesh.vertices[t[2]] - mesh.vertices[t[0]]));
+    }
+    for (const Vector3& p : probes) {
+      double nearest = std::numeric_limits<double>::infinity();
+      for (const Vector3& q : local) nearest = std::min(nearest, (q - p).norm());
+      farthest_gap = std::max(farthest_gap, nearest);
+    }
     EXPECT_LT(farthest_gap, spacing);
+  }
+}
+
+// The radius the contact search bounds a body by (TouchingPairs::reach): its samples' spheres
+// and every point where its shape's φ ≤ 0 lie within it, and it is not much larger.
+TEST(SurfaceSamples, AndTheShapeFitInTheBodysReach) {
+  std::mt19937 rng(71);
+  const TriangleMesh box = box_mesh(Vector3(0.2, 0.15, 0.1));
+  struct Case {
+    Shape shape;
+    double extent;  // the largest ‖x‖ of the solid about its own centre
+  };
+  for (const Case& k : {Case{TorusShape{0.25, 0.1}, 0.35}, Case{LinkShape{0.2, 0.2, 0.07}, 0.47},
+                        Case{CylinderShape{0.15, 0.3}, std::hypot(0.15, 0.3)},
+                        Case{MeshShape{std::make_shared<const GridSdf>(box, 0.02, 0.04),
+                                       std::make_shared<const TriangleMesh>(box)},
+                             Vector3(0.2, 0.15, 0.1).norm()}}) {
+    Model model;
+    RigidBody body;
+    body.contact.stiffness = 1.0;
+    body.contact.radius = 0.01;
+    Collider c;
+    c.shape = k.shape;
+    c.position = Vector3(0.05, -0.02, 0.03);
+    c.orientation = rotation_at(1.0, rng);
+    body.contact_points = surface_samples(c, 0.05, 100000, "bodies[0].contact");
+    body.shape = std::make_shared<const Collider>(c);
+    model.bodies.push_back(body);
+    const double reach = TouchingPairs(model).reach(0);
+    for (const Vector3& p : body.contact_points) EXPECT_LE(p.norm() + 0.01, reach);
+    for (int i = 0; i < 20000; ++i) {
+      const Vector3 p = fd::random_vector(rng, 0.7);
+      if (c.evaluate(p, false).distance <= 0.0) {
+        EXPECT_LE(p.norm(), reach) << p.transpose();
+      }
+    }
+    // Tight: the shape's extent about its centre plus the centre's offset (a mesh: plus the
+    // grid's interpolation bound √3 h, h = 0.02).
+    EXPECT_LE(reach, c.position.norm() + k.extent + std::sqrt(3.0) * 0.02 + 1e-12);
   }
 }
 

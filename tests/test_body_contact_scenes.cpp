@@ -189,7 +189,8 @@ TEST(BodyContactScenes, BadShapesNameTheirField) {
   };
   EXPECT_EQ(error(R"("shape": { "type": "sphere", "radius": 0.1 }, "sample_spacing": 0.02)"), "accepted");
   EXPECT_EQ(error(R"("shape": { "type": "plane" })"),
-            "bodies[0].contact.shape.type: a body's shape must be a sphere, a box or a capsule");
+            "bodies[0].contact.shape.type: a body's shape must be a sphere, box, capsule, torus, "
+            "cylinder, link or mesh");
   EXPECT_EQ(error(R"("shape": { "type": "sphere", "radius": 0.1, "inside": true })"),
             "bodies[0].contact.shape.inside: a body's shape is a solid, not its complement");
   EXPECT_EQ(error(R"("sample_spacing": 0.02, "points": [[0, 0, 0]])"),

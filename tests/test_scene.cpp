@@ -1091,6 +1091,69 @@ TEST(SceneParse, RodContactDefaultsToTheRodRadiusAndRegionPushes) {
   EXPECT_EQ(s.model.rods[0].region_pushes[0].radius, 0.5);
 }
 
+TEST(SceneParse, TorusCylinderAndLinkCollidersBodiesAndMovingColliders) {
+  const Scene s = parse_scene(
+      scene(
+          R"("name": "chain", "density": 7800, "contact": {"stiffness": 1e4, "sample_spacing": 0.01,
+                "shape": {"type": "link", "half_length": 0.02, "major_radius": 0.015, "minor_radius": 0.004}})",
+          R"("colliders": [
+                 {"name": "ring", "type": "torus", "major_radius": 1, "minor_radius": 0.25, "position": [0, 0, 1]},
+                 {"type": "cylinder", "radius": 0.5, "half_length": 2, "inside": true},
+                 {"name": "spool", "type": "cylinder", "radius": 0.1, "half_length": 0.3,
+                  "kinematic": {"angular_velocity": [0, 0, 1]}},
+                 {"name": "hook", "type": "link", "half_length": 0.1, "major_radius": 0.05, "minor_radius": 0.01,
+                  "kinematic": {"linear_velocity": [0, 0, 1]}},
+                 {"name": "loop", "type": "torus", "major_radius": 0.1, "minor_radius": 0.02,
+                  "kinematic": {"linear_velocity": [0, 0, 1]}}], )"),
+      kSource);
+  const Model& m = s.model;
+  ASSERT_EQ(m.colliders.size(), 2u);
+  EXPECT_EQ(std::get<TorusShape>(m.colliders[0].shape).minor_radius, 0.25);
+  EXPECT_EQ(std::get<CylinderShape>(m.colliders[1].shape).half_length, 2.0);
+  EXPECT_TRUE(m.colliders[1].inside);
+  ASSERT_EQ(m.bodies.size(), 4u);
+  const LinkShape& link = std::get<LinkShape>(m.bodies[0].shape->shape);
+  EXPECT_EQ(link.half_length, 0.02);
+  EXPECT_EQ(link.major_radius, 0.015);
+  EXPECT_GT(m.bodies[0].contact_points.size(), 20u);
+  EXPECT_GT(m.bodies[0].mass, 0.0);
+  EXPECT_TRUE(std::holds_alternative<CylinderShape>(m.bodies[1].shape->shape));
+  EXPECT_TRUE(m.bodies[1].kinematic.has_value());
+  EXPECT_TRUE(std::holds_alternative<LinkShape>(m.bodies[2].shape->shape));
+  EXPECT_TRUE(std::holds_alternative<TorusShape>(m.bodies[3].shape->shape));
+}
+
+TEST(SceneErrors, BodyShapesAreTheSolidsABodyMayHave) {
+  const auto with_shape = [](const std::string& shape) {
+    return scene(kBody + R"(, "contact": {"stiffness": 1, "shape": )" + shape + "}");
+  };
+  const std::string allowed =
+      "a body's shape must be a sphere, box, capsule, torus, cylinder, link or mesh";
+  expect_rejected(with_shape(R"({"type": "plane"})"), "bodies[0].contact.shape.type", allowed);
+  expect_rejected(
+      with_shape(R"({"type": "torus", "major_radius": 1, "minor_radius": 0.1, "inside": true})"),
+      "bodies[0].contact.shape.inside", "solid");
+  expect_rejected(
+      with_shape(R"({"type": "link", "half_length": 1, "major_radius": 1, "minor_radius": 1.5})"),
+      "bodies[0].contact.shape.minor_radius", "below major_radius");
+  expect_rejected(with_shape(R"({"type": "cylinder", "radius": 1, "half_length": -1})"),
+                  "bodies[0].contact.shape.half_length", "positive");
+  const std::string moving = R"(, "kinematic": {"linear_velocity": [1, 0, 0]}}], )";
+  expect_rejected(scene(kBody, R"("colliders": [{"name": "p", "type": "plane")" + moving),
+                  "colliders[0].type", allowed);
+  expect_rejected(
+      scene(kBody,
+            R"("colliders": [{"name": "t", "type": "torus", "major_radius": 1, "minor_radius": 0.1,
+                                                 "inside": true)" +
+                moving),
+      "colliders[0].inside", "solid");
+  expect_rejected(
+      scene(kBody,
+            R"("colliders": [{"name": "t", "type": "torus", "major_radius": 1, "minor_radius": 0)" +
+                moving),
+      "colliders[0].minor_radius", "positive");
+}
+
 TEST(SceneErrors, BadCollidersAndContact) {
   const auto with_collider = [](const std::string& c) {
     return scene(kBody, R"("colliders": [)" + c + "], ");
@@ -1123,6 +1186,34 @@ TEST(SceneErrors, BadCollidersAndContact) {
                   "colliders[0].cell_size", "positive");
   expect_rejected(with_collider(R"({"type": "mesh", "cell_size": 0.1})"), "colliders[0].file",
                   "missing");
+  // Torus, cylinder, link: their keys, ranges, and no key of another type.
+  expect_rejected(with_collider(R"({"type": "torus", "minor_radius": 0.1})"),
+                  "colliders[0].major_radius", "missing");
+  expect_rejected(with_collider(R"({"type": "torus", "major_radius": 1})"),
+                  "colliders[0].minor_radius", "missing");
+  expect_rejected(with_collider(R"({"type": "torus", "major_radius": 1, "minor_radius": 1})"),
+                  "colliders[0].minor_radius", "below major_radius");
+  expect_rejected(with_collider(R"({"type": "torus", "major_radius": -1, "minor_radius": 0.1})"),
+                  "colliders[0].major_radius", "positive");
+  expect_rejected(
+      with_collider(R"({"type": "torus", "major_radius": 1, "minor_radius": 0.1, "radius": 1})"),
+      "colliders[0].radius", "unknown key");
+  expect_rejected(with_collider(R"({"type": "cylinder", "radius": 1})"), "colliders[0].half_length",
+                  "missing");
+  expect_rejected(with_collider(R"({"type": "cylinder", "radius": 0, "half_length": 1})"),
+                  "colliders[0].radius", "positive");
+  expect_rejected(with_collider(R"({"type": "cylinder", "radius": 1, "half_length": 0})"),
+                  "colliders[0].half_length", "positive");
+  expect_rejected(with_collider(R"({"type": "link", "major_radius": 1, "minor_radius": 0.1})"),
+                  "colliders[0].half_length", "missing");
+  expect_rejected(
+      with_collider(
+          R"({"type": "link", "half_length": -0.5, "major_radius": 1, "minor_radius": 0.1})"),
+      "colliders[0].half_length", "≥ 0");
+  expect_rejected(
+      with_collider(
+          R"({"type": "link", "half_length": 0.5, "major_radius": 1, "minor_radius": 2})"),
+      "colliders[0].minor_radius", "below major_radius");
 
   const auto with_contact = [](const std::string& c) {
     return scene(kBody + R"(, "contact": )" + c);

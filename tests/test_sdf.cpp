@@ -29,6 +29,7 @@
 #include <random>
 #include <stdexcept>
 #include <string>
+#include <tuple>
 #include <type_traits>
 #include <variant>
 #include <vector>
@@ -149,6 +150,43 @@ Probe probe_tube(const TubeShape& s, const Vector3& x) {
   return p;
 }
 
+// Link (torus: L = 0): the planar distance s to the segment [−L, L] on the x axis, then the
+// distance to the curve s = R in the half-plane through x and the z axis.
+Probe probe_link(double L, double R, double r, const Vector3& x) {
+  const double s = std::hypot(x.x() - std::clamp(x.x(), -L, L), x.y());
+  const double D = std::hypot(s - R, x.z());
+  Probe p;
+  p.distance = D - r;
+  p.region = with_side(
+      std::string(std::abs(x.x()) < L ? "straight" : "arc") + (s < R ? "-hole" : "-outer"),
+      p.distance);
+  // ∇²φ grows as 1/D at the core curve; as 1/s at a torus's axis (a link's strip s = 0 is
+  // where ∇φ jumps: kept as far).
+  p.core = std::min(D, s);
+  if (L > 0.0) p.seam = std::min(std::abs(x.x() - L), std::abs(x.x() + L));  // straight | arc
+  return p;
+}
+
+// Cylinder: the rectangle (s, z) ∈ [0, ρ] × [−h, h] of the half-plane through x and the z axis.
+Probe probe_cylinder(const CylinderShape& c, const Vector3& x) {
+  const double s = std::hypot(x.x(), x.y());
+  const Eigen::Vector2d q(s - c.radius, std::abs(x.z()) - c.half_length);
+  Probe p;
+  p.distance = q.cwiseMax(0.0).norm() + std::min(q.maxCoeff(), 0.0);
+  const bool rim = q.minCoeff() > 0.0, side = !rim && q(0) >= q(1);
+  p.region = with_side(rim ? "rim" : (side ? "side" : "cap"), p.distance);
+  p.zero_hessian = !rim && !side;
+  p.core = std::min(s, std::hypot(q(0), q(1)));  // the axis, the rim
+  if (q(1) > 0.0) p.seam = std::abs(q(0));       // s = ρ beyond a cap (cap | rim)
+  if (q(0) > 0.0)
+    p.seam = std::min(p.seam, std::abs(q(1)));  // |z| = h beside the side (side | rim)
+  if (q.maxCoeff() <= 0.0) {  // inside: the cone q_1 = q_2, the disc z = 0 under the caps
+    p.seam = std::min(p.seam, std::abs(q(0) - q(1)) / std::sqrt(2.0));
+    if (!side) p.seam = std::min(p.seam, std::abs(x.z()));
+  }
+  return p;
+}
+
 Probe probe(const Shape& shape, const Vector3& x) {
   return std::visit(
       [&](const auto& s) -> Probe {
@@ -158,6 +196,13 @@ Probe probe(const Shape& shape, const Vector3& x) {
         if constexpr (std::is_same_v<S, BoxShape>) return probe_box(s, x);
         if constexpr (std::is_same_v<S, CapsuleShape>) return probe_capsule(s, x);
         if constexpr (std::is_same_v<S, TubeShape>) return probe_tube(s, x);
+        if constexpr (std::is_same_v<S, TorusShape>) {
+          return probe_link(0.0, s.major_radius, s.minor_radius, x);
+        }
+        if constexpr (std::is_same_v<S, CylinderShape>) return probe_cylinder(s, x);
+        if constexpr (std::is_same_v<S, LinkShape>) {
+          return probe_link(s.half_length, s.major_radius, s.minor_radius, x);
+        }
         // Grid SDFs of meshes have their own suite (test_mesh_sdf.cpp).
         if constexpr (std::is_same_v<S, MeshShape>) throw std::logic_error("not an analytic shape");
       },
@@ -204,6 +249,20 @@ std::vector<Vector3> curved_polyline() {
   return catmull_rom_polyline(control, 8);
 }
 
+// A point within `reach` of the stadium curve at distance R from [−L, L] (L = 0: a circle):
+// half the time about an arc (past its ends, across the planes x = ±L), else beside a side.
+Vector3 near_stadium(double L, double R, double reach, std::mt19937& rng) {
+  const double side = std::bernoulli_distribution(0.5)(rng) ? 1.0 : -1.0;
+  Vector3 c;
+  if (L == 0.0 || std::bernoulli_distribution(0.5)(rng)) {
+    const double theta = uniform(rng, -0.5 * std::numbers::pi - 0.3, 0.5 * std::numbers::pi + 0.3);
+    c = Vector3(side * (L + R * std::cos(theta)), R * std::sin(theta), 0.0);
+  } else {
+    c = Vector3(uniform(rng, -L, L), side * R, 0.0);
+  }
+  return c + uniform(rng, 0.0, reach) * random_unit(rng);
+}
+
 std::vector<Fixture> fixtures() {
   std::vector<Fixture> out;
   out.push_back(
@@ -248,6 +307,34 @@ std::vector<Fixture> fixtures() {
                    return std::bernoulli_distribution(0.5)(rng) ? near_polyline(curved, 0.6, rng)
                                                                 : near_joint(curved, 0.4, rng);
                  }});
+  // Tori and links: both sides of the core curve (the hole and the outside), in and out of
+  // the solid, about the arcs and beside the straight sides; far points now and then.
+  const std::vector<std::string> arc_regions = {"arc-outer/solid", "arc-outer/free",
+                                                "arc-hole/solid", "arc-hole/free"};
+  out.push_back({"torus", TorusShape{0.6, 0.2}, arc_regions, [](std::mt19937& rng) -> Vector3 {
+                   if (std::bernoulli_distribution(0.1)(rng)) return random_vector(rng, 2.0);
+                   return near_stadium(0.0, 0.6, 0.55, rng);
+                 }});
+  std::vector<std::string> link_regions = arc_regions;
+  for (const char* r : {"straight-outer/solid", "straight-outer/free", "straight-hole/solid",
+                        "straight-hole/free"}) {
+    link_regions.push_back(r);
+  }
+  out.push_back({"link", LinkShape{0.5, 0.4, 0.12}, link_regions, [](std::mt19937& rng) -> Vector3 {
+                   if (std::bernoulli_distribution(0.1)(rng)) return random_vector(rng, 2.0);
+                   return near_stadium(0.5, 0.4, 0.38, rng);
+                 }});
+  // Cylinders longer than wide (the side is nearest on a stretch of the axis) and flat (the
+  // caps are nearest about the centre).
+  const std::vector<std::string> cylinder_regions = {"side/solid", "side/free", "cap/solid",
+                                                     "cap/free", "rim/free"};
+  for (const CylinderShape& cylinder : {CylinderShape{0.5, 0.8}, CylinderShape{0.7, 0.3}}) {
+    out.push_back(
+        {"cylinder", cylinder, cylinder_regions, [cylinder](std::mt19937& rng) -> Vector3 {
+           const double a = 1.5 * cylinder.radius, b = cylinder.half_length + 0.6;
+           return Vector3(uniform(rng, -a, a), uniform(rng, -a, a), uniform(rng, -b, b));
+         }});
+  }
   return out;
 }
 
@@ -483,6 +570,77 @@ TEST(Sdf, TubeValuesAndTieRule) {
   expect_vector(pipe.evaluate(Vector3(1, 0.05, 0)).gradient, -Vector3::UnitY());  // to the axis
 }
 
+TEST(Sdf, TorusLinkAndCylinderValues) {
+  const auto diagonal = [](double a, double b, double c) {
+    return Matrix3(Vector3(a, b, c).asDiagonal());
+  };
+  // Torus R = 2, r = 0.5: on the outer equator 1 beyond the surface, D = 1.5, and the
+  // curvature along the parallel is 1/(distance from the axis) = 1/3.5.
+  const Collider torus = make(TorusShape{2.0, 0.5});
+  SdfValue v = torus.evaluate(Vector3(3.5, 0, 0));
+  EXPECT_EQ(v.distance, 1.0);
+  expect_vector(v.gradient, Vector3::UnitX());
+  EXPECT_LE((v.hessian - diagonal(0, 1 / 3.5, 1 / 1.5)).norm(), 1e-15);
+  // In the hole, 1 from the axis: D = 1, ∇φ towards the axis; the parallel curves the other
+  // way, a/(s D) = −1.
+  v = torus.evaluate(Vector3(0, -1, 0));
+  EXPECT_EQ(v.distance, 0.5);
+  expect_vector(v.gradient, Vector3::UnitY());
+  EXPECT_LE((v.hessian - diagonal(-1, 0, 1)).norm(), 1e-15);
+  // Above the tube: (2, 0, 3), D = 3; inside the tube: (2.3, 0, 0.4), D = 0.5.
+  EXPECT_EQ(torus.evaluate(Vector3(0, 2, 3)).distance, 2.5);
+  expect_vector(torus.evaluate(Vector3(0, 2, 3)).gradient, Vector3::UnitZ());
+  EXPECT_NEAR(torus.evaluate(Vector3(2.3, 0, 0.4)).distance, 0.0, 1e-15);
+  EXPECT_NEAR(torus.evaluate(Vector3(-2.15, 0, 0.2)).distance, -0.25, 1e-15);
+  // Off the planes: (3, 4, 12)·k with s = 5: D = ‖(3, 12)‖... (s − R, z) = (3, 12).
+  EXPECT_NEAR(torus.evaluate(Vector3(3, 4, 12)).distance, std::hypot(3.0, 12.0) - 0.5, 1e-14);
+
+  // Link L = 1, R = 2, r = 0.5: beside a straight side a cylinder about it, about an arc a
+  // torus about (±1, 0, 0).
+  const Collider link = make(LinkShape{1.0, 2.0, 0.5});
+  v = link.evaluate(Vector3(0.3, 3.5, 0));
+  EXPECT_EQ(v.distance, 1.0);
+  expect_vector(v.gradient, Vector3::UnitY());
+  EXPECT_LE((v.hessian - diagonal(0, 0, 1 / 1.5)).norm(), 1e-15);
+  v = link.evaluate(Vector3(-0.7, -1, 0));  // in the hole beside the lower side: D = 1
+  EXPECT_EQ(v.distance, 0.5);
+  expect_vector(v.gradient, Vector3::UnitY());
+  EXPECT_LE((v.hessian - diagonal(0, 0, 1)).norm(), 1e-15);
+  v = link.evaluate(Vector3(4.5, 0, 0));  // beyond the right arc: as the torus at (3.5, 0, 0)
+  EXPECT_EQ(v.distance, 1.0);
+  EXPECT_LE((v.hessian - diagonal(0, 1 / 3.5, 1 / 1.5)).norm(), 1e-15);
+  EXPECT_NEAR(link.evaluate(Vector3(-1 - 3, -4, 12)).distance, std::hypot(3.0, 12.0) - 0.5, 1e-14);
+  EXPECT_NEAR(link.evaluate(Vector3(0.9, 2.2, 0)).distance, -0.3, 1e-15);
+
+  // Cylinder ρ = 1, h = 2.
+  const Collider cylinder = make(CylinderShape{1.0, 2.0});
+  v = cylinder.evaluate(Vector3(0, -2, 1.5));  // beside the side
+  EXPECT_EQ(v.distance, 1.0);
+  expect_vector(v.gradient, -Vector3::UnitY());
+  EXPECT_LE((v.hessian - diagonal(0.5, 0, 0)).norm(), 1e-15);
+  v = cylinder.evaluate(Vector3(0.3, 0.4, -5));  // below the bottom cap
+  EXPECT_EQ(v.distance, 3.0);
+  expect_vector(v.gradient, -Vector3::UnitZ());
+  EXPECT_TRUE(v.hessian.isZero(0.0));
+  v = cylinder.evaluate(Vector3(4, 0, 6));  // beyond the top rim: q = (3, 4)
+  EXPECT_EQ(v.distance, 5.0);
+  expect_vector(v.gradient, Vector3(0.6, 0, 0.8));
+  const Vector3 u(0.6, 0, 0.8);
+  const Matrix3 rim =
+      (Matrix3::Identity() - Vector3::UnitY() * Vector3::UnitY().transpose() - u * u.transpose()) /
+          5 +
+      diagonal(0, 3.0 / (4 * 5), 0);
+  EXPECT_LE((v.hessian - rim).norm(), 1e-15);
+  // Inside: nearer the side (a curved wall: ∇²φ = (I − e_z e_zᵀ − n nᵀ)/s) or a cap.
+  v = cylinder.evaluate(Vector3(0.5, 0, 0.2));
+  EXPECT_EQ(v.distance, -0.5);
+  EXPECT_LE((v.hessian - diagonal(0, 2, 0)).norm(), 1e-15);
+  v = cylinder.evaluate(Vector3(0.25, 0, 1.5));
+  EXPECT_EQ(v.distance, -0.5);
+  expect_vector(v.gradient, Vector3::UnitZ());
+  EXPECT_TRUE(v.hessian.isZero(0.0));
+}
+
 // ---------------------------------------------------------------------------------------
 // Continuity across region boundaries: φ and ∇φ (C¹) agree on both sides of a plane where
 // the formula changes, at δ = 1e-13 on either side.
@@ -526,6 +684,27 @@ TEST(Sdf, ContinuousAcrossRegionBoundaries) {
   expect_continuous(tube, Vector3(1, -0.3, 0.2), Vector3::UnitX());  // interior | joint
   expect_continuous(tube, Vector3(1.3, 0, 0.2), Vector3::UnitY());   // joint | interior
   expect_continuous(tube, Vector3(0, 0.3, 0.2), Vector3::UnitX());   // end | interior
+
+  // Link: straight | arc at x = ±L, in the hole and outside, in and out of the solid.
+  Collider link = make(LinkShape{0.5, 0.4, 0.12});
+  link.orientation = rotation_at(2.0, rng);
+  for (const double x : {0.5, -0.5}) {
+    for (const Vector3& y : {Vector3(0, 0.45, 0.1), Vector3(0, 0.2, -0.05), Vector3(0, -0.35, 0.02),
+                             Vector3(0, -0.9, 0.3)}) {
+      expect_continuous(link, link.orientation * (Vector3(x, 0, 0) + y),
+                        link.orientation * Vector3::UnitX());
+    }
+  }
+  // Cylinder: side | rim at |z| = h, cap | rim at s = ρ (C¹); inside, the cone and the disc
+  // where the nearest face changes (φ continuous, ∇φ jumps).
+  Collider cylinder = make(CylinderShape{0.7, 0.3});
+  cylinder.orientation = rotation_at(1.5, rng);
+  const Matrix3& R = cylinder.orientation;
+  for (const double z : {0.3, -0.3})
+    expect_continuous(cylinder, R * Vector3(0.9, 0.2, z), R * Vector3::UnitZ());
+  expect_continuous(cylinder, R * Vector3(0, 0.7, 0.5), R * Vector3::UnitY());
+  expect_continuous(cylinder, R * Vector3(0.6, 0, 0.2), R * Vector3(1, 0, -1).normalized(), false);
+  expect_continuous(cylinder, R * Vector3(0.1, 0.2, 0), R * Vector3::UnitZ(), false);
 }
 
 // ---------------------------------------------------------------------------------------
@@ -611,6 +790,63 @@ TEST(Sdf, NonDifferentiablePointsAreFinite) {
     v = local(Vector3(0.5, 1e-140, 0));  // above kCoreDistance: the true (huge) curvature
     EXPECT_EQ(v.gradient, s * (P * Vector3::UnitY()));
     EXPECT_NEAR(v.hessian.norm(), 1e140, 1e126);
+
+    // Torus and link, on the core curve: φ = −r, ∇φ = n (away from the segment), ∇²φ = 0.
+    c.position = Vector3(1, -2, 0.5);
+    struct OnCurve {
+      Shape shape;
+      Vector3 x, n;
+    };
+    for (const OnCurve& k :
+         {OnCurve{TorusShape{0.75, 0.25}, Vector3(0.75, 0, 0), Vector3::UnitX()},
+          OnCurve{TorusShape{0.75, 0.25}, Vector3(0, -0.75, 0), -Vector3::UnitY()},
+          OnCurve{LinkShape{0.5, 0.75, 0.25}, Vector3(0.25, 0.75, 0), Vector3::UnitY()},
+          OnCurve{LinkShape{0.5, 0.75, 0.25}, Vector3(-1.25, 0, 0), -Vector3::UnitX()},
+          OnCurve{LinkShape{0.5, 0.75, 0.25}, Vector3(-0.5, -0.75, 0), -Vector3::UnitY()}}) {
+      c.shape = k.shape;
+      v = local(k.x);
+      expect_finite(v);
+      EXPECT_EQ(v.distance, -0.25 * s);
+      EXPECT_EQ(v.gradient, s * (P * k.n));
+      EXPECT_TRUE(v.hessian.isZero(0.0));
+    }
+    // On a torus's axis and a link's strip s = 0 across its hole: n = e_y, ∇²s = 0, so
+    // ∇φ = (−R e_y + z e_z)/D, ∇²φ = (I − e_x e_xᵀ − u uᵀ)/D with D = ‖(R, z)‖ = 1.25.
+    for (const Shape& shape : {Shape(TorusShape{0.75, 0.25}), Shape(LinkShape{0.5, 0.75, 0.25})}) {
+      c.shape = shape;
+      for (const Vector3& x : {Vector3(0, 0, 1), Vector3(0.5, 0, -1), Vector3(-0.25, 0, 1)}) {
+        if (std::holds_alternative<TorusShape>(shape) && x.x() != 0.0) continue;  // off its axis
+        v = local(x);
+        expect_finite(v);
+        EXPECT_EQ(v.distance, s * 1.0);
+        const Vector3 u = Vector3(0, -0.75, x.z()) / 1.25;
+        EXPECT_LE((v.gradient - s * (P * u)).norm(), 1e-15);
+        const Matrix3 H = (Matrix3::Identity() - Vector3::UnitX() * Vector3::UnitX().transpose() -
+                           u * u.transpose()) /
+                          1.25;
+        EXPECT_LE((v.hessian - s * (P * H * P.transpose())).norm(), 1e-15);
+      }
+    }
+    // Cylinder: its axis where the side is nearest (∇φ = e_y, ∇²φ = 0), the cone from the
+    // rim (side: n), the rim circle itself (side), the disc z = 0 between the caps (+e_z).
+    c.shape = CylinderShape{0.5, 0.75};
+    v = local(Vector3(0, 0, 0.125));
+    expect_finite(v);
+    EXPECT_EQ(v.distance, -0.5 * s);
+    EXPECT_EQ(v.gradient, s * (P * Vector3::UnitY()));
+    EXPECT_TRUE(v.hessian.isZero(0.0));
+    v = local(Vector3(0.25, 0, 0.5));  // q = (−0.25, −0.25)
+    EXPECT_EQ(v.distance, -0.25 * s);
+    EXPECT_EQ(v.gradient, s * (P * Vector3::UnitX()));
+    v = local(Vector3(0, -0.5, -0.75));  // the rim
+    expect_finite(v);
+    EXPECT_EQ(v.distance, 0.0);
+    EXPECT_EQ(v.gradient, s * (P * -Vector3::UnitY()));
+    c.shape = CylinderShape{0.75, 0.5};
+    v = local(Vector3(0.125, 0, 0));
+    EXPECT_EQ(v.distance, -0.5 * s);
+    EXPECT_EQ(v.gradient, s * (P * Vector3::UnitZ()));
+    EXPECT_TRUE(v.hessian.isZero(0.0));
   }
 
   // At a general pose the transformed point is only within round-off (~1e-16) of the core
@@ -626,6 +862,19 @@ TEST(Sdf, NonDifferentiablePointsAreFinite) {
       cores = t->polyline;
       cores.push_back(0.5 * (t->polyline[0] + t->polyline[1]));
     }
+    if (const auto* t = std::get_if<TorusShape>(&fx.shape)) {  // the circle
+      cores.insert(cores.end(), {Vector3(t->major_radius, 0, 0), Vector3(0, -t->major_radius, 0)});
+    }
+    if (const auto* l = std::get_if<LinkShape>(&fx.shape)) {  // the stadium, its strip
+      cores.insert(
+          cores.end(),
+          {Vector3(0.1, l->major_radius, 0), Vector3(l->half_length + l->major_radius, 0, 0),
+           Vector3(l->half_length, -l->major_radius, 0), Vector3(0.3, 0, 0.1)});
+    }
+    if (const auto* y = std::get_if<CylinderShape>(&fx.shape)) {  // the rims
+      cores.insert(cores.end(), {Vector3(y->radius, 0, y->half_length),
+                                 Vector3(0, -y->radius, -y->half_length)});
+    }
     for (const Vector3& x : cores) {
       SCOPED_TRACE(fx.name);
       expect_finite(c.evaluate(c.position + c.orientation * x));
@@ -638,6 +887,11 @@ TEST(Sdf, NonDifferentiablePointsAreFinite) {
 // same formulas; error allowed: a few ulps of the coordinates, 8 eps·(‖p − o‖ + size).
 
 using LongVector = Eigen::Matrix<long double, 3, 1>;
+
+long double link_distance(long double L, long double R, long double r, const LongVector& x) {
+  const long double planar = std::hypot(x.x() - std::clamp(x.x(), -L, L), x.y());
+  return std::hypot(planar - R, x.z()) - r;
+}
 
 long double reference_distance(const Collider& c, const Vector3& p) {
   const LongVector x = c.orientation.cast<long double>().transpose() *
@@ -669,6 +923,18 @@ long double reference_distance(const Collider& c, const Vector3& p) {
                                     s.polyline[j + 1].template cast<long double>()));
           }
           return d - s.radius;
+        }
+        if constexpr (std::is_same_v<S, TorusShape>) {
+          return link_distance(0.0L, s.major_radius, s.minor_radius, x);
+        }
+        if constexpr (std::is_same_v<S, LinkShape>) {
+          return link_distance(s.half_length, s.major_radius, s.minor_radius, x);
+        }
+        if constexpr (std::is_same_v<S, CylinderShape>) {
+          const long double q1 = std::hypot(x.x(), x.y()) - s.radius;
+          const long double q2 = std::abs(x.z()) - s.half_length;
+          return std::hypot(std::max(q1, 0.0L), std::max(q2, 0.0L)) +
+                 std::min(std::max(q1, q2), 0.0L);
         }
         if constexpr (std::is_same_v<S, MeshShape>) throw std::logic_error("not an analytic shape");
       },
@@ -713,6 +979,176 @@ TEST(Sdf, AccurateFarAwayAndVeryClose) {
       }
     }
     EXPECT_GE(landed, 10) << fx.name << ": too few points 1e-9 from the surface were tested";
+  }
+}
+
+// ---------------------------------------------------------------------------------------
+// Torus, link and cylinder against brute-force distances to dense samplings of their core
+// curve and of their surface (not the formulas above), and their derivatives 1e-9 from the
+// surface, 1e6 away and on both sides of every plane where ∇²φ jumps.
+
+// The stadium curve at distance R from [−L, L] on the x axis, as a closed polyline of about
+// n points (the same point starts and ends it).
+std::vector<Vector3> stadium_polyline(double L, double R, int n) {
+  const double pi = std::numbers::pi, length = 4 * L + 2 * pi * R;
+  std::vector<Vector3> out;
+  for (const double side : {1.0, -1.0}) {
+    const int arc = static_cast<int>(n * pi * R / length) + 1;
+    for (int k = 0; k < arc; ++k) {
+      const double theta = -pi / 2 + pi * k / arc;
+      out.emplace_back(side * (L + R * std::cos(theta)), side * R * std::sin(theta), 0.0);
+    }
+    const int straight = static_cast<int>(n * 2 * L / length) + 1;
+    for (int k = 0; k < straight; ++k)
+      out.emplace_back(side * (L - 2 * L * k / straight), side * R, 0.0);
+  }
+  out.push_back(out.front());
+  return out;
+}
+
+double polyline_distance(const std::vector<Vector3>& v, const Vector3& x) {
+  double best = kInf;
+  for (std::size_t j = 0; j + 1 < v.size(); ++j) {
+    const Vector3 ab = v[j + 1] - v[j];
+    const double t = std::clamp((x - v[j]).dot(ab) / ab.squaredNorm(), 0.0, 1.0);
+    best = std::min(best, (x - v[j] - t * ab).norm());
+  }
+  return best;
+}
+
+TEST(Sdf, TorusLinkAndCylinderAgreeWithBruteForceDistances) {
+  std::mt19937 rng(17);
+  for (const auto& [L, R, r] : {std::tuple{0.0, 0.6, 0.2}, std::tuple{0.5, 0.4, 0.12}}) {
+    SCOPED_TRACE(fd::trace("link L R r", L, R, r));
+    Collider c = make(LinkShape{L, R, r});
+    if (L == 0.0) c.shape = TorusShape{R, r};
+    // The core curve, 40000 chords: their sag (≤ (arc step)²/8R ≈ 1e-8) bounds the error of
+    // the distance to it.
+    const std::vector<Vector3> core = stadium_polyline(L, R, 40000);
+    // The surface: rings of 600 points about 6000 core points, within ~1.5e-3 of every
+    // surface point (outside the solid: r < R, so no ring point is inside another part).
+    std::vector<Vector3> surface;
+    const std::vector<Vector3> rings = stadium_polyline(L, R, 6000);
+    for (std::size_t i = 0; i + 1 < rings.size(); ++i) {
+      const Vector3 n = (rings[i] - Vector3(std::clamp(rings[i].x(), -L, L), 0, 0)).normalized();
+      for (int j = 0; j < 600; ++j) {
+        const double v = 2 * std::numbers::pi * j / 600;
+        surface.push_back(rings[i] + r * (std::cos(v) * n + std::sin(v) * Vector3::UnitZ()));
+      }
+    }
+    for (int i = 0; i < 60; ++i) {
+      const Vector3 x =
+          i % 3 == 0 ? random_vector(rng, L + R + 2 * r) : near_stadium(L, R, 1.5 * r, rng);
+      const SdfValue v = c.evaluate(x, false);
+      const double to_core = polyline_distance(core, x);
+      EXPECT_NEAR(v.distance, to_core - r, 1e-8) << x.transpose();
+      double to_surface = kInf;
+      for (const Vector3& y : surface) to_surface = std::min(to_surface, (x - y).norm());
+      EXPECT_NEAR(std::abs(v.distance), to_surface, 1.5e-3) << x.transpose();
+      EXPECT_EQ(v.distance < 0.0, to_core < r) << x.transpose();
+    }
+  }
+  // Cylinder ρ = 0.5, h = 0.8: a 1.5e-3 grid on its side and caps (every surface point within
+  // ~1.1e-3 of it).
+  const double rho = 0.5, h = 0.8, step = 1.5e-3;
+  const Collider c = make(CylinderShape{rho, h});
+  std::vector<Vector3> surface;
+  const int around = static_cast<int>(2 * std::numbers::pi * rho / step);
+  const int rows = static_cast<int>(std::ceil(2 * h / step));
+  for (int i = 0; i <= rows; ++i) {  // the rims included
+    for (int j = 0; j < around; ++j) {
+      const double a = 2 * std::numbers::pi * j / around;
+      surface.emplace_back(rho * std::cos(a), rho * std::sin(a), -h + 2 * h * i / rows);
+    }
+  }
+  for (double x = -rho; x <= rho; x += step) {
+    for (double y = -rho; y <= rho; y += step) {
+      if (std::hypot(x, y) <= rho)
+        surface.insert(surface.end(), {Vector3(x, y, h), Vector3(x, y, -h)});
+    }
+  }
+  for (int i = 0; i < 60; ++i) {
+    const Vector3 x(uniform(rng, -1, 1), uniform(rng, -1, 1), uniform(rng, -1.4, 1.4));
+    double to_surface = kInf;
+    for (const Vector3& y : surface) to_surface = std::min(to_surface, (x - y).norm());
+    const SdfValue v = c.evaluate(x, false);
+    EXPECT_NEAR(std::abs(v.distance), to_surface, 1.5e-3) << x.transpose();
+    EXPECT_EQ(v.distance < 0.0, std::hypot(x.x(), x.y()) < rho && std::abs(x.z()) < h)
+        << x.transpose();
+  }
+}
+
+TEST(Sdf, TorusLinkAndCylinderDerivativesAtTheSurfaceFarAwayAndAcrossSeams) {
+  std::mt19937 rng(29);
+  for (const Fixture& fx : fixtures()) {
+    if (std::holds_alternative<PlaneShape>(fx.shape) ||
+        std::holds_alternative<SphereShape>(fx.shape) ||
+        std::holds_alternative<BoxShape>(fx.shape) ||
+        std::holds_alternative<CapsuleShape>(fx.shape) ||
+        std::holds_alternative<TubeShape>(fx.shape)) {
+      continue;
+    }
+    Collider c;
+    c.shape = fx.shape;
+    c.position = random_vector(rng, 1.0);
+    c.orientation = rotation_at(2.0, rng);
+    int tested = 0;
+    for (int trial = 0; trial < 60; ++trial) {
+      const Vector3 x = fx.propose(rng);
+      const Probe pr = probe(fx.shape, x);
+      if (pr.core < kCoreMargin || pr.seam < kSeamMargin) continue;
+      // 1e-9 on either side of the surface, along the (exact) normal: the surface is no seam.
+      const Vector3 p0 = c.position + c.orientation * x;
+      const SdfValue at = c.evaluate(p0);
+      for (const double gap : {1e-9, -1e-9}) {
+        const Vector3 p = p0 - (at.distance - gap) * at.gradient;
+        const Probe close = probe(fx.shape, c.orientation.transpose() * (p - c.position));
+        if (close.core < kCoreMargin || close.seam < kSeamMargin) continue;  // walked to a rim
+        SCOPED_TRACE(fx.name + ", " + close.region + fd::trace(", gap", gap));
+        EXPECT_NEAR(c.evaluate(p).distance, gap, 1e-14);
+        EXPECT_TRUE(check_derivatives(c, p, close.zero_hessian));
+        expect_identities(c, p, close.distance);
+        ++tested;
+      }
+    }
+    EXPECT_GE(tested, 40) << fx.name;
+    // 1e6 away: a larger step (the curvature is ~1e-6; its FD truncation ε²|∂⁴φ| ~ 1e-22).
+    fd::FdOptions far;
+    far.step = 1e-2;
+    for (int i = 0; i < 10; ++i) {
+      const Vector3 p = c.position + 1e6 * random_unit(rng);
+      const SdfValue v = c.evaluate(p);
+      SCOPED_TRACE(fx.name + fd::trace(", far", p.x(), p.y(), p.z()));
+      EXPECT_NEAR(v.gradient.norm(), 1.0, 1e-12);
+      EXPECT_LE((v.hessian * v.gradient).norm(), 1e-12 * v.hessian.norm());
+      EXPECT_TRUE(fd::check_lie_gradient(
+          [&c](const State& q) { return c.evaluate(q.points[0], false).distance; }, at_point(p),
+          kPointDof, v.gradient, far));
+      const bool cap = probe(fx.shape, c.orientation.transpose() * (p - c.position)).zero_hessian;
+      if (cap) far.require_nonzero = fd::NonZero::kNone;
+      EXPECT_TRUE(fd::check_lie_hessian(
+          [&c](const State& q) { return Eigen::VectorXd(c.evaluate(q.points[0], false).gradient); },
+          at_point(p), kPointDof, v.hessian, far));
+      far.require_nonzero = fd::NonZero::kEveryBlock;
+    }
+  }
+  // Both sides of each plane where ∇²φ jumps, 2e-3 off it (FD steps of 1e-6 stay on a side):
+  // link x = ±L; cylinder |z| = h beside the side, s = ρ above a cap.
+  const Collider link = make(LinkShape{0.5, 0.4, 0.12});
+  const Collider cylinder = make(CylinderShape{0.7, 0.3});
+  for (const double side : {2e-3, -2e-3}) {
+    for (const Vector3& x : {Vector3(0.5 + side, 0.45, 0.1), Vector3(-0.5 - side, 0.2, -0.05),
+                             Vector3(0.5 - side, -0.35, 0.02), Vector3(-0.5 + side, -0.9, 0.3)}) {
+      SCOPED_TRACE(fd::trace("link", x.x(), x.y(), x.z()));
+      EXPECT_TRUE(check_derivatives(link, x, false));
+    }
+    for (const Vector3& x : {Vector3(0.9, 0.2, 0.3 + side), Vector3(0.5, -0.8, -0.3 - side)}) {
+      SCOPED_TRACE(fd::trace("cylinder side | rim", x.x(), x.y(), x.z()));
+      EXPECT_TRUE(check_derivatives(cylinder, x, false));
+    }
+    const Vector3 above(0, 0.7 + side, 0.5);
+    SCOPED_TRACE(fd::trace("cylinder cap | rim", above.x(), above.y(), above.z()));
+    EXPECT_TRUE(check_derivatives(cylinder, above, side < 0.0));
   }
 }
 
@@ -772,6 +1208,27 @@ TEST(Sdf, ValidateRejectsEachBadField) {
   EXPECT_EQ(rejected_field(c), "colliders[0].orientation");
   c.orientation = so3::exp(Vector3(0.3, -1, 2));
   EXPECT_EQ(rejected_field(c), "(accepted)");
+
+  EXPECT_EQ(rejected_field(with(TorusShape{1.0, 0.999})), "(accepted)");
+  EXPECT_EQ(rejected_field(with(LinkShape{0.0, 1.0, 0.5})), "(accepted)");  // a torus
+  EXPECT_EQ(rejected_field(with(CylinderShape{1.0, 1e-3})), "(accepted)");
+  for (const double bad : {0.0, -1.0, nan, kInf}) {
+    EXPECT_EQ(rejected_field(with(TorusShape{bad, 0.1})), "colliders[0].major_radius") << bad;
+    EXPECT_EQ(rejected_field(with(TorusShape{1.0, bad})), "colliders[0].minor_radius") << bad;
+    EXPECT_EQ(rejected_field(with(LinkShape{0.5, bad, 0.1})), "colliders[0].major_radius") << bad;
+    EXPECT_EQ(rejected_field(with(LinkShape{0.5, 1.0, bad})), "colliders[0].minor_radius") << bad;
+    EXPECT_EQ(rejected_field(with(CylinderShape{bad, 1.0})), "colliders[0].radius") << bad;
+    EXPECT_EQ(rejected_field(with(CylinderShape{1.0, bad})), "colliders[0].half_length") << bad;
+  }
+  for (const double bad : {-1.0, nan, kInf}) {
+    EXPECT_EQ(rejected_field(with(LinkShape{bad, 1.0, 0.1})), "colliders[0].half_length") << bad;
+  }
+  // The tube may not reach the axis (torus) or the segment (link): minor < major.
+  for (const double minor : {1.0, 1.5}) {
+    EXPECT_EQ(rejected_field(with(TorusShape{1.0, minor})), "colliders[0].minor_radius") << minor;
+    EXPECT_EQ(rejected_field(with(LinkShape{0.5, 1.0, minor})), "colliders[0].minor_radius")
+        << minor;
+  }
 }
 
 // ---------------------------------------------------------------------------------------
