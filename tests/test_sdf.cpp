@@ -826,6 +826,13 @@ TEST(Sdf, NonDifferentiablePointsAreFinite) {
                           1.25;
         EXPECT_LE((v.hessian - s * (P * H * P.transpose())).norm(), 1e-15);
       }
+      // The centre: D = R, ∇φ = −e_y, ∇²φ = (I − e_x e_xᵀ − e_y e_yᵀ)/R.
+      v = local(Vector3::Zero());
+      expect_finite(v);
+      EXPECT_EQ(v.distance, 0.5 * s);
+      EXPECT_EQ(v.gradient, s * (P * -Vector3::UnitY()));
+      EXPECT_LE((v.hessian - s * (P * Vector3(0, 0, 1 / 0.75).asDiagonal() * P.transpose())).norm(),
+                1e-15);
     }
     // Cylinder: its axis where the side is nearest (∇φ = e_y, ∇²φ = 0), the cone from the
     // rim (side: n), the rim circle itself (side), the disc z = 0 between the caps (+e_z).
