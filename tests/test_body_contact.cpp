@@ -375,16 +375,41 @@ TEST(SurfaceSamples, AndTheShapeFitInTheBodysReach) {
 }
 
 TEST(SurfaceSamples, ASpacingThatIsNotPositiveOrTooFineIsAnErrorNamingItsField) {
-  Collider c;
-  c.shape = SphereShape{0.1};
-  for (const double spacing : {0.0, -1.0, std::numeric_limits<double>::quiet_NaN(), 1e-6}) {
+  const TriangleMesh box = box_mesh(Vector3(0.1, 0.1, 0.1));
+  // A needle: its area (the estimate's measure) says ~80 samples at 0.01, its length needs
+  // ~140: the thinning itself stops at the budget.
+  const TriangleMesh needle = box_mesh(Vector3(0.5, 5e-4, 5e-4));
+  const auto error = [](const Shape& shape, double spacing, int budget) {
+    Collider c;
+    c.shape = shape;
     try {
-      surface_samples(c, spacing, 1000, "bodies[2].contact");
-      ADD_FAILURE() << "spacing " << spacing << " accepted";
+      surface_samples(c, spacing, budget, "bodies[2].contact");
     } catch (const ModelError& e) {
-      EXPECT_EQ(e.field(), "bodies[2].contact.sample_spacing") << e.what();
+      return e.field();
     }
+    return std::string("accepted");
+  };
+  for (const Shape& shape :
+       {Shape(SphereShape{0.1}), Shape(TorusShape{0.1, 0.02}), Shape(LinkShape{0.1, 0.1, 0.02}),
+        Shape(CylinderShape{0.1, 0.1}),
+        Shape(MeshShape{std::make_shared<const GridSdf>(box, 0.02, 0.04),
+                        std::make_shared<const TriangleMesh>(box)}),
+        Shape(MeshShape{std::make_shared<const GridSdf>(needle, 0.02, 0.04),
+                        std::make_shared<const TriangleMesh>(needle)})}) {
+    for (const double spacing : {0.0, -1.0, std::numeric_limits<double>::quiet_NaN(), 1e-6}) {
+      EXPECT_EQ(error(shape, spacing, 1000), "bodies[2].contact.sample_spacing")
+          << shape.index() << " " << spacing;
+    }
+    // Never more samples than the budget: one fewer than the spacing gives is refused.
+    Collider c;
+    c.shape = shape;
+    const auto count = static_cast<int>(surface_samples(c, 0.01, 100000, "b").size());
+    EXPECT_EQ(error(shape, 0.01, count - 1), "bodies[2].contact.sample_spacing") << shape.index();
   }
+  // Shapes a body may not have.
+  EXPECT_EQ(error(PlaneShape{}, 0.01, 1000), "bodies[2].contact.shape.type");
+  EXPECT_EQ(error(TubeShape{{{0, 0, 0}, {1, 0, 0}}, 0.1}, 0.01, 1000),
+            "bodies[2].contact.shape.type");
 }
 
 // ----------------------------------------------------------------------------------------

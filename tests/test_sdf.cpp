@@ -826,6 +826,13 @@ TEST(Sdf, NonDifferentiablePointsAreFinite) {
                           1.25;
         EXPECT_LE((v.hessian - s * (P * H * P.transpose())).norm(), 1e-15);
       }
+      // The centre: D = R, ∇φ = −e_y, ∇²φ = (I − e_x e_xᵀ − e_y e_yᵀ)/R.
+      v = local(Vector3::Zero());
+      expect_finite(v);
+      EXPECT_EQ(v.distance, 0.5 * s);
+      EXPECT_EQ(v.gradient, s * (P * -Vector3::UnitY()));
+      EXPECT_LE((v.hessian - s * (P * Vector3(0, 0, 1 / 0.75).asDiagonal() * P.transpose())).norm(),
+                1e-15);
     }
     // Cylinder: its axis where the side is nearest (∇φ = e_y, ∇²φ = 0), the cone from the
     // rim (side: n), the rim circle itself (side), the disc z = 0 between the caps (+e_z).
@@ -1223,6 +1230,25 @@ TEST(Sdf, ValidateRejectsEachBadField) {
   for (const double bad : {-1.0, nan, kInf}) {
     EXPECT_EQ(rejected_field(with(LinkShape{bad, 1.0, 0.1})), "colliders[0].half_length") << bad;
   }
+  // The shapes a body may have: solids, bounded, not complements; a mesh with its triangles.
+  const auto body_field = [](const Collider& c) {
+    try {
+      validate_body_shape(c, "bodies[1].contact.shape");
+    } catch (const ModelError& e) {
+      return e.field();
+    }
+    return std::string("(accepted)");
+  };
+  for (const Shape& shape : {Shape(SphereShape{1.0}), Shape(BoxShape{Vector3(1, 2, 3), 0.5}),
+                             Shape(CapsuleShape{1, 0.1}), Shape(TorusShape{1, 0.1}),
+                             Shape(CylinderShape{1, 1}), Shape(LinkShape{1, 1, 0.1})}) {
+    EXPECT_EQ(body_field(with(shape)), "(accepted)") << shape.index();
+    EXPECT_EQ(body_field(make(shape, true)), "bodies[1].contact.shape.inside") << shape.index();
+  }
+  EXPECT_EQ(body_field(with(PlaneShape{})), "bodies[1].contact.shape.type");
+  EXPECT_EQ(body_field(with(TubeShape{{{0, 0, 0}, {1, 0, 0}}, 0.1})), "bodies[1].contact.shape.type");
+  EXPECT_EQ(body_field(with(MeshShape{})), "bodies[1].contact.shape.type");  // no triangles
+
   // The tube may not reach the axis (torus) or the segment (link): minor < major.
   for (const double minor : {1.0, 1.5}) {
     EXPECT_EQ(rejected_field(with(TorusShape{1.0, minor})), "colliders[0].minor_radius") << minor;
