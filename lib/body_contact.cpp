@@ -12,111 +12,207 @@
 #include <variant>
 
 #include "mesh_sdf.hpp"
-#include "point_pair.hpp"
 #include "so3.hpp"
 
 namespace liedyn {
 
-SdfValue BodyContact::field(const State& q, Vector3& w, bool with_hessian) const {
+SampledPoint SampledPoint::on_frame(const AttachedPoint& at, const State& q) {
+  SampledPoint out;
+  out.lever = at.lever(q);
+  out.position = at.position(q);
+  out.map << Matrix3::Identity(), -so3::hat(out.lever);
+  return out;
+}
+
+SampledPoint SampledPoint::on_edge(const Vector3& x0, const Vector3& x1, double s) {
+  SampledPoint out;
+  out.position = (1.0 - s) * x0 + s * x1;
+  out.map << (1.0 - s) * Matrix3::Identity(), s * Matrix3::Identity();
+  out.lever.setZero();
+  return out;
+}
+
+namespace {
+
+using Jacobian = Eigen::Matrix<double, 3, 12>;  // of a 3-vector with respect to the four blocks
+using MixedBlock = Eigen::Matrix<double, 12, 12>;
+
+// φ_B's value and world-frame derivatives at p; w = p − x_B.
+SdfValue field(const Collider& shape, const State& q, int body_b, const Vector3& p, Vector3& w,
+               bool with_hessian) {
   const Matrix3& R_b = q.rotations[body_b];
-  w = at.position(q) - q.points[body_b];
-  SdfValue s = shape->evaluate(R_b.transpose() * w, with_hessian);  // in B's coordinates
+  w = p - q.points[body_b];
+  SdfValue s = shape.evaluate(R_b.transpose() * w, with_hessian);  // in B's coordinates
   s.gradient = R_b * s.gradient;
   if (with_hessian) s.hessian = R_b * s.hessian * R_b.transpose();
   return s;
 }
 
-double BodyContact::penetration(const State& q) const {
-  Vector3 w;
-  return radius - field(q, w, false).distance;
+// J = [A, −I, hat(w)]: u's motion (times R_B) under the four blocks.
+Jacobian field_jacobian(const SampledPoint& p, const Vector3& w) {
+  Jacobian J;
+  J << p.map, -Matrix3::Identity(), so3::hat(w);
+  return J;
 }
 
-double BodyContact::evaluate(const State& q, LocalGradient<kBlocks>* g,
-                             LocalHessian<kBlocks>* H) const {
+// The penalty ½ k max(0, ρ − φ)² of a sample of stiffness k, returned; its gradient and
+// Hessian (body_contact.hpp) are ADDED to g and H where non-null.
+double add_penalty(const SampledPoint& p, const State& q, int body_b, const Collider& shape,
+                   double k, double radius, LocalGradient<4>* g, LocalHessian<4>* H) {
   Vector3 w;
-  const SdfValue s = field(q, w, H != nullptr);
+  const SdfValue s = field(shape, q, body_b, p.position, w, H != nullptr);
+  const double d = radius - s.distance;
+  if (!(d > 0.0)) return 0.0;
+  if (g != nullptr || H != nullptr) {
+    const Vector3 f = -k * d * s.gradient;  // ∂V/∂p
+    const Jacobian J = field_jacobian(p, w);
+    if (g != nullptr) g->noalias() += J.transpose() * f;
+    if (H != nullptr) {
+      const Matrix3 K = k * (s.gradient * s.gradient.transpose() - d * s.hessian);
+      // Coefficient-based (lazy) product, as in point_pair.hpp: cheaper than Eigen's GEMM here.
+      const Eigen::Matrix<double, 12, 3> JtK = J.transpose() * K;
+      H->noalias() += JtK.lazyProduct(J);
+      H->block<3, 3>(3, 3) += rotated_point_curvature(p.lever, f);
+      H->block<3, 3>(9, 9) += rotated_point_curvature(w, f);
+      const Eigen::Matrix<double, 3, 9> cross = so3::hat(f) * J.leftCols<9>();  // θ_B × (0, 1, x_B)
+      H->block<3, 9>(9, 0) += cross;
+      H->block<9, 3>(0, 9) += cross.transpose();
+    }
+  }
+  return 0.5 * k * d * d;
+}
+
+// The penalty's residual √k max(0, ρ − φ) and, where `row` is non-null, its derivative
+// −√k nᵀ J (0 where there is no contact).
+double penalty_residual(const SampledPoint& p, const State& q, int body_b, const Collider& shape,
+                        double k, double radius, Eigen::Matrix<double, 1, 12>* row) {
+  Vector3 w;
+  const SdfValue s = field(shape, q, body_b, p.position, w, false);
   const double d = radius - s.distance;
   if (!(d > 0.0)) {
-    if (g != nullptr) g->setZero();
-    if (H != nullptr) H->setZero();
+    if (row != nullptr) row->setZero();
     return 0.0;
   }
-  if (g == nullptr && H == nullptr) return 0.5 * stiffness * d * d;
-  const Vector3 r = at.lever(q);
-  const Vector3 f = -stiffness * d * s.gradient;  // ∂V/∂p
-  Eigen::Matrix<double, 3, 12> J;
-  J << Matrix3::Identity(), -so3::hat(r), -Matrix3::Identity(), so3::hat(w);
-  if (g != nullptr) *g = J.transpose() * f;
-  if (H != nullptr) {
-    const Matrix3 K = stiffness * (s.gradient * s.gradient.transpose() - d * s.hessian);
-    const Eigen::Matrix<double, 12, 3> JtK = J.transpose() * K;
-    H->noalias() = JtK.lazyProduct(J);
-    const Matrix3 F = so3::hat(f);
-    H->block<3, 3>(3, 3) += rotated_point_curvature(r, f);
-    H->block<3, 3>(9, 9) += rotated_point_curvature(w, f);
-    H->block<3, 3>(9, 0) += F;
-    H->block<3, 3>(0, 9) -= F;  // (hat f)ᵀ
-    H->block<3, 3>(9, 6) -= F;
-    H->block<3, 3>(6, 9) += F;
-    const Matrix3 FS = F * so3::hat(r);
-    H->block<3, 3>(9, 3) -= FS;
-    H->block<3, 3>(3, 9) -= FS.transpose();
-  }
-  return 0.5 * stiffness * d * d;
+  const double root_k = std::sqrt(k);
+  if (row != nullptr) *row = (-root_k * s.gradient.transpose()) * field_jacobian(p, w);
+  return root_k * d;
 }
 
-void BodyContact::residual(const State& q, Residual& res, ResidualJacobian* J) const {
+// The lagged contact of a sample of stiffness k that was at p̂ in `previous`.
+LaggedContact lag(const Vector3& previous_position, const State& previous, int body_b,
+                  const Collider& shape, double k, double radius) {
+  LaggedContact out;
+  const Matrix3& R_b = previous.rotations[body_b];
+  out.contact_point = R_b.transpose() * (previous_position - previous.points[body_b]);
+  const SdfValue s = shape.evaluate(out.contact_point, false);
+  out.normal_force = k * std::max(0.0, radius - s.distance);
+  const double length = s.gradient.norm();
+  out.normal = length > 0.0 ? Vector3(R_b * s.gradient / length) : Vector3::UnitZ();
+  return out;
+}
+
+// The slip law of a sample at p: d = x_B + R_B û − p (written), r_B = R_B û (written), u = P d.
+SmoothedSlip slip(const Vector3& p, const LaggedContact& l, const State& q, int body_b,
+                  double epsilon, Vector3& lever_b, Vector3& d) {
+  lever_b = q.rotations[body_b] * l.contact_point;
+  d = q.points[body_b] + lever_b - p;
+  return SmoothedSlip(d - l.normal.dot(d) * l.normal, epsilon);
+}
+
+// A sample's friction D = μλ f₀(‖P d‖), returned; its gradient and Hessian are ADDED to g
+// and H where non-null.
+double add_friction(const SampledPoint& p, const LaggedContact& l, const State& q, int body_b,
+                    double coefficient, double epsilon, LocalGradient<4>* g, LocalHessian<4>* H) {
+  if (l.normal_force == 0.0) return 0.0;
+  Vector3 r_b, d;
+  const SmoothedSlip s = slip(p.position, l, q, body_b, epsilon, r_b, d);
+  const double scale = coefficient * l.normal_force;  // μλ
+  if (g != nullptr || H != nullptr) {
+    const Vector3 f = scale * s.phi1 * s.u;  // ∂D/∂d
+    Jacobian Jd;                             // ∂d/∂(blocks)
+    Jd << -p.map, Matrix3::Identity(), -so3::hat(r_b);
+    if (g != nullptr) g->noalias() += Jd.transpose() * f;
+    if (H != nullptr) {
+      const Matrix3 K = scale * s.curvature(Matrix3::Identity() - l.normal * l.normal.transpose());
+      const Eigen::Matrix<double, 12, 3> JtK = Jd.transpose() * K;
+      H->noalias() += JtK.lazyProduct(Jd);
+      H->block<3, 3>(3, 3) += rotated_point_curvature(p.lever, -f);  // ∂D/∂p = −f
+      H->block<3, 3>(9, 9) += rotated_point_curvature(r_b, f);
+    }
+  }
+  return scale * s.f0;
+}
+
+// Adds a sample's ∂C/∂q̂ (body_contact.hpp) to `out`: `now` is the sample at q, `before` at
+// `previous`, k its stiffness.
+void add_friction_previous_jacobian(const SampledPoint& now, const SampledPoint& before,
+                                    const LaggedContact& l, const State& q, const State& previous,
+                                    int body_b, const Collider& shape, double k, double coefficient,
+                                    double epsilon, MixedBlock& out) {
+  if (l.normal_force == 0.0) return;
+  Vector3 r_b, d;
+  const SmoothedSlip s = slip(now.position, l, q, body_b, epsilon, r_b, d);
+  const Matrix3& R_b_previous = previous.rotations[body_b];
+  const SdfValue lagged = shape.evaluate(l.contact_point, true);
+  const double g_norm = lagged.gradient.norm();
+  const Vector3 G = R_b_previous * lagged.gradient;  // world
+  const Matrix3 N = R_b_previous * lagged.hessian * R_b_previous.transpose();
+  const Jacobian J_previous = field_jacobian(before, before.position - previous.points[body_b]);  // Ĵ
+  const Jacobian du_contact = R_b_previous.transpose() * J_previous;                              // ∂û/∂q̂
+  // λ = k(ρ − φ_B(û)) > 0 here.
+  const Eigen::Matrix<double, 1, 12> dlambda = -k * G.transpose() * J_previous;
+  const Vector3& n = l.normal;
+  const Matrix3 P = Matrix3::Identity() - n * n.transpose();
+  Jacobian dn = Jacobian::Zero();
+  if (g_norm > 0.0) dn = (P * N / g_norm) * J_previous;
+  dn.rightCols<3>() -= so3::hat(n);
+  const Jacobian dd = q.rotations[body_b] * du_contact;
+  const Jacobian du = P * dd - (n * d.transpose() + n.dot(d) * Matrix3::Identity()) * dn;
+  const Jacobian df = coefficient * (s.phi1 * s.u * dlambda + l.normal_force * s.jacobian() * du);
+  const Vector3 f = coefficient * l.normal_force * s.phi1 * s.u;
+  out.topRows<6>() -= now.map.transpose() * df;
+  out.middleRows<3>(6) += df;
+  out.middleRows<3>(9) += so3::hat(r_b) * df - so3::hat(f) * dd;
+}
+
+// a_previous += Mᵀ z, the four blocks' columns at the whole-state indices `at` (−1: not a
+// state entry, a rod node's rotation).
+void add_previous(const MixedBlock& M, const LocalGradient<4>& z, const std::array<int, 4>& at,
+                  Eigen::VectorXd& a_previous) {
+  const LocalGradient<4> w = M.transpose() * z;
+  for (int b = 0; b < 4; ++b) {
+    if (at[b] >= 0) a_previous.segment<3>(at[b]) += w.segment<3>(3 * b);
+  }
+}
+
+}  // namespace
+
+double BodyContact::penetration(const State& q) const {
   Vector3 w;
-  const SdfValue s = field(q, w, false);
-  const double d = radius - s.distance;
-  if (!(d > 0.0)) {
-    res(0) = 0.0;
-    if (J != nullptr) J->setZero();
-    return;
-  }
-  const double root_k = std::sqrt(stiffness);
-  res(0) = root_k * d;
-  if (J != nullptr) {
-    const Vector3& n = s.gradient;
-    const Vector3 r = at.lever(q);
-    // −√k nᵀ [I, −hat(r), −I, hat(w)]: nᵀ(−hat(r)) = (r × n)ᵀ, nᵀ hat(w) = −(w × n)ᵀ.
-    J->block<1, 3>(0, 0) = -root_k * n.transpose();
-    J->block<1, 3>(0, 3) = -root_k * r.cross(n).transpose();
-    J->block<1, 3>(0, 6) = root_k * n.transpose();
-    J->block<1, 3>(0, 9) = root_k * w.cross(n).transpose();
-  }
+  return radius - field(*shape, q, body_b, at.position(q), w, false).distance;
+}
+
+double BodyContact::evaluate(const State& q, LocalGradient<kBlocks>* g, LocalHessian<kBlocks>* H) const {
+  if (g != nullptr) g->setZero();
+  if (H != nullptr) H->setZero();
+  return add_penalty(SampledPoint::on_frame(at, q), q, body_b, *shape, stiffness, radius, g, H);
+}
+
+void BodyContact::residual(const State& q, Residual& r, ResidualJacobian* J) const {
+  r(0) = penalty_residual(SampledPoint::on_frame(at, q), q, body_b, *shape, stiffness, radius, J);
 }
 
 void BodyFriction::begin_step(const State& previous, const Step&) {
-  const Matrix3& R_b = previous.rotations[body_b];
-  contact_point = R_b.transpose() * (at.position(previous) - previous.points[body_b]);
-  const SdfValue s = shape->evaluate(contact_point, false);
-  normal_force = stiffness * std::max(0.0, radius - s.distance);
-  const double length = s.gradient.norm();
-  normal = length > 0.0 ? Vector3(R_b * s.gradient / length) : Vector3::UnitZ();
-}
-
-SmoothedSlip BodyFriction::slip(const State& q, Vector3& lever_b) const {
-  lever_b = q.rotations[body_b] * contact_point;
-  const Vector3 d = q.points[body_b] + lever_b - at.position(q);
-  return SmoothedSlip(d - normal.dot(d) * normal, epsilon);
+  const LaggedContact l = lag(at.position(previous), previous, body_b, *shape, stiffness, radius);
+  contact_point = l.contact_point;
+  normal_force = l.normal_force;
+  normal = l.normal;
 }
 
 double BodyFriction::evaluate(const State& q, LocalGradient<kBlocks>* g, LocalHessian<kBlocks>* H) const {
-  if (normal_force == 0.0) {
-    if (g != nullptr) g->setZero();
-    if (H != nullptr) H->setZero();
-    return 0.0;
-  }
-  Vector3 r_b;
-  const SmoothedSlip s = slip(q, r_b);
-  const double scale = coefficient * normal_force;  // μλ
-  if (g != nullptr || H != nullptr) {
-    Matrix3 K = Matrix3::Zero();
-    if (H != nullptr) K = scale * s.curvature(Matrix3::Identity() - normal * normal.transpose());
-    point_pair_derivatives(at.lever(q), r_b, scale * s.phi1 * s.u, K, g, H);
-  }
-  return scale * s.f0;
+  if (g != nullptr) g->setZero();
+  if (H != nullptr) H->setZero();
+  return add_friction(SampledPoint::on_frame(at, q), lagged(), q, body_b, coefficient, epsilon, g, H);
 }
 
 void BodyFriction::residual(const State& q, Residual& r, ResidualJacobian* J) const {
@@ -124,35 +220,9 @@ void BodyFriction::residual(const State& q, Residual& r, ResidualJacobian* J) co
 }
 
 Eigen::Matrix<double, 12, 12> BodyFriction::previous_jacobian(const State& q, const State& previous) const {
-  using Block = Eigen::Matrix<double, 3, 12>;
-  Eigen::Matrix<double, 12, 12> out = Eigen::Matrix<double, 12, 12>::Zero();
-  if (normal_force == 0.0) return out;
-  Vector3 r_b;
-  const SmoothedSlip s = slip(q, r_b);
-  const Matrix3& R_b_previous = previous.rotations[body_b];
-  const Vector3 w_previous = at.position(previous) - previous.points[body_b];
-  const SdfValue lagged = shape->evaluate(contact_point, true);
-  const double g_norm = lagged.gradient.norm();
-  const Vector3 G = R_b_previous * lagged.gradient;  // world
-  const Matrix3 N = R_b_previous * lagged.hessian * R_b_previous.transpose();
-  Block J_previous;  // Ĵ
-  J_previous << Matrix3::Identity(), -so3::hat(at.lever(previous)), -Matrix3::Identity(), so3::hat(w_previous);
-  const Block du_contact = R_b_previous.transpose() * J_previous;  // ∂û/∂q̂
-  const Eigen::Matrix<double, 1, 12> dlambda = -stiffness * G.transpose() * J_previous;
-  const Matrix3 P = Matrix3::Identity() - normal * normal.transpose();
-  Block dn = Block::Zero();
-  if (g_norm > 0.0) dn = (P * N / g_norm) * J_previous;
-  dn.rightCols<3>() -= so3::hat(normal);
-  const Matrix3& R_b = q.rotations[body_b];
-  const Block dd = R_b * du_contact;
-  const Vector3 d = q.points[body_b] + r_b - at.position(q);
-  const Block du = P * dd - (normal * d.transpose() + normal.dot(d) * Matrix3::Identity()) * dn;
-  const Block df = coefficient * (s.phi1 * s.u * dlambda + normal_force * s.jacobian() * du);
-  const Vector3 f = coefficient * normal_force * s.phi1 * s.u;
-  out.middleRows<3>(0) = -df;
-  out.middleRows<3>(3) = -so3::hat(at.lever(q)) * df;
-  out.middleRows<3>(6) = df;
-  out.middleRows<3>(9) = so3::hat(r_b) * df - so3::hat(f) * dd;
+  MixedBlock out = MixedBlock::Zero();
+  add_friction_previous_jacobian(SampledPoint::on_frame(at, q), SampledPoint::on_frame(at, previous), lagged(), q,
+                                 previous, body_b, *shape, stiffness, coefficient, epsilon, out);
   return out;
 }
 
@@ -160,12 +230,111 @@ void BodyFriction::add_step_adjoint(const State& q, const State& previous, const
                                     const LocalGradient<kBlocks>& z, Eigen::VectorXd& a_previous,
                                     Eigen::VectorXd&) const {
   if (normal_force == 0.0) return;
-  const LocalGradient<kBlocks> w = previous_jacobian(q, previous).transpose() * z;
-  a_previous.segment<3>(tangent_point(at.point)) += w.segment<3>(0);
-  if (at.rotation >= 0) a_previous.segment<3>(tangent_rotation(q, at.rotation)) += w.segment<3>(3);  // a rod node has none
-  a_previous.segment<3>(tangent_point(body_b)) += w.segment<3>(6);
-  a_previous.segment<3>(tangent_rotation(q, body_b)) += w.segment<3>(9);
+  // A rod node has no rotation.
+  add_previous(previous_jacobian(q, previous), z,
+               {tangent_point(at.point), at.rotation >= 0 ? tangent_rotation(q, at.rotation) : -1,
+                tangent_point(body_b), tangent_rotation(q, body_b)},
+               a_previous);
 }
+
+namespace {
+
+// Calls visit(k, s_k, c_k κ) for every Gauss point of the edge: s_k its place along the edge,
+// c_k κ = w_k ℓ̄ κ its stiffness.
+template <int N, class Visit>
+void for_each_gauss_point(const EdgeBodySample& edge, Visit&& visit) {
+  const QuadratureRule& rule = gauss_legendre(N);
+  for (int k = 0; k < N; ++k) visit(k, rule.nodes[k], rule.weights[k] * edge.rest_length * edge.stiffness);
+}
+
+// The edge's point at s, at q.
+SampledPoint edge_point(const EdgeBodySample& edge, const State& q, double s) {
+  return SampledPoint::on_edge(q.points[edge.nodes[0]], q.points[edge.nodes[1]], s);
+}
+
+}  // namespace
+
+template <int N>
+double BasicEdgeBodyContact<N>::penetration(const State& q) const {
+  double deepest = -std::numeric_limits<double>::infinity();
+  for_each_gauss_point<N>(*this, [&](int, double s, double) {
+    Vector3 w;
+    deepest = std::max(deepest, radius - field(*shape, q, body_b, edge_point(*this, q, s).position, w, false).distance);
+  });
+  return deepest;
+}
+
+template <int N>
+double BasicEdgeBodyContact<N>::evaluate(const State& q, LocalGradient<kBlocks>* g,
+                                         LocalHessian<kBlocks>* H) const {
+  if (g != nullptr) g->setZero();
+  if (H != nullptr) H->setZero();
+  double value = 0.0;
+  for_each_gauss_point<N>(*this, [&](int, double s, double k) {
+    value += add_penalty(edge_point(*this, q, s), q, body_b, *shape, k, radius, g, H);
+  });
+  return value;
+}
+
+template <int N>
+void BasicEdgeBodyContact<N>::residual(const State& q, Residual& r, ResidualJacobian* J) const {
+  for_each_gauss_point<N>(*this, [&](int k, double s, double stiffness_k) {
+    Eigen::Matrix<double, 1, 12> row;
+    r(k) = penalty_residual(edge_point(*this, q, s), q, body_b, *shape, stiffness_k, radius,
+                            J != nullptr ? &row : nullptr);
+    if (J != nullptr) J->row(k) = row;
+  });
+}
+
+template <int N>
+void BasicEdgeBodyFriction<N>::begin_step(const State& previous, const Step&) {
+  for_each_gauss_point<N>(*this, [&](int k, double s, double stiffness_k) {
+    lagged[k] = lag(edge_point(*this, previous, s).position, previous, body_b, *shape, stiffness_k, radius);
+  });
+}
+
+template <int N>
+double BasicEdgeBodyFriction<N>::evaluate(const State& q, LocalGradient<kBlocks>* g,
+                                          LocalHessian<kBlocks>* H) const {
+  if (g != nullptr) g->setZero();
+  if (H != nullptr) H->setZero();
+  double value = 0.0;
+  for_each_gauss_point<N>(*this, [&](int k, double s, double) {
+    value += add_friction(edge_point(*this, q, s), lagged[k], q, body_b, coefficient, epsilon, g, H);
+  });
+  return value;
+}
+
+template <int N>
+void BasicEdgeBodyFriction<N>::residual(const State& q, Residual& r, ResidualJacobian* J) const {
+  friction_residual(*this, q, r, J);
+}
+
+template <int N>
+Eigen::Matrix<double, 12, 12> BasicEdgeBodyFriction<N>::previous_jacobian(const State& q,
+                                                                          const State& previous) const {
+  MixedBlock out = MixedBlock::Zero();
+  for_each_gauss_point<N>(*this, [&](int k, double s, double stiffness_k) {
+    add_friction_previous_jacobian(edge_point(*this, q, s), edge_point(*this, previous, s), lagged[k], q, previous,
+                                   body_b, *shape, stiffness_k, coefficient, epsilon, out);
+  });
+  return out;
+}
+
+template <int N>
+void BasicEdgeBodyFriction<N>::add_step_adjoint(const State& q, const State& previous, const Step&,
+                                                const LocalGradient<kBlocks>& z, Eigen::VectorXd& a_previous,
+                                                Eigen::VectorXd&) const {
+  if (std::all_of(lagged.begin(), lagged.end(), [](const LaggedContact& l) { return l.normal_force == 0.0; })) return;
+  add_previous(previous_jacobian(q, previous), z,
+               {tangent_point(nodes[0]), tangent_point(nodes[1]), tangent_point(body_b), tangent_rotation(q, body_b)},
+               a_previous);
+}
+
+template struct BasicEdgeBodyContact<1>;
+template struct BasicEdgeBodyContact<4>;
+template struct BasicEdgeBodyContact<8>;
+template struct BasicEdgeBodyFriction<4>;
 
 namespace {
 
@@ -536,12 +705,18 @@ void TouchingPairs::find(const State& q, const std::vector<double>& margin,
 TouchingRodsAndBodies::TouchingRodsAndBodies(const Model& model) {
   for (const auto& [r, b] : model.rod_body_pairs()) {
     const RodSpec& rod = model.rods[r];
+    std::vector<bool> free(rod.node_count(), true);
+    for (int i : rod.fixed_nodes) free[i] = false;
     Pair p;
     p.body = b;
     for (int i = 0; i < rod.node_count(); ++i) {
-      if (std::find(rod.fixed_nodes.begin(), rod.fixed_nodes.end(), i) == rod.fixed_nodes.end()) {
-        p.nodes.push_back(model.rod_point(r, i));
-      }
+      if (free[i]) p.nodes.push_back(model.rod_point(r, i));
+    }
+    for (int e = 0; e < rod.edge_count(); ++e) {
+      if (free[e] || free[e + 1]) p.edges.push_back({model.rod_point(r, e), model.rod_point(r, e + 1)});
+    }
+    for (int i : {0, rod.node_count() - 1}) {
+      if (free[i]) p.tips.push_back(model.rod_point(r, i));
     }
     p.radius = rod.contact.radius;
     p.shape = model.bodies[b].shape;
@@ -556,10 +731,18 @@ double TouchingRodsAndBodies::overlap(const State& q, std::size_t index, double 
   const Matrix3& R_b = q.rotations[p.body];
   const double within = p.reach + p.radius + margin;
   double deepest = -std::numeric_limits<double>::infinity();
-  for (int node : p.nodes) {
-    const Vector3 w = q.points[node] - x_b;
-    if (w.squaredNorm() > within * within) continue;
-    deepest = std::max(deepest, p.radius - p.shape->evaluate(R_b.transpose() * w, false).distance);
+  const auto sample = [&](const Vector3& x) {
+    deepest = std::max(deepest, p.radius - p.shape->evaluate(R_b.transpose() * (x - x_b), false).distance);
+  };
+  for (int node : p.tips) {
+    if ((q.points[node] - x_b).squaredNorm() <= within * within) sample(q.points[node]);
+  }
+  const QuadratureRule& rule = gauss_legendre(EdgeBodyContact::kQuadraturePoints);
+  for (const auto& [a, b] : p.edges) {
+    const Vector3& x0 = q.points[a];
+    const Vector3& x1 = q.points[b];
+    if (point_segment_distance(x_b, x0, x1) > within) continue;
+    for (int k = 0; k < rule.size; ++k) sample(SampledPoint::on_edge(x0, x1, rule.nodes[k]).position);
   }
   return deepest;
 }

@@ -1,38 +1,114 @@
 #pragma once
-// Penalty contact between two bodies: a sample of body A against the shape of body B
-// (lib/contact.hpp is the same against a static collider; shapes: lib/sdf.hpp).
+// Penalty contact and friction against the shape of a body B (lib/contact.hpp is the same
+// against a static collider; shapes: lib/sdf.hpp).
 //
-// The sample is the point p = x_A + R_A p̄ (lever r = R_A p̄), a sphere of radius ρ; B's shape
-// is an SDF φ_B in B's coordinates, so with w = p − x_B and u = R_Bᵀ w,
+// The sampled side. A term's first two blocks carry the point p that touches B, either
+//   on a frame: p = x_A + R_A p̄, blocks (x_A, θ_A): a sample of body A, or a rod's node (no
+//               rotation: p̄ = 0 and θ_A is no DOF);
+//   on an edge: p = (1 − s) x_0 + s x_1, blocks (x_0, x_1): a point of a rod's edge (the
+//               Gauss points below).
+// To first order a change of the two blocks moves p by A (δ_0, δ_1), with
+//   A = [I, −hat(r)] on a frame (r = R_A p̄, the lever),   A = [(1 − s) I, s I] on an edge,
+// and p's only second-order term is the rotated point's, C(r, f_p) at block (1, 1) (paper
+// eq. 23, rotated_point_curvature, f_p = ∂V/∂p), which vanishes on an edge with r = 0 (p is
+// linear in the nodes). Every formula below is written with A and r, and one code path serves
+// both sides: SampledPoint holds (p, A, r), and the terms differ only in how they make it and
+// in where their first two blocks live in the state. Why a value rather than templates on
+// the sampled side: A is the same 3×6 map for both, the Jacobian J below is built explicitly
+// either way (so a general A costs nothing), and the math stays in one compiled function of
+// the .cpp instead of being instantiated per side; BodySample and the body terms keep their
+// layout and interfaces.
+//
+// Contact. B's shape is an SDF φ_B in B's coordinates; a sample is a sphere of radius ρ with
+// stiffness k, and with w = p − x_B, u = R_Bᵀ w,
 //   φ = φ_B(u),   d = ρ − φ,   V = ½ k max(0, d)².
 // In world terms n = R_B ∇φ_B(u), N = R_B ∇²φ_B(u) R_Bᵀ, f = ∂V/∂p = −k d n and
-// K = k (n nᵀ − d N). A change of the four blocks (x_A, θ_A, x_B, θ_B), each rotation by a
-// left perturbation, moves u by R_Bᵀ J (δx_A, δθ_A, δx_B, δθ_B) to first order, with
-//   J = [I, −hat(r), −I, hat(w)]
+// K = k (n nᵀ − d N). A change of the four blocks (sampled side, x_B, θ_B), B's rotation by a
+// left perturbation, moves u by R_Bᵀ J δ to first order, with
+//   J = [A, −I, hat(w)]
 // (B's turn δθ_B moves the field, u = R_Bᵀ exp(−δθ_B) w: the sample seen from B turns by
 // −δθ_B about x_B). So the gradient is Jᵀ f and the Hessian is Jᵀ K J plus the second-order
 // terms of u (paper eq. 23 for both rotated points, and the cross terms of exp(−δθ_B) with
 // the motion of p and x_B), with f in the world:
-//   θ_Aθ_A: C(r, f)          θ_Bθ_B: C(w, f)          (C = rotated_point_curvature)
-//   θ_B x_A: hat(f)          θ_B x_B: −hat(f)         θ_B θ_A: −hat(f) hat(r)
-// and their transposes across the diagonal. As for a collider, K is indefinite where B's
-// surface curves towards the sample, exact, and V is C¹ with a jump of K at d = 0.
-// The internal forces are equal and opposite: the gradient's x_A and x_B parts cancel, and
-// so do the torques about the origin, so contact between bodies conserves linear and angular
-// momentum (tests/test_body_contact.cpp).
+//   (1, 1): C(r, f)     θ_Bθ_B: C(w, f)     θ_B × (block 0, block 1, x_B): hat(f) [A, −I]
+// and their transposes across the diagonal (on a frame: θ_B x_A hat(f), θ_B θ_A −hat(f) hat(r),
+// θ_B x_B −hat(f)). As for a collider, K is indefinite where B's surface curves towards the
+// sample, exact, and V is C¹ with a jump of K at d = 0.
+// The internal forces are equal and opposite: the gradient's parts on p (Aᵀ f) and x_B (−f)
+// cancel, and so do the torques about the origin, so contact conserves linear and angular
+// momentum (tests/test_body_contact.cpp, tests/test_edge_body_contact.cpp).
 //
-// Least-squares form, 1 residual: r = √k max(0, d), ∂r/∂(x_A, θ_A, x_B, θ_B) = −√k nᵀ J
-// where d > 0, else 0.
+// Least-squares form, 1 residual per sample: r = √k max(0, d), ∂r/∂(blocks) = −√k nᵀ J where
+// d > 0, else 0.
 //
 // Reads q_k only: the adjoint needs no mixed block (its Hessian enters H_k). Its stencil
-// spans two bodies: a pair of bodies in contact is a coupling, and joins their islands
-// (solvers/islands.hpp) for the steps in which it is (Model::touching_pairs).
+// spans two objects: a pair in contact is a coupling, and joins their islands
+// (solvers/islands.hpp) for the steps in which it is (ContactSearch, contact_search.hpp).
+//
+// Friction: friction.hpp's lagged law on the slip of the sample relative to the point of B it
+// touched. At the start of the step, with hats for q_{k−1}: the sample at p̂ sits at
+// û = R̂_Bᵀ(p̂ − x̂_B) in B's coordinates, and
+//   λ = k max(0, ρ − φ_B(û)),   n = R̂_B G/‖G‖ (G = ∇φ_B(û)),   P = I − n nᵀ
+// are frozen, as is û: B's material point b̄ = û (LaggedContact). Over the step the sample
+// moves from that point by d = p_B − p with p_B = x_B + R_B û (zero at q_{k−1}), and
+//   D = μ λ f₀(‖P d‖)
+// (f₀ and its slopes: friction.hpp). With
+//   f = ∂D/∂d = μλ φ₁ u,   K = μλ (φ₁ P + (φ₁′/y) u uᵀ),   u = P d, y = ‖u‖,
+// and r_B = R_B û, ∂d/∂(blocks) = Jd = [−A, I, −hat(r_B)]: the gradient is Jdᵀ f and the
+// Hessian Jdᵀ K Jd + C(r, −f) at (1, 1) + C(r_B, f) at θ_Bθ_B (point_pair.hpp's mapping with
+// the sampled side's A). A sample sliding over a still body feels μλ against its slip; the
+// body the opposite force at its material point, d away: linear momentum is conserved, and the
+// couple d × f vanishes where the slip lies in the lagged tangent plane (P d = d).
+//
+// Least-squares form: r = √(2D), J = gᵀ/r (friction_residual).
+//
+// The adjoint: λ, n and û are functions of q̂ = (the sampled side's blocks, x̂_B, θ̂_B) at
+// q_{k−1}, through
+//   ∂û/∂q̂ = R̂_Bᵀ Ĵ,   Ĵ = [Â, −I, hat(ŵ)],   ŵ = p̂ − x̂_B   (the contact's J at q_{k−1}),
+//   ∂λ/∂q̂ = −k Gᵀ ∂û/∂q̂,
+//   ∂n/∂q̂ = (P N/‖G‖) Ĵ − [0, 0, 0, hat(n)]   (N = R̂_B ∇²φ_B(û) R̂_Bᵀ; B's turn carries n),
+//   ∂d/∂q̂ = R_B ∂û/∂q̂,   ∂u/∂q̂ = P ∂d/∂q̂ − (n dᵀ + (n·d) I) ∂n/∂q̂,
+//   ∂f/∂q̂ = μ φ₁ u ∂λ/∂q̂ + μλ (φ₁ I + (φ₁′/y) u uᵀ) ∂u/∂q̂,
+// and the gradient C = [−Aᵀ f; f; r_B × f] has ∂C/∂q̂ rows −Aᵀ ∂f (A at q_k: p̂ does not
+// enter it), ∂f and hat(r_B) ∂f − hat(f) R_B ∂û/∂q̂ (r_B moves with û). Δq_{k−1} does not
+// enter.
+//
+// Edges (EdgeBodyContact, EdgeBodyFriction). A rod's edge [x_0, x_1] is a capsule of the
+// rod's contact radius ρ. Its closest point to B is not a smooth function of the state (it
+// jumps along a straight edge lying on a face), so, as between edges (lib/edge_contact.hpp),
+// the penalty is integrated along the edge by an N-point Gauss–Legendre rule (nodes s_q,
+// weights w_q, Σ w_q = 1) with ℓ̄ the edge's rest length:
+//   V = Σ_q c_q ½ κ max(0, ρ − φ(p_q))²,   p_q = (1 − s_q) x_0 + s_q x_1,   c_q = w_q ℓ̄,
+// κ a stiffness per unit length: each Gauss point is a sample on an edge with stiffness c_q κ,
+// and its friction a sample's friction with its own lagged (û_q, λ_q = c_q κ max(0, ρ −
+// φ_B(û_q)), n_q); the blocks are (x_0, x_1, x_B, θ_B), a clamped node's or a kinematic
+// body's offsets −1. The builder takes κ = k/ℓ̄ (the rod's contact k, as EdgeContact does), so
+// that c_q κ = w_q k: an edge lying along a body presses with k in all, about k per node, as
+// the node samples it replaces did.
+// Tips: the Gauss points never reach an edge's ends (s_1 ≈ 0.07 with 4 points), so the
+// hemispherical caps at a rod's two ends are not sampled, and a rod pushed end-on into a body
+// would sink by 0.07 ℓ̄ before a Gauss point touched. The two END nodes, when free, keep a
+// node sample (a BodyContact on a frame without rotation) with the rod's k. Interior nodes
+// need none: the two edges that meet there sample both sides of them. Near an end the node's
+// k adds to the edge's (a rod lying flat on a face presses with (n + 1) k over its n nodes
+// instead of n k): the ends are a little stiffer, never softer.
+// What the quadrature sees, and when more points are needed: contact only where a Gauss point
+// is within ρ of B. Consecutive samples along a rod are at most Δ = 0.34 ℓ̄ apart with 4
+// points (the middle pair; 0.14 ℓ̄ across a node), 0.18 ℓ̄ with 8. A convex feature of B of
+// radius of curvature R (a sphere's or capsule's radius, a box's rounding) crossed between
+// two samples pokes into the capsule by up to (R + ρ) − √((R + ρ)² − Δ²/4) ≈ Δ²/(8 (R + ρ)),
+// and passes through it when Δ/2 ≥ R + ρ; a sharp box edge (R = 0) crossed at 45° pokes in by
+// up to Δ/2 − (√2 − 1) ρ, through the rod when Δ/2 ≥ (√2 + 1) ρ. Δ is about 1.4 ℓ̄/N, so
+// where rods cross thin features ℓ̄/N should be below about R + ρ: more points (the builder
+// uses 4) or shorter edges. penetration() reports the deepest sample, not the capsule's
+// closest distance.
 
 #include <memory>
 #include <string>
 #include <utility>
 #include <vector>
 
+#include "edge_contact.hpp"
 #include "friction.hpp"
 #include "model.hpp"
 #include "sdf.hpp"
@@ -41,8 +117,27 @@
 
 namespace liedyn {
 
-// What the contact and friction terms between two bodies share: a sample of A, a sphere of
-// radius ρ, against B's shape with stiffness k.
+// The sampled side at a state (formulas above): p, A = ∂p/∂(block 0, block 1) and the lever r.
+struct SampledPoint {
+  Vector3 position;                 // p
+  Eigen::Matrix<double, 3, 6> map;  // A
+  Vector3 lever;                    // r (0 on an edge)
+
+  // A point on a frame (a body's sample, a rod's node): blocks (x_A, θ_A).
+  static SampledPoint on_frame(const AttachedPoint& at, const State& q);
+  // The point at s of the edge [x0, x1]: blocks (x_0, x_1).
+  static SampledPoint on_edge(const Vector3& x0, const Vector3& x1, double s);
+};
+
+// What friction freezes at the start of a step, per sample (formulas above).
+struct LaggedContact {
+  Vector3 contact_point = Vector3::Zero();  // û, in B's coordinates
+  double normal_force = 0.0;                // λ
+  Vector3 normal = Vector3::UnitZ();        // n, world
+};
+
+// What the contact and friction terms of a sample on a frame share: a sample of A (or a rod's
+// node), a sphere of radius ρ, against B's shape with stiffness k.
 struct BodySample {
   std::array<int, 4> offsets{-1, -1, -1, -1};  // x_A, θ_A, x_B, θ_B
   AttachedPoint at;                            // the sample, on A
@@ -65,45 +160,15 @@ struct BodyContact : BodySample {
   using Residual = LocalResidual<kResiduals>;
   using ResidualJacobian = LocalResidualJacobian<kResiduals, kBlocks>;
   void residual(const State& q, Residual& r, ResidualJacobian* J) const;
-
- private:
-  // φ_B's value and world-frame derivatives at the sample; w = p − x_B.
-  SdfValue field(const State& q, Vector3& w, bool with_hessian) const;
 };
 
-// Smoothed Coulomb friction between a sample of body A and body B: friction.hpp's lagged law
-// on the slip of the sample relative to the point of B it touched.
-//
-// At the start of the step, with hats for q_{k−1}: the sample at p̂ = x̂_A + R̂_A p̄ sits at
-// û = R̂_Bᵀ(p̂ − x̂_B) in B's coordinates, and
-//   λ = k max(0, ρ − φ_B(û)),   n = R̂_B G/‖G‖ (G = ∇φ_B(û)),   P = I − n nᵀ
-// are frozen, as is û: B's material point b̄ = û. Over the step the sample moves from that
-// point by d = p_B − p_A with p_A = x_A + R_A p̄ and p_B = x_B + R_B û (zero at q_{k−1}), and
-//   D = μ λ f₀(‖P d‖)
-// (f₀ and its slopes: friction.hpp). The potential is one of the vector between two attached
-// points, so the gradient and Hessian are point_pair.hpp's mapping of
-//   f = ∂D/∂d = μλ φ₁ u,   K = μλ (φ₁ P + (φ₁′/y) u uᵀ),   u = P d, y = ‖u‖,
-// with the levers r_A = R_A p̄, r_B = R_B û. A body sliding over a still one feels μλ against
-// its slip; the still one feels the opposite force at the same place (equal and opposite, as
-// for BodyContact: momentum is conserved, only energy is dissipated).
-//
-// Least-squares form: r = √(2D), J = gᵀ/r (friction_residual).
-//
-// The adjoint: λ, n and û are functions of q̂ = (x̂_A, θ̂_A, x̂_B, θ̂_B), through
-//   ∂û/∂q̂ = R̂_Bᵀ Ĵ,   Ĵ = [I, −hat(r̂_A), −I, hat(ŵ)],   ŵ = p̂ − x̂_B   (as BodyContact's J),
-//   ∂λ/∂q̂ = −k Gᵀ ∂û/∂q̂,
-//   ∂n/∂q̂ = (P N/‖G‖) Ĵ − [0, 0, 0, hat(n)]   (N = R̂_B ∇²φ_B(û) R̂_Bᵀ; B's turn carries n),
-//   ∂d/∂q̂ = R_B ∂û/∂q̂,   ∂u/∂q̂ = P ∂d/∂q̂ − (n dᵀ + (n·d) I) ∂n/∂q̂,
-//   ∂f/∂q̂ = μ φ₁ u ∂λ/∂q̂ + μλ (φ₁ I + (φ₁′/y) u uᵀ) ∂u/∂q̂,
-// and the gradient C = [−f; −r_A × f; f; r_B × f] has ∂C/∂q̂ rows −∂f, −hat(r_A) ∂f, ∂f and
-// hat(r_B) ∂f − hat(f) R_B ∂û/∂q̂ (r_B moves with û). Δq_{k−1} does not enter.
 struct BodyFriction : BodySample {
   static constexpr int kBlocks = 4;
   static constexpr const char* kName = "body_friction";
   double coefficient = 0.0;  // μ, A's
   double epsilon = 0.0;      // ε = ε_v h, m, > 0
 
-  // Lagged per step (begin_step).
+  // Lagged per step (begin_step): a LaggedContact's.
   Vector3 contact_point = Vector3::Zero();  // û, in B's coordinates
   double normal_force = 0.0;                // λ
   Vector3 normal = Vector3::UnitZ();        // n, world
@@ -124,8 +189,76 @@ struct BodyFriction : BodySample {
                         Eigen::VectorXd& da_previous) const;
 
  private:
-  SmoothedSlip slip(const State& q, Vector3& lever_b) const;
+  LaggedContact lagged() const { return {contact_point, normal_force, normal}; }
 };
+
+// What the contact and friction terms of a rod's edge against B's shape share.
+struct EdgeBodySample {
+  std::array<int, 4> offsets{-1, -1, -1, -1};  // x_0, x_1, x_B, θ_B
+  std::array<int, 2> nodes{-1, -1};            // State::points of the edge's two nodes
+  int body_b = -1;                             // B
+  std::shared_ptr<const Collider> shape;       // B's shape, in B's coordinates
+  double stiffness = 0.0;                      // κ, N/m² (per unit length of edge)
+  double radius = 0.0;                         // ρ, m
+  double rest_length = 0.0;                    // ℓ̄, m: weighs the samples
+};
+
+template <int N>
+struct BasicEdgeBodyContact : EdgeBodySample {
+  static_assert(N >= 1 && N <= kMaxEdgeQuadraturePoints, "Gauss–Legendre points per edge");
+  static constexpr int kBlocks = 4;
+  static constexpr const char* kName = "edge_body_contact";
+  static constexpr bool kEnergyOfState = true;
+  static constexpr int kQuadraturePoints = N;
+
+  // ρ − φ of the deepest Gauss point: > 0 when its sphere overlaps B.
+  double penetration(const State& q) const;
+  double evaluate(const State& q, LocalGradient<kBlocks>* g, LocalHessian<kBlocks>* H) const;
+
+  // One residual per Gauss point: r_q = √(c_q κ) max(0, d_q).
+  static constexpr int kResiduals = N;
+  using Residual = LocalResidual<kResiduals>;
+  using ResidualJacobian = LocalResidualJacobian<kResiduals, kBlocks>;
+  void residual(const State& q, Residual& r, ResidualJacobian* J) const;
+};
+
+template <int N>
+struct BasicEdgeBodyFriction : EdgeBodySample {
+  static_assert(N >= 1 && N <= kMaxEdgeQuadraturePoints, "Gauss–Legendre points per edge");
+  static constexpr int kBlocks = 4;
+  static constexpr const char* kName = "edge_body_friction";
+  static constexpr int kQuadraturePoints = N;
+  double coefficient = 0.0;  // μ, the rod's
+  double epsilon = 0.0;      // ε = ε_v h, m, > 0
+  std::array<LaggedContact, N> lagged{};  // per Gauss point, fixed by begin_step
+
+  void begin_step(const State& previous, const Step& previous_step);
+  // D = Σ_q D_q.
+  double evaluate(const State& q, LocalGradient<kBlocks>* g, LocalHessian<kBlocks>* H) const;
+
+  // r = √(2D) (friction_residual).
+  static constexpr int kResiduals = 1;
+  using Residual = LocalResidual<kResiduals>;
+  using ResidualJacobian = LocalResidualJacobian<kResiduals, kBlocks>;
+  void residual(const State& q, Residual& r, ResidualJacobian* J) const;
+
+  // ∂C/∂q̂ with respect to the previous positions of the two nodes and the previous pose of B,
+  // summed over the Gauss points. `previous` must be the state begin_step was given.
+  Eigen::Matrix<double, 12, 12> previous_jacobian(const State& q, const State& previous) const;
+  void add_step_adjoint(const State& q, const State& previous, const Step& previous_step,
+                        const LocalGradient<kBlocks>& z, Eigen::VectorXd& a_previous,
+                        Eigen::VectorXd& da_previous) const;
+};
+
+// 4 Gauss points per edge, as EdgeContact (the rule's size is a template parameter because
+// the residual count must be known at compile time).
+using EdgeBodyContact = BasicEdgeBodyContact<4>;
+using EdgeBodyFriction = BasicEdgeBodyFriction<4>;
+
+extern template struct BasicEdgeBodyContact<1>;
+extern template struct BasicEdgeBodyContact<4>;
+extern template struct BasicEdgeBodyContact<8>;
+extern template struct BasicEdgeBodyFriction<4>;
 
 // Points on the surface of a body's shape (its coordinates, the shape's pose within the body
 // applied), about `spacing` (m, > 0) apart, deterministic, every point of the surface within
@@ -185,11 +318,13 @@ class TouchingPairs {
   std::vector<double> reach_;
 };
 
-// Which (rod, body) pairs (Model::rod_body_pairs) touch at a state: a free node of the rod
-// within the rod's contact radius plus a margin of the body's shape (the margin: the body's,
-// as for TouchingPairs, plus the farthest any node of the rod moved in the last step). The
-// body's bounding sphere rules most nodes out first. Allocation-free after construction.
-// The entries of the pairs are `touching[first + p]`.
+// Which (rod, body) pairs (Model::rod_body_pairs) touch at a state, by the samples of the
+// terms (EdgeBodyContact's Gauss points on every edge with a free node, and the free end
+// nodes): one within the rod's contact radius plus a margin of the body's shape (the margin:
+// the body's, as for TouchingPairs, plus the farthest any free node of the rod moved in the
+// last step). The body's bounding sphere rules most edges out first (the segment's distance
+// to its centre), and most end nodes. Allocation-free after construction. The entries of the
+// pairs are `touching[first + p]`.
 class TouchingRodsAndBodies {
  public:
   TouchingRodsAndBodies() = default;
@@ -207,12 +342,14 @@ class TouchingRodsAndBodies {
  private:
   struct Pair {
     int body = -1;
-    std::vector<int> nodes;  // State::points of the rod's free nodes
-    double radius = 0.0;     // the rod's contact radius
-    double reach = 0.0;      // the body's bounding radius
+    std::vector<int> nodes;                 // State::points of the rod's free nodes
+    std::vector<std::array<int, 2>> edges;  // of the nodes of each edge with a free node
+    std::vector<int> tips;                  // of its free end nodes
+    double radius = 0.0;                    // the rod's contact radius
+    double reach = 0.0;                     // the body's bounding radius
     std::shared_ptr<const Collider> shape;
   };
-  // The deepest ρ − φ of a node within reach + margin of the body's centre (−∞ without one).
+  // The deepest ρ − φ of a sample within reach + margin of the body's centre (−∞ without one).
   double overlap(const State& q, std::size_t p, double margin) const;
   std::vector<Pair> pairs_;
 };

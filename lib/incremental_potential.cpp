@@ -467,29 +467,48 @@ void add_edge_contact_terms(const Model& model, const std::vector<bool>& key, co
   }
 }
 
-// Every free node of a rod against a body's shape (a sample without a rotation: BodyContact's
-// θ_A block is no DOF), for each (rod, body) pair that touches under `key` (the entries after
-// the edge pairs); rod and body are then in one component.
+// A rod against a body's shape (body_contact.hpp), for each (rod, body) pair that touches under
+// `key` (the entries after the edge pairs): every edge with a free node by its Gauss points
+// (EdgeBodyContact, stiffness per unit length k over the edge's rest length, so that an edge
+// lying on the body presses with k as a node did), and the free END nodes by a node sample (a
+// sample without a rotation: BodyContact's θ_A block is no DOF), the hemispherical tips that
+// the Gauss points never reach; rod and body are then in one component.
 void add_rod_body_contact_terms(const Model& model, const std::vector<bool>& key, const ContactCandidates& candidates,
                                 const DofMap& dofs, std::vector<Component>& components) {
   const std::vector<std::pair<int, int>>& pairs = candidates.rods_on_bodies;
+  std::vector<std::optional<RodDiscretization>> rods(model.rods.size());
   for (std::size_t p = 0; p < pairs.size(); ++p) {
     if (!holds(key, candidates.first_rod_on_body, p)) continue;
     const auto [r, b] = pairs[p];
     const RodSpec& rod = model.rods[r];
+    if (!rods[r]) rods[r] = discretize(rod);
     const std::array<int, 2> body = dofs.points[b];
+    const int body_rotation = dofs.rotations[b][1];
+    const auto offset = [&](int node) { return dofs.points[model.rod_point(r, node)][1]; };  // −1: clamped
     // The body's component, or for a kinematic body (no DOF) the rod's (Model::rod_body_pairs:
     // it has a free node).
     int component = body[0];
     for (int i = 0; component < 0 && i < rod.node_count(); ++i) component = dofs.points[model.rod_point(r, i)][0];
     IncrementalPotential& potential = components[component].potential;
-    for (int i = 0; i < rod.node_count(); ++i) {
-      const int point = model.rod_point(r, i);
-      const int offset = dofs.points[point][1];
-      if (offset < 0) continue;  // clamped
+    for (int e = 0; e < rod.edge_count(); ++e) {
+      if (offset(e) < 0 && offset(e + 1) < 0) continue;
+      const double rest_length = rods[r]->rest_length[e];
+      add_sample_terms<EdgeBodyContact, EdgeBodyFriction>(
+          model,
+          EdgeBodySample{{offset(e), offset(e + 1), body[1], body_rotation},
+                         {model.rod_point(r, e), model.rod_point(r, e + 1)},
+                         b,
+                         model.bodies[b].shape,
+                         rod.contact.stiffness / rest_length,
+                         rod.contact.radius,
+                         rest_length},
+          rod.contact, potential);
+    }
+    for (int i : {0, rod.node_count() - 1}) {
+      if (offset(i) < 0) continue;
       add_sample_terms<BodyContact, BodyFriction>(
           model,
-          BodySample{{offset, -1, body[1], dofs.rotations[b][1]}, {point, -1, Vector3::Zero()}, b,
+          BodySample{{offset(i), -1, body[1], body_rotation}, {model.rod_point(r, i), -1, Vector3::Zero()}, b,
                      model.bodies[b].shape, rod.contact.stiffness, rod.contact.radius},
           rod.contact, potential);
     }

@@ -53,7 +53,7 @@ class IncrementalPotential {
                                RodBendTwist, CableSegment, JointPoint, JointLine, JointAlignment, JointWeld,
                                JointMotor, JointForceMotor, JointLimit<HingeAngle>,
                                JointLimit<SliderPosition>, Contact, Friction, BodyContact,
-                               BodyFriction, EdgeContact>;
+                               BodyFriction, EdgeContact, EdgeBodyContact, EdgeBodyFriction>;
 
   // The terms of type T (one contiguous vector per type).
   template <class T>

@@ -76,8 +76,8 @@ struct RodSpec {
   // Contact of every free node, a sphere of contact.radius, with the model's colliders
   // (lib/contact.hpp); contact.stiffness = 0: none. With contact, its edges (capsules of
   // contact.radius) touch the edges of every other rod with contact (lib/edge_contact.hpp),
-  // and with self_contact its own edges more than self_contact_skip apart along it; its free
-  // nodes touch the shapes of bodies (lib/body_contact.hpp).
+  // and with self_contact its own edges more than self_contact_skip apart along it; its edges
+  // (by Gauss points) and free end nodes touch the shapes of bodies (lib/body_contact.hpp).
   ContactMaterial contact;
   bool self_contact = false;
   int self_contact_skip = 2;
