@@ -22,6 +22,7 @@
 #include <vector>
 
 #include "fd_check.hpp"
+#include "mesh_models.hpp"
 #include "lib/body_contact.hpp"
 #include "lib/mesh_sdf.hpp"
 #include "lib/sdf.hpp"
@@ -29,6 +30,8 @@
 
 namespace liedyn {
 namespace {
+
+using test::box_mesh;
 
 using fd::kAngles;
 using fd::rotation_at;
@@ -214,24 +217,6 @@ TEST(SurfaceSamples, LieOnTheShapeAndCoverItAtTheirSpacing) {
 // triangles within the spacing of one, its corners sampled, deterministic; one per ~(0.7
 // spacing)² of area. A box mesh (large faces), and a finely meshed sphere (triangles much
 // smaller than the spacing).
-TriangleMesh box_mesh(const Vector3& h) {
-  TriangleMesh m;
-  for (int i = 0; i < 8; ++i) {
-    m.vertices.emplace_back((i & 1 ? 1 : -1) * h.x(), (i & 2 ? 1 : -1) * h.y(),
-                            (i & 4 ? 1 : -1) * h.z());
-  }
-  for (const auto& q : {std::array<int, 4>{0, 2, 3, 1},
-                        {4, 5, 7, 6},
-                        {0, 1, 5, 4},
-                        {2, 6, 7, 3},
-                        {0, 4, 6, 2},
-                        {1, 3, 7, 5}}) {
-    m.triangles.push_back({q[0], q[1], q[2]});
-    m.triangles.push_back({q[0], q[2], q[3]});
-  }
-  return m;
-}
-
 // A UV sphere of radius r: `rings` latitudes (poles apart), `around` longitudes.
 TriangleMesh uv_sphere(double r, int rings, int around) {
   TriangleMesh m;

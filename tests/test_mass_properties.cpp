@@ -14,6 +14,7 @@
 #include <string>
 
 #include "fd_check.hpp"
+#include "mesh_models.hpp"
 #include "lib/mass_properties.hpp"
 #include "lib/mesh_sdf.hpp"
 #include "lib/model.hpp"
@@ -21,6 +22,8 @@
 
 namespace liedyn {
 namespace {
+
+using test::box_mesh;
 
 Collider solid(const Shape& shape, const Matrix3& orientation = Matrix3::Identity()) {
   Collider c;
@@ -140,24 +143,6 @@ TEST(MassProperties, AgreeWithIntegrationOverTheShapeAndTurnWithIt) {
 // a regular tetrahedron (I = m a²/20 about any axis through its centroid, edge a) and a
 // regular octahedron |x| + |y| + |z| ≤ c (I = m c²/5); turned with the shape; inward normals
 // give the same; a mesh not centred on its centroid is refused, saying by how much.
-TriangleMesh box_mesh(const Vector3& h) {
-  TriangleMesh m;
-  for (int i = 0; i < 8; ++i)
-    m.vertices.emplace_back((i & 1 ? 1 : -1) * h.x(), (i & 2 ? 1 : -1) * h.y(),
-                            (i & 4 ? 1 : -1) * h.z());
-  // Two triangles per face, counter-clockwise seen from outside.
-  for (const auto& q : {std::array<int, 4>{0, 2, 3, 1},
-                        {4, 5, 7, 6},
-                        {0, 1, 5, 4},
-                        {2, 6, 7, 3},
-                        {0, 4, 6, 2},
-                        {1, 3, 7, 5}}) {
-    m.triangles.push_back({q[0], q[1], q[2]});
-    m.triangles.push_back({q[0], q[2], q[3]});
-  }
-  return m;
-}
-
 TriangleMesh tetrahedron() {
   return {{{1, 1, 1}, {1, -1, -1}, {-1, 1, -1}, {-1, -1, 1}},
           {{0, 1, 2}, {0, 3, 1}, {0, 2, 3}, {1, 3, 2}}};
