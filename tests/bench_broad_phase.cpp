@@ -6,15 +6,14 @@
 // pairs that overlap.
 //   /0 SweepAndPrune (ours, the order of the last query kept)
 //   /1 fcl::DynamicAABBTreeCollisionManager (update every object, then collide)
-//   /2 fcl::SaPCollisionManager (FCL's own sweep and prune)
-//   /3 every pair of boxes tested (what the candidates cost without a broad phase)
-// Each reports the pairs it found per query (`pairs`): all four must agree.
+//   /2 every pair of boxes tested (what the candidates cost without a broad phase)
+// Each reports the pairs it found per query (`pairs`). (FCL's SaPCollisionManager is left out:
+// its first query on these boxes had not returned after minutes.)
 //
 //   ./build/tests/liedyn_bench --benchmark_filter=BroadPhase --benchmark_repetitions=3
 
 #include <benchmark/benchmark.h>
 
-#include <fcl/broadphase/broadphase_SaP.h>
 #include <fcl/broadphase/broadphase_dynamic_AABB_tree.h>
 #include <fcl/geometry/shape/box.h>
 #include <fcl/narrowphase/collision_object.h>
@@ -87,7 +86,6 @@ void BM_BroadPhase_Coil(benchmark::State& state) {
   }
   std::unique_ptr<fcl::BroadPhaseCollisionManagerd> manager;
   if (method == 1) manager = std::make_unique<fcl::DynamicAABBTreeCollisionManagerd>();
-  if (method == 2) manager = std::make_unique<fcl::SaPCollisionManagerd>();
   const auto place = [&](const std::vector<Aabb>& boxes) {
     for (int i = 0; i < n; ++i) {
       shapes[i]->side = boxes[i].hi - boxes[i].lo;
@@ -109,7 +107,7 @@ void BM_BroadPhase_Coil(benchmark::State& state) {
     if (method == 0) {
       sweep.overlapping(boxes, pairs);
       count = pairs.size();
-    } else if (method == 3) {
+    } else if (method == 2) {
       for (int i = 0; i < n; ++i) {
         for (int j = i + 1; j < n; ++j) {
           count += (boxes[i].lo.array() <= boxes[j].hi.array()).all() && (boxes[j].lo.array() <= boxes[i].hi.array()).all();
@@ -127,6 +125,6 @@ void BM_BroadPhase_Coil(benchmark::State& state) {
   }
   state.counters["pairs"] = static_cast<double>(found) / static_cast<double>(queries);
 }
-BENCHMARK(BM_BroadPhase_Coil)->Arg(0)->Arg(1)->Arg(2)->Arg(3)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_BroadPhase_Coil)->Arg(0)->Arg(1)->Arg(2)->Unit(benchmark::kMicrosecond);
 
 }  // namespace
