@@ -1,5 +1,7 @@
 #include "edge_contact.hpp"
 
+#include "friction.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -115,13 +117,17 @@ std::array<double, 4> sample_beta(int side) {
   return {-1.0, 1.0, 0.0, 0.0};
 }
 
+// The four nodes a0, a1, b0, b1 at q.
+std::array<const Vector3*, 4> node_positions(const EdgeEdgeSample& term, const State& q) {
+  return {&q.points[term.nodes[0]], &q.points[term.nodes[1]], &q.points[term.nodes[2]], &q.points[term.nodes[3]]};
+}
+
 // Calls visit(side, k, s, c, projection) for every sample: side 0 the N samples of a against
 // [b0, b1], side 1 those of b against [a0, a1]; c = ½ w_k ℓ̄ its weight.
 template <int N, class Visit>
-void for_each_sample(const BasicEdgeContact<N>& term, const State& q, Visit&& visit) {
+void for_each_sample(const EdgeEdgeSample& term, const State& q, Visit&& visit) {
   const QuadratureRule& rule = gauss_legendre(N);
-  const std::array<const Vector3*, 4> x = {&q.points[term.nodes[0]], &q.points[term.nodes[1]],
-                                           &q.points[term.nodes[2]], &q.points[term.nodes[3]]};
+  const std::array<const Vector3*, 4> x = node_positions(term, q);
   for (int side = 0; side < 2; ++side) {
     const Vector3& p0 = *x[2 * side];
     const Vector3& p1 = *x[2 * side + 1];
@@ -197,7 +203,7 @@ double BasicEdgeContact<N>::evaluate(const State& q, LocalGradient<kBlocks>* g,
   const double reach = radius_a + radius_b;
   // Each edge's half apart, added last, so that swapping a and b gives the same value exactly.
   std::array<double, 2> half{0.0, 0.0};
-  for_each_sample(*this, q, [&](int side, int, double s, double c, const Projection& pr) {
+  for_each_sample<N>(*this, q, [&](int side, int, double s, double c, const Projection& pr) {
     const double gap = reach - pr.distance;
     if (!(gap > 0.0)) return;
     const double ck = c * stiffness;
@@ -213,7 +219,7 @@ double BasicEdgeContact<N>::evaluate(const State& q, LocalGradient<kBlocks>* g,
 template <int N>
 double BasicEdgeContact<N>::penetration(const State& q) const {
   double closest = std::numeric_limits<double>::infinity();
-  for_each_sample(*this, q, [&](int, int, double, double, const Projection& pr) {
+  for_each_sample<N>(*this, q, [&](int, int, double, double, const Projection& pr) {
     closest = std::min(closest, pr.distance);
   });
   return radius_a + radius_b - closest;
@@ -224,7 +230,7 @@ void BasicEdgeContact<N>::residual(const State& q, Residual& r, ResidualJacobian
   r.setZero();
   if (J != nullptr) J->setZero();
   const double reach = radius_a + radius_b;
-  for_each_sample(*this, q, [&](int side, int k, double s, double c, const Projection& pr) {
+  for_each_sample<N>(*this, q, [&](int side, int k, double s, double c, const Projection& pr) {
     const double gap = reach - pr.distance;
     if (!(gap > 0.0)) return;
     const int row = side * N + k;
@@ -242,6 +248,122 @@ template struct BasicEdgeContact<1>;
 template struct BasicEdgeContact<2>;
 template struct BasicEdgeContact<4>;
 template struct BasicEdgeContact<8>;
+
+template <int N>
+void BasicEdgeFriction<N>::begin_step(const State& previous, const Step&) {
+  const double reach = radius_a + radius_b;
+  for_each_sample<N>(*this, previous, [&](int side, int k, double, double c, const Projection& pr) {
+    LaggedEdgeSample& l = lagged[side * N + k];
+    const double gap = reach - pr.distance;
+    const bool touching = gap > 0.0 && pr.distance > 0.0;  // d̂ = 0: no normal (header)
+    l.t = pr.t;
+    l.separation = pr.w;
+    l.normal_force = touching ? c * stiffness * gap : 0.0;
+    l.normal = touching ? Vector3(pr.w / pr.distance) : Vector3::UnitZ();
+  });
+}
+
+namespace {
+
+// A sample's slip over the step relative to the point it touched: W = Σ_i α_i(t̄) x_i − ŵ.
+Vector3 relative_slip(const std::array<double, 4>& alpha, const std::array<const Vector3*, 4>& x,
+                      const LaggedEdgeSample& l) {
+  Vector3 W = -l.separation;
+  for (int i = 0; i < 4; ++i) W += alpha[i] * *x[i];
+  return W;
+}
+
+}  // namespace
+
+template <int N>
+double BasicEdgeFriction<N>::evaluate(const State& q, LocalGradient<kBlocks>* g, LocalHessian<kBlocks>* H) const {
+  if (g != nullptr) g->setZero();
+  if (H != nullptr) H->setZero();
+  const QuadratureRule& rule = gauss_legendre(N);
+  const std::array<const Vector3*, 4> x = node_positions(*this, q);
+  double value = 0.0;
+  for (int side = 0; side < 2; ++side) {
+    for (int k = 0; k < N; ++k) {
+      const LaggedEdgeSample& l = lagged[side * N + k];
+      if (l.normal_force == 0.0) continue;
+      const std::array<double, 4> alpha = sample_alpha(side, rule.nodes[k], l.t);
+      const Vector3 W = relative_slip(alpha, x, l);
+      const SmoothedSlip slip(W - l.normal.dot(W) * l.normal, epsilon[side]);
+      const double scale = coefficient[side] * l.normal_force;  // μλ
+      value += scale * slip.f0;
+      if (g != nullptr) {
+        const Vector3 f = scale * slip.phi1 * slip.u;
+        for (int i = 0; i < 4; ++i) g->template segment<3>(3 * i) += alpha[i] * f;
+      }
+      if (H != nullptr) {
+        const Matrix3 K = scale * slip.curvature(Matrix3::Identity() - l.normal * l.normal.transpose());
+        for (int i = 0; i < 4; ++i) {
+          for (int j = 0; j < 4; ++j) H->template block<3, 3>(3 * i, 3 * j) += (alpha[i] * alpha[j]) * K;
+        }
+      }
+    }
+  }
+  return value;
+}
+
+template <int N>
+void BasicEdgeFriction<N>::residual(const State& q, Residual& r, ResidualJacobian* J) const {
+  friction_residual(*this, q, r, J);
+}
+
+template <int N>
+Eigen::Matrix<double, 12, 12> BasicEdgeFriction<N>::previous_jacobian(const State& q, const State& previous) const {
+  Eigen::Matrix<double, 12, 12> out = Eigen::Matrix<double, 12, 12>::Zero();
+  const std::array<const Vector3*, 4> x = node_positions(*this, q);
+  const std::array<const Vector3*, 4> x_hat = node_positions(*this, previous);
+  const Matrix3 I = Matrix3::Identity();
+  // The projections at q_{k−1} again: the same t̄, ŵ and d̂ begin_step froze.
+  for_each_sample<N>(*this, previous, [&](int side, int k, double s, double c, const Projection& pr) {
+    const LaggedEdgeSample& l = lagged[side * N + k];
+    if (l.normal_force == 0.0) return;
+    const std::array<double, 4> alpha = sample_alpha(side, s, l.t);
+    const std::array<double, 4> beta = sample_beta(side);
+    std::array<Vector3, 4> gamma;  // ∂t̄/∂x̂_j
+    for (int j = 0; j < 4; ++j) {
+      gamma[j] = pr.interior ? Vector3((alpha[j] * pr.e + beta[j] * pr.w) / pr.e.squaredNorm()) : Vector3::Zero();
+    }
+    Vector3 moved_other = Vector3::Zero();  // Σ_i β_i (x_i − x̂_i)
+    for (int i = 0; i < 4; ++i) moved_other += beta[i] * (*x[i] - *x_hat[i]);
+    const Vector3& n = l.normal;
+    const Matrix3 P = I - n * n.transpose();
+    const Vector3 W = relative_slip(alpha, x, l);
+    const SmoothedSlip slip(P * W, epsilon[side]);
+    const double mu = coefficient[side];
+    const Vector3 f = mu * l.normal_force * slip.phi1 * slip.u;
+    const Matrix3 A = slip.jacobian();
+    const Matrix3 turn = n * W.transpose() + n.dot(W) * I;  // ∂u/∂n, negated
+    for (int j = 0; j < 4; ++j) {
+      const Matrix3 dW = -alpha[j] * I - moved_other * gamma[j].transpose();
+      const Matrix3 dn = P * (alpha[j] * I - pr.e * gamma[j].transpose()) / pr.distance;
+      const Vector3 dlambda = -c * stiffness * alpha[j] * n;
+      const Matrix3 du = P * dW - turn * dn;
+      const Matrix3 df = mu * slip.phi1 * slip.u * dlambda.transpose() + mu * l.normal_force * A * du;
+      for (int i = 0; i < 4; ++i) {
+        out.template block<3, 3>(3 * i, 3 * j) += alpha[i] * df - beta[i] * f * gamma[j].transpose();
+      }
+    }
+  });
+  return out;
+}
+
+template <int N>
+void BasicEdgeFriction<N>::add_step_adjoint(const State& q, const State& previous, const Step&,
+                                            const LocalGradient<kBlocks>& z, Eigen::VectorXd& a_previous,
+                                            Eigen::VectorXd&) const {
+  if (std::all_of(lagged.begin(), lagged.end(), [](const LaggedEdgeSample& l) { return l.normal_force == 0.0; })) {
+    return;
+  }
+  const LocalGradient<kBlocks> w = previous_jacobian(q, previous).transpose() * z;
+  for (int b = 0; b < 4; ++b) a_previous.template segment<3>(tangent_point(nodes[b])) += w.template segment<3>(3 * b);
+}
+
+template struct BasicEdgeFriction<1>;
+template struct BasicEdgeFriction<4>;
 
 TouchingEdges::TouchingEdges(const Model& model) {
   for (const EdgePair& e : model.edge_pairs()) {

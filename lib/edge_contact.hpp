@@ -106,21 +106,24 @@ double point_segment_distance(const Vector3& p, const Vector3& b0, const Vector3
 double segment_distance(const Vector3& a0, const Vector3& a1, const Vector3& b0,
                         const Vector3& b1);
 
-template <int N>
-struct BasicEdgeContact {
-  static_assert(N >= 1 && N <= kMaxEdgeQuadraturePoints, "Gauss–Legendre points per edge");
-  static constexpr int kBlocks = 4;
-  static constexpr const char* kName = "edge_contact";
-  static constexpr bool kEnergyOfState = true;
-  static constexpr int kQuadraturePoints = N;
-
-  std::array<int, kBlocks> offsets{-1, -1, -1, -1};  // a0, a1, b0, b1 (tangent offsets)
-  std::array<int, kBlocks> nodes{-1, -1, -1, -1};    // indices into State::points: a0, a1, b0, b1
+// What the contact and friction terms of two rod edges share.
+struct EdgeEdgeSample {
+  std::array<int, 4> offsets{-1, -1, -1, -1};  // a0, a1, b0, b1 (tangent offsets)
+  std::array<int, 4> nodes{-1, -1, -1, -1};    // indices into State::points: a0, a1, b0, b1
   double stiffness = 0.0;      // k, N/m² (per unit length of edge)
   double radius_a = 0.0;       // ρ_a, m
   double radius_b = 0.0;       // ρ_b, m
   double rest_length_a = 0.0;  // ℓ̄_a, m: weighs a's samples
   double rest_length_b = 0.0;  // ℓ̄_b, m
+};
+
+template <int N>
+struct BasicEdgeContact : EdgeEdgeSample {
+  static_assert(N >= 1 && N <= kMaxEdgeQuadraturePoints, "Gauss–Legendre points per edge");
+  static constexpr int kBlocks = 4;
+  static constexpr const char* kName = "edge_contact";
+  static constexpr bool kEnergyOfState = true;
+  static constexpr int kQuadraturePoints = N;
 
   double evaluate(const State& q, LocalGradient<kBlocks>* g, LocalHessian<kBlocks>* H) const;
   // ρ_a + ρ_b − the smallest distance of a sample to the other segment: > 0 when overlapping.
@@ -132,14 +135,83 @@ struct BasicEdgeContact {
   void residual(const State& q, Residual& r, ResidualJacobian* J) const;
 };
 
+// What friction freezes per sample of an edge pair at the start of a step (formulas below).
+struct LaggedEdgeSample {
+  double t = 0.0;                        // t̄: the touched point's parameter on the other segment
+  Vector3 separation = Vector3::Zero();  // ŵ = p̂ − (the touched point), d̂ n
+  double normal_force = 0.0;             // λ (0: no friction from this sample in this step)
+  Vector3 normal = Vector3::UnitZ();     // n = ŵ/d̂
+};
+
+// Friction between two edges: friction.hpp's lagged smoothed-Coulomb law per sample of the
+// contact above. At the start of step k (hats for q_{k−1}) each sample p̂ = a(s_q) of one
+// edge is projected on the other segment, and what the projection touched is frozen: its
+// parameter t̄ (a material point of the other edge), and, with d̂ and ŵ the sample's
+// distance and offset from it,
+//   λ = c_q k max(0, δ − d̂)   (the sample's normal force in the contact term),
+//   n = ŵ/d̂,   P = I − n nᵀ.
+// Over the step the sample slips relative to that point by
+//   W = Σ_i α_i(t̄) x_i − ŵ = Σ_i α_i(t̄) (x_i − x̂_i)   (α at the frozen t̄, blocks a0, a1, b0, b1),
+// and D = Σ_q μ λ_q f₀(‖P W_q‖) with ε = ε_v h, μ and ε_v those of the SAMPLED rod (as a
+// body's samples use their own body's; a rod with μ = 0 still feels the other's samples).
+// W is linear in the nodes at fixed t̄, so with u = P W, y = ‖u‖ and f = μλ φ₁ u,
+//   gradient block i:  α_i f,
+//   Hessian block ij:  α_i α_j μλ (φ₁ P + (φ₁′/y) u uᵀ)   (positive semi-definite).
+// Σ_i α_i = 0: the forces on the two edges are equal and opposite. They act on the rods'
+// centre lines, d̂ apart along n, not at the surfaces where the capsules touch: the couple
+// d̂ n × f would turn each rod about its own axis, and the rods' material frames do not feel
+// it (no friction-driven rolling or twisting of a rod; its centre line is exact).
+// A sample lying exactly on the other segment's axis (d̂ = 0) has no normal and is given
+// λ = 0 for that step.
+//
+// Least-squares form: r = √(2D), J = gᵀ/r (friction_residual).
+//
+// The adjoint: t̄, λ, n and ŵ are functions of q̂ = (x̂_i) through the projection at q_{k−1}.
+// With ê, the other segment's vector, and β as above (∂α_i/∂t = −β_i), t̄ moves in the
+// interior by γ_j = (α_j ê + β_j ŵ)/|ê|² per x̂_j (at an end, γ_j = 0), and
+//   ∂λ/∂x̂_j = −c k α_j n,   ∂n/∂x̂_j = P (α_j I − ê γ_jᵀ)/d̂,
+//   ∂W/∂x̂_j = −α_j I − (Σ_i β_i (x_i − x̂_i)) γ_jᵀ,
+//   ∂u/∂x̂_j = P ∂W/∂x̂_j − (n Wᵀ + (n·W) I) ∂n/∂x̂_j,
+//   ∂f/∂x̂_j = μ φ₁ u (∂λ/∂x̂_j)ᵀ + μλ (φ₁ I + (φ₁′/y) u uᵀ) ∂u/∂x̂_j,
+//   ∂(gradient block i)/∂x̂_j = α_i ∂f/∂x̂_j − β_i f γ_jᵀ,
+// summed over the samples. Δq_{k−1} does not enter.
+template <int N>
+struct BasicEdgeFriction : EdgeEdgeSample {
+  static_assert(N >= 1 && N <= kMaxEdgeQuadraturePoints, "Gauss–Legendre points per edge");
+  static constexpr int kBlocks = 4;
+  static constexpr const char* kName = "edge_friction";
+  static constexpr int kQuadraturePoints = N;
+  std::array<double, 2> coefficient{0.0, 0.0};  // μ of a's samples, of b's
+  std::array<double, 2> epsilon{0.0, 0.0};      // ε = ε_v h of a's samples, of b's, m, > 0
+  std::array<LaggedEdgeSample, 2 * N> lagged{};  // a's samples, then b's; fixed by begin_step
+
+  void begin_step(const State& previous, const Step& previous_step);
+  double evaluate(const State& q, LocalGradient<kBlocks>* g, LocalHessian<kBlocks>* H) const;
+
+  static constexpr int kResiduals = 1;
+  using Residual = LocalResidual<kResiduals>;
+  using ResidualJacobian = LocalResidualJacobian<kResiduals, kBlocks>;
+  void residual(const State& q, Residual& r, ResidualJacobian* J) const;
+
+  // ∂C/∂q̂: the 12×12 mixed block of the local gradient with respect to the four nodes'
+  // previous positions. `previous` must be the state begin_step was given.
+  Eigen::Matrix<double, 12, 12> previous_jacobian(const State& q, const State& previous) const;
+  void add_step_adjoint(const State& q, const State& previous, const Step& previous_step,
+                        const LocalGradient<kBlocks>& z, Eigen::VectorXd& a_previous,
+                        Eigen::VectorXd& da_previous) const;
+};
+
 // The rule's size is a template parameter because the residual count 2N must be known at
 // compile time (Ceres's residual blocks); 4 points per edge by default.
 using EdgeContact = BasicEdgeContact<4>;
+using EdgeFriction = BasicEdgeFriction<4>;
 
 extern template struct BasicEdgeContact<1>;
 extern template struct BasicEdgeContact<2>;
 extern template struct BasicEdgeContact<4>;
 extern template struct BasicEdgeContact<8>;
+extern template struct BasicEdgeFriction<1>;
+extern template struct BasicEdgeFriction<4>;
 
 // Which pairs of rod edges (Model::edge_pairs: the candidates) are within reach of each
 // other at a state, for the couplings and terms of a step: a pair is within reach when its

@@ -436,7 +436,8 @@ int find_root(std::vector<int>& parent, int i) {
 // Contact between the rod edges that touch under `key` (the entries after the body pairs),
 // in the component of their nodes. The stiffness per unit length is each rod's contact k over
 // its edge's rest length (so a rod lying along another presses with about k per node, as on
-// a collider), the two edges' averaged.
+// a collider), the two edges' averaged. Friction where either rod's μ > 0, each edge's samples
+// with their own rod's μ and ε_v (edge_contact.hpp).
 void add_edge_contact_terms(const Model& model, const std::vector<bool>& key, const ContactCandidates& candidates,
                             const DofMap& dofs, std::vector<Component>& components) {
   const std::vector<EdgePair>& pairs = candidates.edges;
@@ -463,7 +464,14 @@ void add_edge_contact_terms(const Model& model, const std::vector<bool>& key, co
     term.radius_a = a.contact.radius;
     term.radius_b = b.contact.radius;
     term.stiffness = 0.5 * (a.contact.stiffness / term.rest_length_a + b.contact.stiffness / term.rest_length_b);
-    components[component].potential.add(term);  // Model::edge_pairs: some node is free
+    IncrementalPotential& potential = components[component].potential;  // Model::edge_pairs: some node is free
+    potential.add(term);
+    if ((a.contact.friction > 0.0 || b.contact.friction > 0.0) && !model.static_equilibrium) {
+      EdgeFriction friction{term};
+      friction.coefficient = {a.contact.friction, b.contact.friction};
+      friction.epsilon = {a.contact.friction_velocity * model.time_step, b.contact.friction_velocity * model.time_step};
+      potential.add(friction);
+    }
   }
 }
 

@@ -53,7 +53,8 @@ class IncrementalPotential {
                                RodBendTwist, CableSegment, JointPoint, JointLine, JointAlignment, JointWeld,
                                JointMotor, JointForceMotor, JointLimit<HingeAngle>,
                                JointLimit<SliderPosition>, Contact, Friction, BodyContact,
-                               BodyFriction, EdgeContact, EdgeBodyContact, EdgeBodyFriction>;
+                               BodyFriction, EdgeContact, EdgeFriction, EdgeBodyContact,
+                               EdgeBodyFriction>;
 
   // The terms of type T (one contiguous vector per type).
   template <class T>

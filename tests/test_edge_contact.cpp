@@ -6,7 +6,10 @@
 // collinear end to end, touching at the ends at an angle, crossing at right angles, one edge
 // much shorter, nearly parallel — over stiffnesses from tiny to huge; both sides of each
 // switch of the Hessian; the residual form; the balance of the internal forces; and the
-// symmetry between a and b.
+// symmetry between a and b. Then friction between the edges (EdgeFriction): its derivatives
+// in stick and slip on the same configurations, at tiny and huge stiffnesses and time steps,
+// the sliding force against the closed form, its residual form, and the mixed block of the
+// lagged step that the adjoint needs.
 //
 // Geometry is O(1): edges 0.3–1.5 m, radii 0.12 + 0.08 m, gaps ≥ 1e-3 m. V is C¹ and
 // piecewise smooth; its Hessian jumps where a sample's gap reaches 0 and where its
@@ -21,12 +24,15 @@
 
 #include <gtest/gtest.h>
 
+#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
 #include <limits>
 #include <numbers>
 #include <random>
 #include <stdexcept>
+#include <string>
+#include <utility>
 #include <vector>
 
 #include "fd_check.hpp"
@@ -43,6 +49,8 @@ static_assert(Term<EdgeContact> && HasResidual<EdgeContact> && EnergyOfState<Edg
 static_assert(!BeginsStep<EdgeContact> && !ReadsPreviousStep<EdgeContact>);
 static_assert(EdgeContact::kQuadraturePoints == 4 && EdgeContact::kResiduals == 8);
 static_assert(BasicEdgeContact<8>::kResiduals == 16);
+static_assert(Term<EdgeFriction> && HasResidual<EdgeFriction> && BeginsStep<EdgeFriction> &&
+              ReadsPreviousStep<EdgeFriction> && !EnergyOfState<EdgeFriction>);
 
 constexpr double kRadiusA = 0.12;
 constexpr double kRadiusB = 0.08;
@@ -81,8 +89,7 @@ Pair<N> edge_pair(const Points& x, double stiffness = 1e4) {
   return c;
 }
 
-template <int N>
-fd::Dofs dofs_of(const BasicEdgeContact<N>& term) {
+fd::Dofs dofs_of(const EdgeEdgeSample& term) {
   return {fd::point_dof(term.nodes[0]), fd::point_dof(term.nodes[1]), fd::point_dof(term.nodes[2]),
           fd::point_dof(term.nodes[3])};
 }
@@ -878,6 +885,298 @@ TEST(EdgeContact, GapReachingZeroIsC1WithAHessianJump) {
   const double bound = 2.0 * H_in.norm() * std::sqrt(2.0) * 2.0 * tau;
   EXPECT_LE((gradient(touching) - gradient(apart)).norm(), bound);
   EXPECT_LT(bound, 0.05 * gradient(apart).norm());
+}
+
+// ---------------------------------------------------------------------------------------
+// Friction between the edges (EdgeFriction).
+
+struct FrictionPair {
+  EdgeFriction term;
+  State previous, q;
+};
+
+// The sliding-regime slip y_q = ‖P W_q‖ of every sample with a lagged normal force, from the
+// header's definitions (W = Σ_i α_i(t̄) x_i − ŵ).
+std::vector<double> slips(const FrictionPair& f) {
+  std::vector<double> out;
+  const QuadratureRule& rule = gauss_legendre(4);
+  std::array<Vector3, 4> x;
+  for (int i = 0; i < 4; ++i) x[i] = f.q.points[f.term.nodes[i]];
+  for (int side = 0; side < 2; ++side) {
+    for (int k = 0; k < 4; ++k) {
+      const LaggedEdgeSample& l = f.term.lagged[4 * side + k];
+      if (l.normal_force == 0.0) continue;
+      const double s = rule.nodes[k];
+      const Vector3 sample = side == 0 ? Vector3((1.0 - s) * x[0] + s * x[1]) : Vector3((1.0 - s) * x[2] + s * x[3]);
+      const Vector3 touched = side == 0 ? Vector3((1.0 - l.t) * x[2] + l.t * x[3]) : Vector3((1.0 - l.t) * x[0] + l.t * x[1]);
+      const Vector3 W = sample - touched - l.separation;
+      out.push_back((W - l.normal.dot(W) * l.normal).norm());
+    }
+  }
+  return out;
+}
+
+// c's contact lagged at its state (q_{k−1}), μ 0.4 for a's samples and 0.25 for b's; then the
+// four nodes carried by a small rigid motion (which alone makes each sample slip a little,
+// its lagged normal staying put), and a's two nodes moved by `slip` ⟂ the first touching
+// sample's normal and `normal_move` along it.
+FrictionPair friction_pair(const Pair<4>& c, double slip, double epsilon, std::mt19937& rng,
+                           double turn_angle = 0.02, double normal_move = 1e-3) {
+  FrictionPair f;
+  static_cast<EdgeEdgeSample&>(f.term) = c.term;
+  f.term.coefficient = {0.4, 0.25};
+  f.term.epsilon = {epsilon, epsilon};
+  f.previous = c.q;
+  f.term.begin_step(f.previous, Step{});
+  Vector3 n = Vector3::UnitZ();
+  for (const LaggedEdgeSample& l : f.term.lagged) {
+    if (l.normal_force > 0.0) {
+      n = l.normal;
+      break;
+    }
+  }
+  f.q = f.previous;
+  const Matrix3 turn = so3::exp(turn_angle * fd::random_unit(rng));
+  const Vector3 centre = f.previous.points[c.term.nodes[0]];
+  const Vector3 shift = fd::random_vector(rng, 0.05 * turn_angle / 0.02);
+  for (int node : c.term.nodes) f.q.points[node] = centre + turn * (f.previous.points[node] - centre) + shift;
+  const Vector3 move = slip * fd::random_perpendicular(n, rng) + normal_move * n;
+  for (int i : {0, 1}) f.q.points[c.term.nodes[i]] += move;
+  return f;
+}
+
+// friction_pair on `c`, drawn again until every touching sample's slip is on the side of the
+// switch y = ε that `slip` is, 2 % clear of it.
+FrictionPair clear_of_switch(const Pair<4>& c, double slip, double epsilon, std::mt19937& rng) {
+  for (int attempt = 0; attempt < 200; ++attempt) {
+    const FrictionPair f = friction_pair(c, slip, epsilon, rng);
+    const std::vector<double> y = slips(f);
+    if (!y.empty() && std::all_of(y.begin(), y.end(), [&](double yq) {
+          return (yq < epsilon) == (slip < epsilon) && std::abs(yq - epsilon) > 0.02 * epsilon;
+        })) {
+      return f;
+    }
+  }
+  ADD_FAILURE() << "no placement clear of the switch";
+  return friction_pair(c, slip, epsilon, rng);
+}
+
+// The configurations of the contact tests above, each ≥ 1e-3 from a switch of the lagged
+// projection (the mixed block's FD moves q_{k−1}).
+std::vector<std::pair<std::string, Pair<4>>> friction_configurations(std::mt19937& rng) {
+  std::vector<std::pair<std::string, Pair<4>>> out;
+  out.push_back({"parallel", edge_pair(moved(parallel(0.3, 1.3, 0.15), rng))});
+  out.push_back({"collinear end to end", edge_pair(moved({Vector3(0, 0, 0), Vector3(1, 0, 0), Vector3(1.05, 0, 0),
+                                                          Vector3(2.05, 0, 0)},
+                                                         rng))});
+  const Vector3 b0(1.04, 0.03, 0.04);
+  const double angle = 2.0 * std::numbers::pi / 3.0;
+  out.push_back({"touching at the ends at an angle",
+                 edge_pair(moved({Vector3(0, 0, 0), Vector3(1, 0, 0), b0,
+                                  b0 + 0.9 * Vector3(std::cos(angle), std::sin(angle), 0.0)},
+                                 rng))});
+  out.push_back({"crossing at right angles",
+                 edge_pair(moved({Vector3(-0.5, 0, 0), Vector3(0.5, 0, 0), Vector3(0.1, -0.45, 0.1),
+                                  Vector3(0.1, 0.55, 0.1)},
+                                 rng))});
+  for (int i = 0; i < 4; ++i) out.push_back({"random", random_pair(rng)});
+  for (const auto& [name, c] : out) {
+    EXPECT_GE(switch_margin(c), 1e-3) << name;
+  }
+  return out;
+}
+
+TEST(EdgeFriction, DerivativesInStickAndSlipMatchFiniteDifferences) {
+  std::mt19937 rng(70);
+  const double epsilon = 1e-2;
+  int checked = 0;
+  for (const auto& [name, c] : friction_configurations(rng)) {
+    // Deep in the stick regime, near the switch on both sides, and sliding.
+    for (const double slip : {0.3 * epsilon, 0.9 * epsilon, 1.1 * epsilon, 20.0 * epsilon}) {
+      SCOPED_TRACE(name + trace(", slip", slip));
+      const FrictionPair f = clear_of_switch(c, slip, epsilon, rng);
+      fd::TermCheckOptions options;
+      // As for the other friction terms: the stick zone's fourth derivative needs gradient
+      // steps of 2e-7 and value steps of 1e-5 ≤ y/300.
+      options.gradient.step = 2e-7;
+      options.hessian.step = 2e-7;
+      options.hessian_from_value.step = 1e-5;
+      // Only some block need be non-zero: a node whose weights α vanish at a sample's
+      // clamped projection gets no force from it.
+      options.gradient.require_nonzero = fd::NonZero::kAny;
+      options.hessian.require_nonzero = fd::NonZero::kAny;
+      EXPECT_TRUE(fd::check_term(f.term, f.q, dofs_of(f.term), options));
+      // The Hessian is positive semi-definite (header).
+      LocalHessian<4> H;
+      f.term.evaluate(f.q, nullptr, &H);
+      EXPECT_GE(Eigen::SelfAdjointEigenSolver<LocalHessian<4>>(H).eigenvalues().minCoeff(), -1e-12 * H.norm());
+      ++checked;
+    }
+  }
+  EXPECT_EQ(checked, 8 * 4);
+}
+
+TEST(EdgeFriction, TinyAndHugeStiffnessesAndTimeSteps) {
+  std::mt19937 rng(71);
+  // k from 1e-3 to 1e9 at ε = 1e-2: λ scales the term, the checks are relative.
+  for (const double k : {1e-3, 1e9}) {
+    Pair<4> c = random_pair(rng);
+    c.term.stiffness = k;
+    for (const double slip : {0.3e-2, 0.2}) {
+      SCOPED_TRACE(trace("k, slip", k, slip));
+      const FrictionPair f = clear_of_switch(c, slip, 1e-2, rng);
+      fd::TermCheckOptions options;
+      options.gradient.step = 2e-7;
+      options.hessian.step = 2e-7;
+      options.hessian_from_value.step = 1e-5;
+      options.gradient.require_nonzero = fd::NonZero::kAny;
+      options.hessian.require_nonzero = fd::NonZero::kAny;
+      EXPECT_TRUE(fd::check_term(f.term, f.q, dofs_of(f.term), options));
+    }
+  }
+  // ε = ε_v h for h from 1e-6 to 1 s at ε_v = 1e-3 m/s: parallel edges side by side (every
+  // sample's normal the same, so a's slip is every sample's) scaled to 50 ε (a power of two
+  // near it, so that the scaling is exact) so that the state's round-off stays far below FD
+  // steps that fit in the quadratic zone (fd::within_zone).
+  for (const double h : {1e-6, 1e-3, 1.0}) {
+    const double epsilon = 1e-3 * h;
+    const double scale = fd::power_of_two_near(50.0 * epsilon);
+    Pair<4> c = edge_pair(moved(parallel(0.0, 1.0, 0.15), rng));
+    for (Vector3& p : c.q.points) p *= scale;
+    c.term.radius_a *= scale;
+    c.term.radius_b *= scale;
+    c.term.rest_length_a *= scale;
+    c.term.rest_length_b *= scale;
+    for (const double factor : {0.5, 3.0}) {
+      SCOPED_TRACE(trace("h, slip/ε", h, factor));
+      FrictionPair f = friction_pair(c, factor * epsilon, epsilon, rng, 0.0, 0.0);
+      const std::vector<double> y = slips(f);
+      ASSERT_FALSE(y.empty());
+      for (double yq : y) ASSERT_NEAR(yq, factor * epsilon, 1e-9 * epsilon);  // a's nodes slip, b's stay
+      EXPECT_TRUE(fd::check_term(f.term, f.q, dofs_of(f.term), fd::within_zone(epsilon)));
+    }
+  }
+}
+
+TEST(EdgeFriction, SlidingForceIsMuLambdaAgainstTheSlipOnEachSideAndEqualAndOpposite) {
+  // Equal parallel edges 0.15 apart, fully overlapping: every sample has gap γ = 0.05 and the
+  // same normal, so Σ_q λ_q = ½ ℓ̄ k γ per side. a slides along its length by 20 ε relative to b
+  // (sliding: f₁ = 1), so the force on a is μ_a ½ ℓ̄_a k γ + μ_b ½ ℓ̄_b k γ against its slip
+  // (a's samples with a's μ, b's with b's), and b feels the opposite.
+  std::mt19937 rng(72);
+  const double epsilon = 1e-3, k = 1e4, gap = kReach - 0.15;
+  Pair<4> c = edge_pair(moved(parallel(0.0, 1.0, 0.15), rng), k);
+  c.term.rest_length_a = 0.8;
+  c.term.rest_length_b = 1.2;
+  FrictionPair f = friction_pair(c, 0.0, epsilon, rng, 0.0, 0.0);
+  const Vector3 along = (f.q.points[c.term.nodes[1]] - f.q.points[c.term.nodes[0]]).normalized();
+  for (int i : {0, 1}) f.q.points[c.term.nodes[i]] += 20.0 * epsilon * along;
+  LocalGradient<4> g;
+  f.term.evaluate(f.q, &g, nullptr);
+  const Vector3 on_a = -(g.segment<3>(0) + g.segment<3>(3));
+  const Vector3 on_b = -(g.segment<3>(6) + g.segment<3>(9));
+  const double expected = 0.4 * 0.5 * 0.8 * k * gap + 0.25 * 0.5 * 1.2 * k * gap;
+  EXPECT_TRUE(on_a.isApprox(-expected * along, 1e-12)) << on_a.transpose();
+  EXPECT_LT((on_a + on_b).norm(), 1e-12 * expected);
+  // Without μ on b's side, only a's samples rub.
+  f.term.coefficient = {0.4, 0.0};
+  f.term.evaluate(f.q, &g, nullptr);
+  EXPECT_TRUE((-(g.segment<3>(0) + g.segment<3>(3))).isApprox(-0.4 * 0.5 * 0.8 * k * gap * along, 1e-12));
+}
+
+TEST(EdgeFriction, NoLaggedContactNoFrictionAndNoneOnTheAxis) {
+  std::mt19937 rng(73);
+  // Apart at q_{k−1}: nothing, whatever q_k.
+  const Pair<4> apart = edge_pair(moved(parallel(0.0, 1.0, 0.5), rng));
+  // Collinear and overlapping: every sample lies on the other segment's axis (d̂ = 0), where
+  // the lagged normal is undefined and the header gives λ = 0.
+  const Pair<4> on_axis = edge_pair(moved(parallel(0.25, 0.5, 0.0), rng));
+  for (const Pair<4>* c : {&apart, &on_axis}) {
+    const FrictionPair f = friction_pair(*c, 0.05, 1e-3, rng);
+    for (const LaggedEdgeSample& l : f.term.lagged) EXPECT_EQ(l.normal_force, 0.0);
+    LocalGradient<4> g;
+    LocalHessian<4> H;
+    EXPECT_EQ(f.term.evaluate(f.q, &g, &H), 0.0);
+    EXPECT_TRUE(g.isZero(0.0));
+    EXPECT_TRUE(H.isZero(0.0));
+    EXPECT_TRUE(f.term.previous_jacobian(f.q, f.previous).isZero(0.0));
+    EdgeFriction::Residual r;
+    EdgeFriction::ResidualJacobian J;
+    f.term.residual(f.q, r, &J);
+    EXPECT_EQ(r(0), 0.0);
+    EXPECT_TRUE(J.isZero(0.0));
+  }
+}
+
+TEST(EdgeFriction, ResidualFormReproducesValueAndGradient) {
+  std::mt19937 rng(74);
+  for (const auto& [name, c] : friction_configurations(rng)) {
+    for (const double slip : {0.3e-2, 5e-2}) {
+      SCOPED_TRACE(name + trace(", slip", slip));
+      const FrictionPair f = clear_of_switch(c, slip, 1e-2, rng);
+      LocalGradient<4> g;
+      const double D = f.term.evaluate(f.q, &g, nullptr);
+      EdgeFriction::Residual r;
+      EdgeFriction::ResidualJacobian J;
+      f.term.residual(f.q, r, &J);
+      EXPECT_NEAR(0.5 * r.squaredNorm(), D, 1e-13 * D);
+      EXPECT_TRUE((J.transpose() * r).isApprox(g, 1e-12));
+      const fd::VectorFunction F = [&f](const State& s) {
+        EdgeFriction::Residual rs;
+        f.term.residual(s, rs, nullptr);
+        return Eigen::VectorXd(rs);
+      };
+      fd::FdOptions o;
+      o.require_nonzero = fd::NonZero::kAny;
+      EXPECT_TRUE(fd::check_vector_jacobian(F, f.q, dofs_of(f.term), J, o));
+    }
+  }
+}
+
+TEST(EdgeFriction, MixedBlockOfTheLaggedStepMatchesFiniteDifferences) {
+  // C(q; q_{k−1}): the local gradient at the fixed current state as a function of the four
+  // nodes' previous positions, through every sample's t̄, ŵ, λ and n (begin_step re-run at
+  // every perturbed q_{k−1}).
+  std::mt19937 rng(75);
+  int checked = 0;
+  for (const auto& [name, c] : friction_configurations(rng)) {
+    for (const double slip : {0.3e-2, 5e-2}) {
+      SCOPED_TRACE(name + trace(", slip", slip));
+      const FrictionPair f = clear_of_switch(c, slip, 1e-2, rng);
+      const fd::VectorFunction C = [&f](const State& previous) {
+        EdgeFriction t = f.term;
+        t.begin_step(previous, Step{});
+        LocalGradient<4> g;
+        t.evaluate(f.q, &g, nullptr);
+        return Eigen::VectorXd(g);
+      };
+      const Eigen::MatrixXd J = f.term.previous_jacobian(f.q, f.previous);
+      fd::FdOptions o;
+      o.step = 2e-7;  // the stick zone's truncation, as in the derivatives' test
+      o.require_nonzero = fd::NonZero::kAny;
+      EXPECT_TRUE(fd::check_vector_jacobian(C, f.previous, dofs_of(f.term), J, o));
+      // Mutations a wrong mapping would make: a's two columns swapped, b's previous motion
+      // ignored. The check must see both.
+      Eigen::MatrixXd swapped = J;
+      swapped.middleCols<3>(0) = J.middleCols<3>(3);
+      swapped.middleCols<3>(3) = J.middleCols<3>(0);
+      Eigen::MatrixXd still_b = J;
+      still_b.rightCols<6>().setZero();
+      EXPECT_FALSE(fd::check_vector_jacobian(C, f.previous, dofs_of(f.term), swapped, o));
+      EXPECT_FALSE(fd::check_vector_jacobian(C, f.previous, dofs_of(f.term), still_b, o));
+      // add_step_adjoint puts (∂C/∂q̂)ᵀ z at the four nodes' entries of the whole-state layout.
+      const LocalGradient<4> z = LocalGradient<4>::Random();
+      Eigen::VectorXd a = Eigen::VectorXd::Zero(tangent_size(f.q)), da = a;
+      f.term.add_step_adjoint(f.q, f.previous, Step{}, z, a, da);
+      const LocalGradient<4> expected = J.transpose() * z;
+      for (int b = 0; b < 4; ++b) {
+        EXPECT_TRUE(a.segment<3>(tangent_point(f.term.nodes[b])).isApprox(expected.segment<3>(3 * b), 1e-14));
+      }
+      EXPECT_TRUE(da.isZero(0.0));
+      ++checked;
+    }
+  }
+  EXPECT_EQ(checked, 8 * 2);
 }
 
 }  // namespace

@@ -1,8 +1,9 @@
 // Contact between rods and within a rod, in whole runs (lib/edge_contact.hpp: the term is
 // FD-tested in test_edge_contact.cpp; the candidates and the pairs within reach:
 // Model::edge_pairs, TouchingEdges): the bundled rope coil with and without self-contact,
-// a rod dropped across another, two rods colliding without gravity (momentum), filters, and
-// the adjoint through rod–rod contact.
+// a rod dropped across another, two rods colliding without gravity (momentum), filters, a rod
+// sliding and sticking on two tilted rods against the closed form of friction, and the
+// adjoint through rod–rod contact and friction.
 
 #include <gtest/gtest.h>
 
@@ -11,6 +12,7 @@
 #include <iostream>
 #include <filesystem>
 #include <limits>
+#include <numbers>
 #include <string>
 #include <variant>
 
@@ -134,31 +136,87 @@ TEST(RodContactScenes, TwoRodsCollidingKeepTheirMomentum) {
 }
 
 // The adjoint through rod–rod contact: a rod thrown across another lying on the floor; γ its
-// initial node velocities, the loss its final distance to a target line.
-TEST(RodContactAdjoint, TheGradientRunsBackThroughContactBetweenRods) {
-  const std::string text = R"({
-    "time_step": 0.002, "frames": 100, "gravity": [0, 0, -9.81],
-    "solver": { "tolerance": 1e-12, "max_iterations": 100 },
-    "colliders": [ { "type": "plane" } ],
-    "rods": [ { "name": "below", "shape": { "type": "line", "start": [-0.25, 0, 0.0099], "end": [0.25, 0, 0.0099], "edges": 6 },
-                "mass": 0.05, "radius": 0.01, "stretch_stiffness": 1e3, "shear_stiffness": 1e3,
-                "bending_stiffness": [1e-3, 1e-3, 1e-3], "contact": { "stiffness": 2e3 } },
-              { "name": "thrown", "shape": { "type": "line", "start": [0.02, -0.2, 0.06], "end": [0.02, 0.2, 0.06], "edges": 6 },
-                "mass": 0.05, "radius": 0.01, "stretch_stiffness": 1e3, "shear_stiffness": 1e3,
-                "bending_stiffness": [1e-3, 1e-3, 1e-3], "contact": { "stiffness": 2e3 } } ],
-    "optimization": {
-      "parameters": [ { "kind": "rod_node_velocities", "rod": "thrown" } ],
-      "objective": [ { "term": "point_targets", "rod": "thrown", "frame": -1,
-                       "polyline": [[0.1, -0.2, 0.1], [0.1, 0.2, 0.1]] } ] } })";
-  const Scene scene = parse_scene(text, "rods_adjoint.json");
-  Simulator forward(scene.model, scene.solver);
-  double closest = std::numeric_limits<double>::infinity();
-  for (int k = 0; k < scene.frames; ++k) {
-    forward.step();
-    closest = std::min(closest, forward.min_rod_separation());
+// initial node velocities, the loss its final distance to a target line. Frictionless, and
+// with friction between the rods (and on the floor): the lagged friction's mixed blocks
+// (EdgeFriction::previous_jacobian) enter the backward pass.
+TEST(RodContactAdjoint, TheGradientRunsBackThroughContactAndFrictionBetweenRods) {
+  for (const std::string contact : {R"({ "stiffness": 2e3 })", R"({ "stiffness": 2e3, "friction": 0.5 })"}) {
+    SCOPED_TRACE(contact);
+    const std::string text = R"({
+      "time_step": 0.002, "frames": 100, "gravity": [0, 0, -9.81],
+      "solver": { "tolerance": 1e-12, "max_iterations": 100 },
+      "colliders": [ { "type": "plane" } ],
+      "rods": [ { "name": "below", "shape": { "type": "line", "start": [-0.25, 0, 0.0099], "end": [0.25, 0, 0.0099], "edges": 6 },
+                  "mass": 0.05, "radius": 0.01, "stretch_stiffness": 1e3, "shear_stiffness": 1e3,
+                  "bending_stiffness": [1e-3, 1e-3, 1e-3], "contact": )" + contact + R"( },
+                { "name": "thrown", "shape": { "type": "line", "start": [0.02, -0.2, 0.06], "end": [0.02, 0.2, 0.06], "edges": 6 },
+                  "mass": 0.05, "radius": 0.01, "stretch_stiffness": 1e3, "shear_stiffness": 1e3,
+                  "bending_stiffness": [1e-3, 1e-3, 1e-3], "contact": )" + contact + R"( } ],
+      "optimization": {
+        "parameters": [ { "kind": "rod_node_velocities", "rod": "thrown" } ],
+        "objective": [ { "term": "point_targets", "rod": "thrown", "frame": -1,
+                         "polyline": [[0.1, -0.2, 0.1], [0.1, 0.2, 0.1]] } ] } })";
+    const Scene scene = parse_scene(text, "rods_adjoint.json");
+    Simulator forward(scene.model, scene.solver);
+    double closest = std::numeric_limits<double>::infinity();
+    for (int k = 0; k < scene.frames; ++k) {
+      forward.step();
+      closest = std::min(closest, forward.min_rod_separation());
+    }
+    ASSERT_LT(closest, 0.0);  // the rods touch: the check runs through their contact
+    EXPECT_TRUE(test::gradient_agrees(scene));
   }
-  ASSERT_LT(closest, 0.0);  // the rods touch: the check runs through their contact
-  EXPECT_TRUE(test::gradient_agrees(scene));
+}
+
+// Friction between rods against its closed form: a short rod (the slider, 4 edges) lies on two
+// parallel clamped rods (the rails, 3 cm apart centre to centre, all radii 1 cm), under gravity
+// tilted by θ along the rails. Each rail's contact normal leans by φ from the vertical, sin φ =
+// 1.5/2, so the rails press with W cos θ / cos φ in all (a wedge), and the slider
+//   slides with a = g (sin θ − μ cos θ / cos φ) when tan θ > μ / cos φ,
+//   creeps at ε_v (1 − √(1 − tan θ cos φ / μ)) below it (the smoothed law's f₁ = that fraction
+//   of μλ; friction.hpp), and
+//   slides with a = g sin θ without friction.
+// Backward Euler is exact for a constant force, so the acceleration is measured between
+// 0.1 s and 0.2 s from the slider's middle node.
+TEST(RodContactScenes, ARodOnTwoTiltedRodsSticksBelowItsFrictionAngleAndSlidesAboveIt) {
+  const double g = 9.81, cos_phi = std::sqrt(1.0 - 0.75 * 0.75), epsilon_v = 1e-3;
+  const auto middle_velocity = [&](double mu, double theta, double at) {
+    const auto rod = [&](const std::string& name, double y, double z, double half, int edges, bool clamped) {
+      std::string fixed;
+      for (int i = 0; clamped && i <= edges; ++i) fixed += std::string(i ? ", " : "") + std::to_string(i);
+      const std::string fixed_edges = clamped ? fixed.substr(0, fixed.rfind(',')) : "";
+      return R"({"name": ")" + name + R"(", "shape": {"type": "line", "start": [)" + std::to_string(-half) + ", " +
+             std::to_string(y) + ", " + std::to_string(z) + "], \"end\": [" + std::to_string(half) + ", " + std::to_string(y) +
+             ", " + std::to_string(z) + "], \"edges\": " + std::to_string(edges) +
+             R"(}, "mass": 0.05, "radius": 0.01, "stretch_stiffness": 1e3, "shear_stiffness": 1e3,
+                 "bending_stiffness": [1e-3, 1e-3, 1e-3], "fixed_nodes": [)" + fixed + R"(], "fixed_edges": [)" + fixed_edges +
+             R"(], "contact": {"stiffness": 1e4, "friction": )" + std::to_string(mu) + "}}";
+    };
+    const double z = 0.02 * cos_phi;  // resting on both rails
+    const Scene s = parse_scene(R"({"time_step": 0.002, "frames": 100, "gravity": [)" + std::to_string(g * std::sin(theta)) +
+                                    ", 0, " + std::to_string(-g * std::cos(theta)) + R"(], "rods": [)" +
+                                    rod("left", -0.015, 0.0, 0.5, 20, true) + "," + rod("right", 0.015, 0.0, 0.5, 20, true) +
+                                    "," + rod("slider", 0.0, z, 0.1, 4, false) + "]}",
+                                "slider.json");
+    Simulator sim(s.model, s.solver);
+    const int middle = s.model.rod_point(2, 2);
+    double v = 0.0;
+    for (int k = 1; k <= static_cast<int>(std::lround(at / s.model.time_step)); ++k) {
+      EXPECT_TRUE(sim.step().converged()) << k;
+      v = sim.linear_velocity(middle).x();
+    }
+    return v;
+  };
+  const double theta_slide = 35.0 * std::numbers::pi / 180.0, theta_stick = 20.0 * std::numbers::pi / 180.0;
+  const auto acceleration = [&](double mu, double theta) {
+    return (middle_velocity(mu, theta, 0.2) - middle_velocity(mu, theta, 0.1)) / 0.1;
+  };
+  const double mu = 0.3;
+  EXPECT_NEAR(acceleration(0.0, theta_slide), g * std::sin(theta_slide), 0.01 * g * std::sin(theta_slide));
+  const double sliding = g * (std::sin(theta_slide) - mu * std::cos(theta_slide) / cos_phi);
+  EXPECT_NEAR(acceleration(mu, theta_slide), sliding, 0.01 * sliding);
+  const double creep = epsilon_v * (1.0 - std::sqrt(1.0 - std::tan(theta_stick) * cos_phi / mu));
+  EXPECT_NEAR(middle_velocity(mu, theta_stick, 0.2), creep, 0.03 * creep);
 }
 
 // Rods on bodies: a rod's free nodes against a body's shape (BodyContact with a sample that has
