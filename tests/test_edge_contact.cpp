@@ -1088,9 +1088,10 @@ TEST(EdgeFriction, NoLaggedContactNoFrictionAndNoneOnTheAxis) {
   std::mt19937 rng(73);
   // Apart at q_{k−1}: nothing, whatever q_k.
   const Pair<4> apart = edge_pair(moved(parallel(0.0, 1.0, 0.5), rng));
-  // Collinear and overlapping: every sample lies on the other segment's axis (d̂ = 0), where
-  // the lagged normal is undefined and the header gives λ = 0.
-  const Pair<4> on_axis = edge_pair(moved(parallel(0.25, 0.5, 0.0), rng));
+  // One edge on the other (exact coordinates, not moved: a rigid motion's round-off would put
+  // the samples 1e-16 off the axis, with a normal of noise): every sample lies on the other
+  // segment's axis (d̂ = 0), where the lagged normal is undefined and the header gives λ = 0.
+  const Pair<4> on_axis = edge_pair(parallel(0.0, 1.0, 0.0));
   for (const Pair<4>* c : {&apart, &on_axis}) {
     const FrictionPair f = friction_pair(*c, 0.05, 1e-3, rng);
     for (const LaggedEdgeSample& l : f.term.lagged) EXPECT_EQ(l.normal_force, 0.0);
