@@ -424,6 +424,21 @@ inline TermCheckOptions within_zone(double zone) {
   return o;
 }
 
+// Steps for a friction term (lib/friction.hpp) at O(1) geometry with slips y ≥ 3e-3 and a
+// stick zone ε ~ 1e-2, its switch y = ε ≥ 1e-3 from every slip. D depends on y, whose fourth
+// derivative is ~1/y³, so second differences of the value take a step 1e-5 ≤ y/300
+// (truncation ≤ 1e-5 relative). Differences of the gradient have truncation step²/6 · ∂⁴D
+// with ∂⁴D ~ 2μλ/(ε² y) ≈ 5e8 in the stick zone (its cubic through y): 1e-4 at the default
+// step, ~1e-8 of the Hessian's scale; a step of 2e-7 brings it 25× below the 1e-9 floor,
+// while the round-off 16 eps|g|/step stays ~1e-6.
+inline TermCheckOptions stick_zone() {
+  TermCheckOptions o;
+  o.gradient.step = 2e-7;
+  o.hessian.step = 2e-7;
+  o.hessian_from_value.step = 1e-5;
+  return o;
+}
+
 template <class Term>
 ::testing::AssertionResult check_term(const Term& term, const State& q, const Dofs& dofs,
                                       const TermCheckOptions& opt = {}) {

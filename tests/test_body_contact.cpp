@@ -442,18 +442,7 @@ TEST(BodyFriction, LieDerivativesInStickAndSlipMatchFiniteDifferences) {
           SCOPED_TRACE(trace("angles of A and B, slip", angle_a, angle_b, slip));
           const FrictionPair c = friction_pair(shape, angle_a, angle_b, slip, epsilon, 1e4, rng);
           ASSERT_NEAR(c.term.normal_force, 1e4 * 0.02, 1e-9);
-          fd::TermCheckOptions options;
-          // As for Friction (test_contact.cpp): D depends on y = ‖u‖ ≥ 3e-3, whose fourth
-          // derivative is ~1/y³, so second differences of the value take a step 1e-5 ≤ y/300
-          // (truncation ≤ 1e-5 relative); the switch at y = ε is ≥ 1e-3 from every slip.
-          // Differences of the gradient have truncation step²/6 · ∂⁴D with ∂⁴D ~ 2μλ/(ε² y)
-          // ≈ 5e8 in the stick zone (its cubic through y): 1e-4 at the default step, ~1e-8 of
-          // the Hessian's scale; step 2e-7 brings it 25× below the 1e-9 floor, while the
-          // round-off 16 eps|g|/step stays ~1e-6.
-          options.gradient.step = 2e-7;
-          options.hessian.step = 2e-7;
-          options.hessian_from_value.step = 1e-5;
-          EXPECT_TRUE(fd::check_term(c.term, c.q, kDofs, options));
+          EXPECT_TRUE(fd::check_term(c.term, c.q, kDofs, fd::stick_zone()));
           ++checked;
         }
       }

@@ -409,13 +409,7 @@ TEST(EdgeBodyFriction, LieDerivativesInStickAndSlipMatchFiniteDifferences) {
       for (const double slip : {0.3 * epsilon, 0.9 * epsilon, 1.1 * epsilon, 20.0 * epsilon}) {
         SCOPED_TRACE(trace("angle of B, slip", angle_b, slip));
         const FrictionCase<4> c = clear_of_switch(shape, angle_b, slip, epsilon, rng);
-        fd::TermCheckOptions options;
-        // As for BodyFriction (test_body_contact.cpp): the stick zone's fourth derivative
-        // needs gradient steps of 2e-7 and value steps of 1e-5 ≤ y/300.
-        options.gradient.step = 2e-7;
-        options.hessian.step = 2e-7;
-        options.hessian_from_value.step = 1e-5;
-        EXPECT_TRUE(fd::check_term(c.term, c.q, kDofs, options));
+        EXPECT_TRUE(fd::check_term(c.term, c.q, kDofs, fd::stick_zone()));
         ++checked;
       }
     }

@@ -986,6 +986,15 @@ std::vector<std::pair<std::string, Pair<4>>> friction_configurations(std::mt1993
   return out;
 }
 
+// fd::stick_zone's steps. Only some block need be non-zero: a node whose weights α vanish at
+// a sample's clamped projection gets no force from it.
+fd::TermCheckOptions friction_options() {
+  fd::TermCheckOptions options = fd::stick_zone();
+  options.gradient.require_nonzero = fd::NonZero::kAny;
+  options.hessian.require_nonzero = fd::NonZero::kAny;
+  return options;
+}
+
 TEST(EdgeFriction, DerivativesInStickAndSlipMatchFiniteDifferences) {
   std::mt19937 rng(70);
   const double epsilon = 1e-2;
@@ -995,17 +1004,7 @@ TEST(EdgeFriction, DerivativesInStickAndSlipMatchFiniteDifferences) {
     for (const double slip : {0.3 * epsilon, 0.9 * epsilon, 1.1 * epsilon, 20.0 * epsilon}) {
       SCOPED_TRACE(name + trace(", slip", slip));
       const FrictionPair f = clear_of_switch(c, slip, epsilon, rng);
-      fd::TermCheckOptions options;
-      // As for the other friction terms: the stick zone's fourth derivative needs gradient
-      // steps of 2e-7 and value steps of 1e-5 ≤ y/300.
-      options.gradient.step = 2e-7;
-      options.hessian.step = 2e-7;
-      options.hessian_from_value.step = 1e-5;
-      // Only some block need be non-zero: a node whose weights α vanish at a sample's
-      // clamped projection gets no force from it.
-      options.gradient.require_nonzero = fd::NonZero::kAny;
-      options.hessian.require_nonzero = fd::NonZero::kAny;
-      EXPECT_TRUE(fd::check_term(f.term, f.q, dofs_of(f.term), options));
+      EXPECT_TRUE(fd::check_term(f.term, f.q, dofs_of(f.term), friction_options()));
       // The Hessian is positive semi-definite (header).
       LocalHessian<4> H;
       f.term.evaluate(f.q, nullptr, &H);
@@ -1025,13 +1024,7 @@ TEST(EdgeFriction, TinyAndHugeStiffnessesAndTimeSteps) {
     for (const double slip : {0.3e-2, 0.2}) {
       SCOPED_TRACE(trace("k, slip", k, slip));
       const FrictionPair f = clear_of_switch(c, slip, 1e-2, rng);
-      fd::TermCheckOptions options;
-      options.gradient.step = 2e-7;
-      options.hessian.step = 2e-7;
-      options.hessian_from_value.step = 1e-5;
-      options.gradient.require_nonzero = fd::NonZero::kAny;
-      options.hessian.require_nonzero = fd::NonZero::kAny;
-      EXPECT_TRUE(fd::check_term(f.term, f.q, dofs_of(f.term), options));
+      EXPECT_TRUE(fd::check_term(f.term, f.q, dofs_of(f.term), friction_options()));
     }
   }
   // ε = ε_v h for h from 1e-6 to 1 s at ε_v = 1e-3 m/s: parallel edges side by side (every

@@ -778,10 +778,11 @@ TEST(OptimizationScenes, BundledProblemsLoad) {
       {"cable_tip_curve.json", 8 * 100},             // 8 cables × 100 frames
       {"rest_shape_tip_curve.json", 3 * 13 * 100},   // 13 interior nodes × 100 frames
       {"arm_reach.json", 6 * 50},                    // 6 motors × 50 frames
-      {"billiard.json", 3}};                         // the cue ball's v_0
+      {"billiard.json", 3},                          // the cue ball's v_0
+      {"rod_throw_friction.json", 3 * 7}};           // the thrown rod's 7 node velocities
   std::vector<fs::path> files = scene_files(kSourceDir / "problems/scenes/optimization");
   const std::vector<fs::path> letters = scene_files(kSourceDir / "problems/scenes/letters");
-  EXPECT_EQ(files.size(), 6u);
+  EXPECT_EQ(files.size(), 7u);
   EXPECT_EQ(letters.size(), 7u);
   files.insert(files.end(), letters.begin(), letters.end());
   for (const fs::path& file : files) {
