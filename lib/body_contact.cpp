@@ -339,19 +339,30 @@ template struct BasicEdgeBodyFriction<4>;
 namespace {
 
 // The radius about the body's origin that the shape fits in: every point where φ ≤ 0 is
-// within it. A mesh's grid interpolant is within √3 h of the mesh's true distance (the
-// Lipschitz bound of lib/mesh_sdf.hpp, also outside the grid), so φ ≤ 0 only within √3 h of
-// the triangles, which lie within the largest vertex norm.
+// within it. +∞ for an unbounded solid, which only a kinematic body may have (lib/sdf.hpp,
+// validate_body_shape): a plane's half-space, and any inside-out shape (the complement of a
+// bounded set). A tube's solid is within its radius of its polyline, whose segments (each the
+// convex hull of its two ends) lie within its farthest point. A mesh's grid interpolant is
+// within √3 h of the mesh's true distance (the Lipschitz bound of lib/mesh_sdf.hpp, also
+// outside the grid), so φ ≤ 0 only within √3 h of the triangles, which lie within the largest
+// vertex norm, or without the triangles (a kinematic body's mesh) within the grid's box.
 double bounding_radius(const Collider& shape) {
-  validate_body_shape(shape, "contact.shape");
+  constexpr double kUnbounded = std::numeric_limits<double>::infinity();
+  if (shape.inside) return kUnbounded;
   const double offset = shape.position.norm();
   return offset + std::visit(
                       [](const auto& s) -> double {
                         using S = std::decay_t<decltype(s)>;
+                        if constexpr (std::is_same_v<S, PlaneShape>) return kUnbounded;
                         if constexpr (std::is_same_v<S, SphereShape>) return s.radius;
                         if constexpr (std::is_same_v<S, BoxShape>) return s.half_extents.norm();
                         if constexpr (std::is_same_v<S, CapsuleShape>)
                           return s.half_length + s.radius;
+                        if constexpr (std::is_same_v<S, TubeShape>) {
+                          double farthest = 0.0;
+                          for (const Vector3& v : s.polyline) farthest = std::max(farthest, v.norm());
+                          return farthest + s.radius;
+                        }
                         if constexpr (std::is_same_v<S, TorusShape>)
                           return s.major_radius + s.minor_radius;
                         if constexpr (std::is_same_v<S, CylinderShape>) {
@@ -362,13 +373,16 @@ double bounding_radius(const Collider& shape) {
                         }
                         if constexpr (std::is_same_v<S, MeshShape>) {
                           double farthest = 0.0;
-                          for (const Vector3& v : s.mesh->vertices)
-                            farthest = std::max(farthest, v.norm());
+                          if (s.mesh != nullptr) {
+                            for (const Vector3& v : s.mesh->vertices)
+                              farthest = std::max(farthest, v.norm());
+                          } else {  // the grid box's farthest corner
+                            const Vector3 corner =
+                                s.grid->origin().cwiseAbs().cwiseMax(s.grid->max_corner().cwiseAbs());
+                            farthest = corner.norm();
+                          }
                           return farthest + std::sqrt(3.0) * s.grid->cell_size();
                         }
-                        // Not body shapes: validate_body_shape refused them above.
-                        if constexpr (std::is_same_v<S, PlaneShape> || std::is_same_v<S, TubeShape>)
-                          return 0.0;
                       },
                       shape.shape);
 }

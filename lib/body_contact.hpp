@@ -279,15 +279,18 @@ std::vector<Vector3> surface_samples(const Collider& shape, double spacing, int 
 // couplings of a step. A pair touches when a sample of one body comes within its radius plus
 // a margin of the other's shape (the margins of its two bodies added: how far each may move
 // in the step). A bounding sphere about each body's centre of mass (its samples' spheres and
-// its shape) rules most pairs out first. Allocation-free after construction. Body shapes are
-// spheres, boxes and capsules (whose bounding spheres are known).
+// its shape) rules most pairs out first. Allocation-free after construction. A kinematic
+// body's shape may be unbounded (a moving plane, an inside-out shape: lib/sdf.hpp,
+// validate_body_shape): its reach is +∞, so every pair with it passes the sphere test (and a
+// margin of +∞ lets every sample's test pass) and is decided by its samples alone.
 class TouchingPairs {
  public:
   TouchingPairs() = default;
   explicit TouchingPairs(const Model& model);
 
   std::size_t size() const { return pairs_.size(); }
-  // The radius about body i's centre of mass that its samples' spheres and its shape fit in.
+  // The radius about body i's centre of mass that its samples' spheres and its shape fit in
+  // (+∞ for an unbounded shape).
   double reach(int body) const { return reach_[body]; }
   // The two bodies of candidate pair p.
   const std::pair<int, int>& pair(int p) const { return pairs_[p]; }
@@ -323,8 +326,8 @@ class TouchingPairs {
 // nodes): one within the rod's contact radius plus a margin of the body's shape (the margin:
 // the body's, as for TouchingPairs, plus the farthest any free node of the rod moved in the
 // last step). The body's bounding sphere rules most edges out first (the segment's distance
-// to its centre), and most end nodes. Allocation-free after construction. The entries of the
-// pairs are `touching[first + p]`.
+// to its centre), and most end nodes; an unbounded shape's (reach +∞) rules none out.
+// Allocation-free after construction. The entries of the pairs are `touching[first + p]`.
 class TouchingRodsAndBodies {
  public:
   TouchingRodsAndBodies() = default;
@@ -346,7 +349,7 @@ class TouchingRodsAndBodies {
     std::vector<std::array<int, 2>> edges;  // of the nodes of each edge with a free node
     std::vector<int> tips;                  // of its free end nodes
     double radius = 0.0;                    // the rod's contact radius
-    double reach = 0.0;                     // the body's bounding radius
+    double reach = 0.0;                     // the body's bounding radius (+∞: unbounded)
     std::shared_ptr<const Collider> shape;
   };
   // The deepest ρ − φ of a sample within reach + margin of the body's centre (−∞ without one).

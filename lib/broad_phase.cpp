@@ -8,15 +8,20 @@ void SweepAndPrune::overlapping(const std::vector<Aabb>& boxes, std::vector<std:
   pairs.clear();
   const int n = static_cast<int>(boxes.size());
   if (n < 2) return;
-  // The axis of the widest spread of the centres (their variance, up to the factor 1/n).
+  // The axis of the widest spread of the centres (their variance, up to the factor 1/m) of
+  // the m bounded boxes. An unbounded box (±∞) has no centre (−∞ + ∞ = NaN) and overlaps
+  // every box along any axis: it does not bear on the choice.
   Vector3 sum = Vector3::Zero(), squares = Vector3::Zero();
+  int bounded = 0;
   for (const Aabb& b : boxes) {
+    if (!b.lo.allFinite() || !b.hi.allFinite()) continue;
     const Vector3 c = 0.5 * (b.lo + b.hi);
     sum += c;
     squares += c.cwiseProduct(c);
+    ++bounded;
   }
   int axis = 0;
-  (squares - sum.cwiseProduct(sum) / n).maxCoeff(&axis);
+  if (bounded > 0) (squares - sum.cwiseProduct(sum) / bounded).maxCoeff(&axis);
   const auto starts_before = [&](int i, int j) { return boxes[i].lo[axis] < boxes[j].lo[axis]; };
   if (static_cast<int>(order_.size()) != n || axis != axis_) {
     order_.resize(n);

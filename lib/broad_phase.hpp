@@ -20,6 +20,10 @@
 //
 // The axis: the one along which the boxes' centres spread the most (fewest overlaps along
 // it), chosen at each query; a change of axis re-sorts from scratch (std::sort, in place).
+//
+// A box may be unbounded, lo = −∞ and hi = +∞ (the reach of a moving plane or inside-out
+// shape, contact_search.hpp): it sorts first, overlaps every other box on every axis (no
+// ∞ − ∞ arises in the tests, which only compare), and is left out of the choice of axis.
 
 #include <utility>
 #include <vector>

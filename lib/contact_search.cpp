@@ -79,7 +79,7 @@ void ContactSearch::broad_phase(const State& q, const Step* last_step) {
   for (std::size_t i = 0; i < objects_.size(); ++i) {
     const Object& o = objects_[i];
     const Vector3& a = q.points[o.first_node];
-    if (o.rod < 0) {  // a body: its bounding sphere
+    if (o.rod < 0) {  // a body: its bounding sphere (r = +∞: a box of ±∞ that meets every box)
       const double r = o.radius + (last_step != nullptr ? body_margin_[o.first_node] : 0.0);
       boxes_[i] = {a.array() - r, a.array() + r};
     } else {  // an edge: its capsule, grown by the farthest a node of its rod moved (the
@@ -115,8 +115,11 @@ void ContactSearch::for_each_near(Visit&& visit) {
 void ContactSearch::update_body_margins(const Step& last_step) {
   if (bodies_.size() == 0 && rods_on_bodies_.size() == 0) return;  // no body touches anything that moves
   for (std::size_t i = 0; i < body_margin_.size() && !last_step.points.empty(); ++i) {
-    body_margin_[i] = last_step.points[i].norm() +
-                      so3::log(last_step.rotations[i]).norm() * bodies_.reach(static_cast<int>(i));
+    // A turn by θ moves a point at distance r from the centre by at most θ r. A body that
+    // did not turn moves by its translation alone, even an unbounded one (whose θ · ∞ would
+    // be 0 · ∞ = NaN, and a NaN margin fails every test); one that turned, by +∞.
+    const double turn = so3::log(last_step.rotations[i]).norm();
+    body_margin_[i] = last_step.points[i].norm() + (turn > 0.0 ? turn * bodies_.reach(static_cast<int>(i)) : 0.0);
   }
 }
 

@@ -4,7 +4,9 @@
 // body pairs (TouchingPairs, body_contact.hpp), then the rod edge pairs (TouchingEdges,
 // edge_contact.hpp), then the (rod, body) pairs (TouchingRodsAndBodies). Each object's margin
 // is how far it moved in the last step (a body: its translation plus its turn times its
-// reach; a node: its translation).
+// reach; a node: its translation). A kinematic body with an unbounded shape (a moving plane,
+// an inside-out shape) has an infinite reach: its box is all of space, every candidate pair
+// with it goes to the narrow phase, and after it turns its margin is +∞ too.
 //
 // Two phases. The broad phase (broad_phase.hpp) puts every object that some candidate pair
 // names in an axis-aligned box — a body's bounding sphere, a rod edge's capsule — grown by

@@ -3,7 +3,9 @@
 // driven spool, a moving piston, a collider that sweeps through a scene). Before each step the
 // simulator puts them where their motion says they are at its end; they then push what they
 // touch (their shape and samples enter the contact terms of the bodies and rods they touch,
-// with no DOF on their side) and are not pushed back: no inertia, no load, no DOF.
+// with no DOF on their side) and are not pushed back: no inertia, no load, no DOF. Their
+// shape is only touched, so it may be any collider, an unbounded plane or inside-out shape or
+// a tube included (a moving floor, a moving lumen; sdf.hpp, validate_body_shape).
 //
 // Two kinds of motion, from the body's pose (x_0, R_0) at t = 0:
 //   velocities  x(t) = x_0 + v t,  R(t) = exp(ω t) R_0    (v, ω world frame, constant);

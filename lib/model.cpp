@@ -117,12 +117,14 @@ void require_rotation(const Matrix3& R, const std::string& field) {
   }
 }
 
-// A body's contact samples: finite, and only with contact enabled.
+// A body's contact samples: finite, and only with contact enabled. Its shape: a valid
+// collider, and one a body may have unless the body is kinematic (validate_body_shape: a
+// kinematic body's shape is only touched, so a moving plane, tube or bowl is one).
 void validate_body_contact(const RigidBody& b, const std::string& path) {
   Model::validate_contact(b.contact, path + ".contact");
   if (b.shape != nullptr) {
     b.shape->validate(path + ".contact.shape");
-    validate_body_shape(*b.shape, path + ".contact.shape");
+    if (!b.kinematic) validate_body_shape(*b.shape, path + ".contact.shape");
   }
   for (std::size_t k = 0; k < b.contact_points.size(); ++k) {
     require_finite(b.contact_points[k], path + ".contact.points[" + std::to_string(k) + "]");

@@ -50,6 +50,8 @@ struct RigidBody {
   ContactMaterial contact;
   // The body's solid for other bodies' samples (lib/body_contact.hpp): an SDF in body
   // coordinates (the collider's pose within the body), or none: other bodies pass through it.
+  // A shape a body may have (validate_body_shape), or, for a kinematic body, any collider (a
+  // moving plane, tube or inside-out shape: unbounded or unsampled solids that only push).
   std::shared_ptr<const Collider> shape;
   // A kinematic body follows this motion from its pose at t = 0 (lib/kinematic.hpp): it is
   // no DOF, holds no inertia (mass, inertia and velocities unused) and feels no load; what

@@ -358,13 +358,13 @@ void validate_body_shape(const Collider& shape, const std::string& path) {
         return !std::is_same_v<S, PlaneShape> && !std::is_same_v<S, TubeShape>;
       },
       shape.shape);
+  // Where an unbounded or unsampled solid belongs instead: a moving collider.
+  const std::string moving = " (a moving plane, tube or inside-out shape is a collider with a \"kinematic\" block)";
   if (!body) {
-    throw ModelError(
-        path + ".type",
-        "a body's shape must be a sphere, box, capsule, torus, cylinder, link or mesh");
+    throw ModelError(path + ".type",
+                     "a body's shape must be a sphere, box, capsule, torus, cylinder, link or mesh" + moving);
   }
-  if (shape.inside)
-    throw ModelError(path + ".inside", "a body's shape is a solid, not its complement");
+  if (shape.inside) throw ModelError(path + ".inside", "a body's shape is a solid, not its complement" + moving);
 }
 
 std::vector<Vector3> catmull_rom_polyline(const std::vector<Vector3>& control_points,

@@ -205,12 +205,14 @@ struct Collider {
   void validate(const std::string& path) const;
 };
 
-// The one place that decides which shapes a body may have (Model::validate, the scene's
-// bodies and moving colliders): a bounded solid whose surface samples, bounding radius
-// (lib/body_contact.cpp) and mass properties (lib/mass_properties.hpp) are known — a sphere,
-// box, capsule, torus, cylinder, link or mesh (with its triangles), not `inside`. Throws
-// ModelError(path + ".type") for another shape or a mesh without its triangles, and
-// (path + ".inside") for a complement.
+// The one place that decides which shapes a dynamic body, or any body of the scene's
+// "bodies", may have (Model::validate, the scene's bodies, surface_samples, mass_properties):
+// a bounded solid whose surface samples (lib/body_contact.hpp) and mass properties
+// (lib/mass_properties.hpp) are known — a sphere, box, capsule, torus, cylinder, link or mesh
+// (with its triangles), not `inside`. A kinematic body's shape is only touched, never sampled
+// or weighed, so it may be any collider (a moving collider: a plane, a tube, a bowl; its
+// bounding radius may be +∞, lib/body_contact.cpp). Throws ModelError(path + ".type") for
+// another shape or a mesh without its triangles, and (path + ".inside") for a complement.
 void validate_body_shape(const Collider& shape, const std::string& path);
 
 // Centripetal Catmull–Rom spline (α = ½: knot spacing ‖P_{i+1} − P_i‖^½; no cusps or

@@ -538,8 +538,9 @@ Collider parse_collider(const json& value, const std::string& path, const std::s
   return collider;
 }
 
-// The shapes a body can have (lib/sdf.hpp, validate_body_shape decides); `path` is the
-// shape's object (its "type" and "inside" are named in the error).
+// The shapes a body of "bodies" can have (lib/sdf.hpp, validate_body_shape decides): its
+// shape may be sampled ("sample_spacing") or filled ("density"); `path` is the shape's object
+// (its "type" and "inside" are named in the error).
 void require_body_shape(const ObjectReader& r, const Collider& solid, const std::string& path) {
   try {
     validate_body_shape(solid, path);
@@ -618,8 +619,10 @@ ContactMaterial parse_contact(ObjectReader& owner, double default_radius,
     if (c.has("shape")) {
       // The body's solid for other bodies (body coordinates), and with "sample_spacing" its
       // samples on its surface.
-      int no_points = 0;
-      Collider solid = parse_collider(c.get("shape"), c.field("shape"), owner.source(), no_points);
+      // A tube is read against what is left of the budget, on a copy: it is refused right
+      // after as a body's shape (its "type" named), not for its points (with no budget).
+      int tube_points = budget;
+      Collider solid = parse_collider(c.get("shape"), c.field("shape"), owner.source(), tube_points);
       require_body_shape(c, solid, c.field("shape"));
       if (c.has("sample_spacing")) {
         try {
@@ -942,6 +945,8 @@ Scene parse(const json& root, const std::string& source) {
       }
       // A moving collider is a kinematic body with that shape and no samples (appended after
       // the scene's bodies, under the collider's name): what touches it, touches its shape.
+      // Nothing samples or weighs that shape, so it may be any collider, a plane or a tube or
+      // an inside-out one included (validate_body_shape is for the bodies' own shapes).
       json fixed = colliders[i];
       fixed.erase("kinematic");
       Collider solid = parse_collider(fixed, path, source, contact_budget);
@@ -950,7 +955,6 @@ Scene parse(const json& root, const std::string& source) {
         if (colliders[i].contains(key)) motion_part[key] = colliders[i][key];
       }
       ObjectReader c(motion_part, path, source, {"name", "kinematic"});
-      require_body_shape(c, solid, path);
       if (!c.has("name")) c.fail(c.field("name"), "a kinematic collider needs a name (it is reported as a body)");
       try {
         solid.validate(path);  // here, while its fields are the collider's

@@ -190,9 +190,11 @@ TEST(BodyContactScenes, BadShapesNameTheirField) {
   EXPECT_EQ(error(R"("shape": { "type": "sphere", "radius": 0.1 }, "sample_spacing": 0.02)"), "accepted");
   EXPECT_EQ(error(R"("shape": { "type": "plane" })"),
             "bodies[0].contact.shape.type: a body's shape must be a sphere, box, capsule, torus, "
-            "cylinder, link or mesh");
+            "cylinder, link or mesh (a moving plane, tube or inside-out shape is a collider with a "
+            "\"kinematic\" block)");
   EXPECT_EQ(error(R"("shape": { "type": "sphere", "radius": 0.1, "inside": true })"),
-            "bodies[0].contact.shape.inside: a body's shape is a solid, not its complement");
+            "bodies[0].contact.shape.inside: a body's shape is a solid, not its complement (a moving "
+            "plane, tube or inside-out shape is a collider with a \"kinematic\" block)");
   EXPECT_EQ(error(R"("sample_spacing": 0.02, "points": [[0, 0, 0]])"),
             "bodies[0].contact.sample_spacing: samples a \"shape\": give one");
   EXPECT_EQ(error(R"("shape": { "type": "box", "half_extents": [1, 1, 1] }, "sample_spacing": 0)"),

@@ -309,11 +309,12 @@ TEST(KinematicScenes, MisusesAreRefusedNamingTheField) {
             "colliders[0].name");
   EXPECT_EQ(field_of(collider + R"({"name": "ball", "type": "sphere", "radius": 1, "kinematic": {"linear_velocity": [1, 0, 0]}}]})"),
             "colliders[0].name");  // the name of a body already
+  // Any collider may move, a plane or an inside-out shape too (tests/test_moving_colliders.cpp).
   EXPECT_EQ(field_of(collider + R"({"name": "p", "type": "plane", "kinematic": {"linear_velocity": [1, 0, 0]}}]})"),
-            "colliders[0].type");
+            "accepted");
   EXPECT_EQ(field_of(collider + R"({"name": "p", "type": "sphere", "radius": 1, "inside": true,
                                     "kinematic": {"linear_velocity": [1, 0, 0]}}]})"),
-            "colliders[0].inside");
+            "accepted");
   EXPECT_EQ(field_of(collider + R"({"name": "p", "type": "sphere", "radius": -1, "kinematic": {"linear_velocity": [1, 0, 0]}}]})"),
             "colliders[0].radius");
   // A body's shape is checked as a collider is (whether kinematic or not).
