@@ -250,11 +250,7 @@ TEST(MovingColliders, BodyContactAndFrictionAgainstAnyColliderMatchFiniteDiffere
           q.rotations[0] = so3::exp(0.2 * fd::random_unit(rng)) * c.q.rotations[0];
           const Vector3 p_b = q.points[1] + q.rotations[1] * f.contact_point;
           q.points[0] = p_b + slip * fd::random_perpendicular(f.normal, rng) - q.rotations[0] * f.at.local;
-          fd::TermCheckOptions options;  // steps as tests/test_body_contact.cpp's (stick zone)
-          options.gradient.step = 2e-7;
-          options.hessian.step = 2e-7;
-          options.hessian_from_value.step = 1e-5;
-          EXPECT_TRUE(fd::check_term(f, q, kBodyDofs, options)) << "slip " << slip;
+          EXPECT_TRUE(fd::check_term(f, q, kBodyDofs, fd::stick_zone())) << "slip " << slip;
           const fd::VectorFunction C = [&](const State& previous) {
             BodyFriction t = f;
             t.begin_step(previous, Step{});
@@ -262,9 +258,8 @@ TEST(MovingColliders, BodyContactAndFrictionAgainstAnyColliderMatchFiniteDiffere
             t.evaluate(q, &g, nullptr);
             return Eigen::VectorXd(g);
           };
-          fd::FdOptions o;
-          o.step = 2e-7;
-          EXPECT_TRUE(fd::check_vector_jacobian(C, c.q, kBodyDofs, f.previous_jacobian(q, c.q), o)) << "slip " << slip;
+          EXPECT_TRUE(fd::check_vector_jacobian(C, c.q, kBodyDofs, f.previous_jacobian(q, c.q), fd::stick_zone().gradient))
+              << "slip " << slip;
         }
         ++checked;
       }
