@@ -21,6 +21,7 @@
 #include <string>
 #include <vector>
 
+#include "contact_references.hpp"
 #include "fd_check.hpp"
 #include "mesh_models.hpp"
 #include "lib/body_contact.hpp"
@@ -55,14 +56,7 @@ std::vector<std::shared_ptr<const Collider>> shapes(std::mt19937& rng) {
 // A point at signed distance `target` from the shape (its coordinates), found by walking
 // along the SDF's gradient from a random start.
 Vector3 place(const Collider& shape, double target, std::mt19937& rng) {
-  Vector3 p = shape.position + 0.5 * fd::random_unit(rng);
-  for (int i = 0; i < 100; ++i) {
-    const SdfValue s = shape.evaluate(p, false);
-    const double error = s.distance - target;
-    if (std::abs(error) < 1e-13) break;
-    p -= error * s.gradient / s.gradient.squaredNorm();
-  }
-  return p;
+  return test::onto_level_set(shape, shape.position + 0.5 * fd::random_unit(rng), target);
 }
 
 struct Pair {

@@ -11,6 +11,7 @@
 #include <utility>
 #include <vector>
 
+#include "contact_references.hpp"
 #include "lib/broad_phase.hpp"
 #include "lib/contact_search.hpp"
 #include "problems/scene.hpp"
@@ -19,17 +20,7 @@
 namespace liedyn {
 namespace {
 
-std::vector<std::pair<int, int>> every_overlap(const std::vector<Aabb>& boxes) {
-  std::vector<std::pair<int, int>> out;
-  for (int i = 0; i < static_cast<int>(boxes.size()); ++i) {
-    for (int j = i + 1; j < static_cast<int>(boxes.size()); ++j) {
-      if ((boxes[i].lo.array() <= boxes[j].hi.array()).all() && (boxes[j].lo.array() <= boxes[i].hi.array()).all()) {
-        out.emplace_back(i, j);
-      }
-    }
-  }
-  return out;
-}
+using test::every_overlap;
 
 std::vector<std::pair<int, int>> sorted(std::vector<std::pair<int, int>> pairs) {
   std::sort(pairs.begin(), pairs.end());

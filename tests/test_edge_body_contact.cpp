@@ -30,6 +30,7 @@
 #include <vector>
 
 #include "adjoint_check.hpp"
+#include "contact_references.hpp"
 #include "fd_check.hpp"
 #include "lib/body_contact.hpp"
 #include "lib/edge_contact.hpp"
@@ -76,14 +77,7 @@ std::vector<Region> regions(const Collider& shape) {
 // from the faces' planes, where the SDF's Hessian jumps.
 Vector3 place(const Collider& shape, double target, Region region, std::mt19937& rng) {
   if (region == Region::kAnywhere) {
-    Vector3 p = shape.position + 0.5 * fd::random_unit(rng);
-    for (int i = 0; i < 100; ++i) {
-      const SdfValue s = shape.evaluate(p, false);
-      const double error = s.distance - target;
-      if (std::abs(error) < 1e-13) break;
-      p -= error * s.gradient / s.gradient.squaredNorm();
-    }
-    return p;
+    return test::onto_level_set(shape, shape.position + 0.5 * fd::random_unit(rng), target);
   }
   const BoxShape& box = std::get<BoxShape>(shape.shape);
   const Vector3 inner = box.half_extents - Vector3::Constant(box.rounding);

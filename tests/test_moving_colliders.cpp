@@ -24,6 +24,7 @@
 #include <vector>
 
 #include "adjoint_check.hpp"
+#include "contact_references.hpp"
 #include "fd_check.hpp"
 #include "mesh_models.hpp"
 #include "lib/body_contact.hpp"
@@ -97,18 +98,7 @@ TEST(MovingColliders, ReachIsUnboundedForAPlaneOrAComplementAndBoundsATube) {
   EXPECT_LE(farthest, pairs.reach(4));
 }
 
-std::vector<std::pair<int, int>> every_overlap(const std::vector<Aabb>& boxes) {
-  std::vector<std::pair<int, int>> out;
-  for (int i = 0; i < static_cast<int>(boxes.size()); ++i) {
-    for (int j = i + 1; j < static_cast<int>(boxes.size()); ++j) {
-      if ((boxes[i].lo.array() <= boxes[j].hi.array()).all() && (boxes[j].lo.array() <= boxes[i].hi.array()).all()) {
-        out.emplace_back(i, j);
-      }
-    }
-  }
-  std::sort(out.begin(), out.end());
-  return out;
-}
+using test::every_overlap;
 
 // Unbounded boxes (±∞: an unbounded reach) among moving ones: each meets every other box,
 // and the pairs are exactly those of testing every pair, as the boxes move.
@@ -185,14 +175,7 @@ bool clear_of_kinks(const Collider& shape, double radius, const Vector3& u) {
 // A point at signed distance `target` from the shape (its coordinates): a start near its
 // frame's origin walked along the SDF's gradient onto the level set.
 Vector3 place(const Collider& shape, double target, std::mt19937& rng) {
-  Vector3 p = shape.position + shape.orientation * (0.3 * fd::random_unit(rng));
-  for (int i = 0; i < 100; ++i) {
-    const SdfValue s = shape.evaluate(p, false);
-    const double error = s.distance - target;
-    if (std::abs(error) < 1e-13) break;
-    p -= error * s.gradient / s.gradient.squaredNorm();
-  }
-  return p;
+  return test::onto_level_set(shape, shape.position + shape.orientation * (0.3 * fd::random_unit(rng)), target);
 }
 
 // Body A's sample p̄ = (0.3, −0.4, 0.2) `depth` deep in body B's shape, clear of its kinks,
