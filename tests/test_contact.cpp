@@ -20,6 +20,7 @@
 #include <random>
 #include <vector>
 
+#include "contact_references.hpp"
 #include "fd_check.hpp"
 #include "lib/contact.hpp"
 #include "lib/friction.hpp"
@@ -60,14 +61,7 @@ std::vector<std::shared_ptr<const Collider>> colliders(std::mt19937& rng) {
 // radius ρ around it touching `collider`: φ(p) = ρ − depth. Walks along the SDF gradient
 // from a random start until φ matches (Newton on φ along ∇φ; φ is 1-Lipschitz).
 Vector3 place_sample(const Collider& collider, double target_distance, std::mt19937& rng) {
-  Vector3 p = collider.position + 0.5 * random_unit(rng);
-  for (int i = 0; i < 100; ++i) {
-    const SdfValue s = collider.evaluate(p, false);
-    const double error = s.distance - target_distance;
-    if (std::abs(error) < 1e-13) break;
-    p -= error * s.gradient / s.gradient.squaredNorm();
-  }
-  return p;
+  return test::onto_level_set(collider, collider.position + 0.5 * random_unit(rng), target_distance);
 }
 
 struct BodySample {
