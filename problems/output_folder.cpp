@@ -13,7 +13,6 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <random>
-#include <regex>
 #include <sstream>
 
 #include "output_internal.hpp"
@@ -80,6 +79,21 @@ bool remove_staging(int dirfd, const std::filesystem::path& staging) {
   return clean && ::unlinkat(dirfd, staging.filename().c_str(), AT_REMOVEDIR) == 0;
 }
 
+// The process id of a temporary file "<name>.tmp-<pid>" that a writer left (atomic writes
+// stage into such files), or 0 when `name` is not one. A pid is at most 2²² on Linux
+// (pid_max), so more than 7 digits are not one either.
+long temporary_pid(const std::string& name) {
+  const std::size_t at = name.rfind(".tmp-");
+  if (at == std::string::npos || at == 0) return 0;
+  const std::string digits = name.substr(at + 5);
+  if (digits.empty() || digits.size() > 7 ||
+      !std::all_of(digits.begin(), digits.end(), [](unsigned char c) { return c >= '0' && c <= '9'; })) {
+    return 0;
+  }
+  const long pid = std::stol(digits);
+  return pid <= (1L << 22) ? pid : 0;
+}
+
 }  // namespace
 
 OutputFolder::OutputFolder(std::filesystem::path dir, std::string command, std::ostream* notes)
@@ -113,18 +127,14 @@ void OutputFolder::settle_leftovers(std::ostream* notes) {
   // Safe under the lock: every liedyn writer into this folder holds it for its whole life, so
   // nothing found here belongs to a live run (except .tmp-<pid> files of versions that did
   // not lock, hence the pid check).
-  static const std::regex old_temporary(R"(.+\.tmp-([0-9]+))");
   std::vector<std::filesystem::path> stagings, temporaries;
   std::error_code error;
   for (const auto& entry : std::filesystem::directory_iterator(dir_, error)) {
     const std::string name = entry.path().filename().string();
-    std::smatch match;
     if (name.rfind(kStagingPrefix, 0) == 0 && entry.is_directory() && !entry.is_symlink()) {
       stagings.push_back(entry.path());
-    } else if (std::regex_match(name, match, old_temporary) && entry.is_regular_file() &&
-               !entry.is_symlink()) {
-      const long pid = std::stol(match[1].str());
-      if (pid > 0 && pid <= 1 << 22 && ::kill(static_cast<pid_t>(pid), 0) != 0 && errno == ESRCH) {
+    } else if (const long pid = temporary_pid(name); pid > 0 && entry.is_regular_file() && !entry.is_symlink()) {
+      if (::kill(static_cast<pid_t>(pid), 0) != 0 && errno == ESRCH) {
         temporaries.push_back(entry.path());
       }
     }

@@ -194,6 +194,18 @@ TEST_F(OutputTest, TemporariesOfEndedOlderRunsAreRemoved) {
   EXPECT_TRUE(fs::exists(out / live)) << "a live process's temporary is not touched";
 }
 
+TEST_F(OutputTest, NamesThatOnlyLookLikeTemporariesAreLeftAlone) {
+  // A user's files whose "pid" is not one (too many digits for any pid, beyond pid_max, or not
+  // digits) are not ours: they stay, and opening the folder does not fail on them.
+  const fs::path out = dir_ / "out";
+  fs::create_directories(out);
+  const std::vector<std::string> names = {"data.tmp-99999999999999999999", "data.tmp-4194305", "data.tmp-12a",
+                                          ".tmp-1", "data.tmp-"};
+  for (const std::string& name : names) write(out / name, "the user's");
+  EXPECT_NO_THROW({ OutputFolder folder(out, "next", nullptr); });
+  for (const std::string& name : names) EXPECT_TRUE(fs::exists(out / name)) << name;
+}
+
 TEST_F(OutputTest, AWriteFailureLeavesTheEarlierUnit) {
   // A file size limit makes writes fail with EFBIG, as a full disk fails them with ENOSPC:
   // the commit must throw before anything in the folder is replaced.
