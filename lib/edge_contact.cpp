@@ -295,10 +295,14 @@ double BasicEdgeFriction<N>::evaluate(const State& q, LocalGradient<kBlocks>* g,
         const Vector3 f = scale * slip.phi1 * slip.u;
         for (int i = 0; i < 4; ++i) g->template segment<3>(3 * i) += alpha[i] * f;
       }
-      if (H != nullptr) {
+      if (H != nullptr) {  // α_i α_j K with K symmetric: each block pair once
         const Matrix3 K = scale * slip.curvature(Matrix3::Identity() - l.normal * l.normal.transpose());
         for (int i = 0; i < 4; ++i) {
-          for (int j = 0; j < 4; ++j) H->template block<3, 3>(3 * i, 3 * j) += (alpha[i] * alpha[j]) * K;
+          for (int j = i; j < 4; ++j) {
+            const Matrix3 block = (alpha[i] * alpha[j]) * K;
+            H->template block<3, 3>(3 * i, 3 * j) += block;
+            if (j != i) H->template block<3, 3>(3 * j, 3 * i) += block;
+          }
         }
       }
     }

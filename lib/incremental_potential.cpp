@@ -130,17 +130,27 @@ std::vector<std::shared_ptr<const Collider>> shared_colliders(const Model& model
   return out;
 }
 
+// Whether a material's samples rub: μ > 0, and a dynamic model (static equilibria have no step
+// to slip over: friction is a dynamic term).
+bool rubs(const Model& model, const ContactMaterial& material) {
+  return material.friction > 0.0 && !model.static_equilibrium;
+}
+
+// The slip over a step at which a material's friction saturates: ε = ε_v h (friction.hpp).
+double slip_zone(const Model& model, const ContactMaterial& material) {
+  return material.friction_velocity * model.time_step;
+}
+
 // A sample's penalty term (against a collider: Contact; against a body: BodyContact), and its
-// friction term where its material's μ > 0. Static equilibria have no step to slip over:
-// friction is a dynamic term.
+// friction term where its material rubs.
 template <class Penalty, class FrictionTerm, class Sample>
 void add_sample_terms(const Model& model, const Sample& sample, const ContactMaterial& material,
                       IncrementalPotential& potential) {
   potential.add(Penalty{sample});
-  if (material.friction > 0.0 && !model.static_equilibrium) {
+  if (rubs(model, material)) {
     FrictionTerm friction{sample};
     friction.coefficient = material.friction;
-    friction.epsilon = material.friction_velocity * model.time_step;
+    friction.epsilon = slip_zone(model, material);
     potential.add(friction);
   }
 }
@@ -466,10 +476,10 @@ void add_edge_contact_terms(const Model& model, const std::vector<bool>& key, co
     term.stiffness = 0.5 * (a.contact.stiffness / term.rest_length_a + b.contact.stiffness / term.rest_length_b);
     IncrementalPotential& potential = components[component].potential;  // Model::edge_pairs: some node is free
     potential.add(term);
-    if ((a.contact.friction > 0.0 || b.contact.friction > 0.0) && !model.static_equilibrium) {
+    if (rubs(model, a.contact) || rubs(model, b.contact)) {
       EdgeFriction friction{term};
       friction.coefficient = {a.contact.friction, b.contact.friction};
-      friction.epsilon = {a.contact.friction_velocity * model.time_step, b.contact.friction_velocity * model.time_step};
+      friction.epsilon = {slip_zone(model, a.contact), slip_zone(model, b.contact)};
       potential.add(friction);
     }
   }

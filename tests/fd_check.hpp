@@ -400,6 +400,32 @@ inline ::testing::AssertionResult check_vector_jacobian(const VectorFunction& F,
                          dofs, nullptr, opt, noise_of(magnitude, opt.step));
 }
 
+// A term's residual vector (its least-squares form, lib/term.hpp) as a function of the state,
+// for check_vector_jacobian. `term` is captured by reference.
+template <class Term>
+VectorFunction residual_of(const Term& term) {
+  return [&term](const State& s) {
+    typename Term::Residual r;
+    term.residual(s, r, nullptr);
+    return Eigen::VectorXd(r);
+  };
+}
+
+// The local gradient at q of a term that freezes data at the start of a step (begin_step), as
+// a function of the previous state: what its mixed block ∂C/∂q_{k−1} is the Jacobian of. A
+// copy of the term is lagged again at every previous state; `term` and `q` are captured by
+// reference.
+template <class Term>
+VectorFunction lagged_gradient(const Term& term, const State& q) {
+  return [&term, &q](const State& previous) {
+    Term t = term;
+    t.begin_step(previous, Step{});
+    LocalGradient<Term::kBlocks> g;
+    t.evaluate(q, &g, nullptr);
+    return Eigen::VectorXd(g);
+  };
+}
+
 // ---------------------------------------------------------------------------------------
 // Energy terms (lib/term.hpp): value, Lie gradient and Lie Hessian of term.evaluate over all
 // its blocks; `dofs` maps the term's local blocks to the state (no_dof() for world anchors).

@@ -500,11 +500,7 @@ TEST(BodyFriction, ResidualFormReproducesValueAndGradient) {
       c.term.residual(c.q, r, &J);
       EXPECT_NEAR(0.5 * r.squaredNorm(), D, 1e-13 * D);
       EXPECT_TRUE((J.transpose() * r).isApprox(g, 1e-12));
-      const fd::VectorFunction F = [&c](const State& s) {
-        BodyFriction::Residual rs;
-        c.term.residual(s, rs, nullptr);
-        return Eigen::VectorXd(rs);
-      };
+      const fd::VectorFunction F = fd::residual_of(c.term);
       EXPECT_TRUE(fd::check_vector_jacobian(F, c.q, kDofs, J));
     }
   }
@@ -521,13 +517,7 @@ TEST(BodyFriction, MixedBlockOfTheLaggedStepMatchesFiniteDifferences) {
         for (const double slip : {0.3e-2, 5e-2}) {
           SCOPED_TRACE(trace("angles of A and B, slip", angle_a, angle_b, slip));
           const FrictionPair c = friction_pair(shape, angle_a, angle_b, slip, 1e-2, 1e4, rng);
-          const fd::VectorFunction C = [&c](const State& previous) {
-            BodyFriction t = c.term;
-            t.begin_step(previous, Step{});
-            LocalGradient<4> g;
-            t.evaluate(c.q, &g, nullptr);
-            return Eigen::VectorXd(g);
-          };
+          const fd::VectorFunction C = fd::lagged_gradient(c.term, c.q);
           const Eigen::MatrixXd J = c.term.previous_jacobian(c.q, c.previous);
           fd::FdOptions o;
           o.step = 2e-7;  // the stick zone's truncation, as in the Lie derivatives' test

@@ -179,11 +179,7 @@ TEST(Contact, ResidualFormReproducesValueAndGradientAndItsJacobian) {
       term.residual(b.q, r, &J);
       EXPECT_NEAR(0.5 * r.squaredNorm(), V, 1e-12 * V);
       EXPECT_TRUE((J.transpose() * r).isApprox(g, 1e-12));
-      const fd::VectorFunction F = [&term](const State& s) {
-        Contact::Residual rs;
-        term.residual(s, rs, nullptr);
-        return Eigen::VectorXd(rs);
-      };
+      const fd::VectorFunction F = fd::residual_of(term);
       EXPECT_TRUE(fd::check_vector_jacobian(F, b.q, kBodyDofs, J));
     }
   }
@@ -303,11 +299,7 @@ TEST(Friction, ResidualFormReproducesValueAndGradient) {
       c.term.residual(c.q, r, &J);
       EXPECT_NEAR(0.5 * r.squaredNorm(), D, 1e-13 * D);
       EXPECT_TRUE((J.transpose() * r).isApprox(g, 1e-12) || g.isZero(0.0));
-      const fd::VectorFunction F = [&c](const State& s) {
-        Friction::Residual rs;
-        c.term.residual(s, rs, nullptr);
-        return Eigen::VectorXd(rs);
-      };
+      const fd::VectorFunction F = fd::residual_of(c.term);
       fd::FdOptions o;
       if (slip == 0.0) o.require_nonzero = fd::NonZero::kNone;  // J = 0 at zero slip
       EXPECT_TRUE(fd::check_vector_jacobian(F, c.q, kBodyDofs, J, o));
@@ -324,13 +316,7 @@ TEST(Friction, MixedBlockOfTheLaggedStepMatchesFiniteDifferences) {
       for (double slip : {0.3e-2, 5e-2}) {
         SCOPED_TRACE(trace("angle slip", angle, slip));
         const FrictionCase c = friction_case(collider, angle, slip, 1e-2, rng, 0.002);
-        const fd::VectorFunction C = [&c](const State& previous) {
-          Friction t = c.term;
-          t.begin_step(previous, Step{});
-          LocalGradient<2> g;
-          t.evaluate(c.q, &g, nullptr);
-          return Eigen::VectorXd(g);
-        };
+        const fd::VectorFunction C = fd::lagged_gradient(c.term, c.q);
         const Eigen::MatrixXd J = c.term.previous_jacobian(c.q, c.previous);
         EXPECT_TRUE(fd::check_vector_jacobian(C, c.previous, kBodyDofs, J));
       }

@@ -271,11 +271,7 @@ TEST(EdgeBodyContact, InternalForcesBalanceAndTheResidualFormAgrees) {
       c.term.residual(c.q, r, &J);
       EXPECT_NEAR(0.5 * r.squaredNorm(), value, 1e-12 * value);
       EXPECT_LT((J.transpose() * r - g).norm(), 1e-12 * g.norm());
-      const fd::VectorFunction F = [&c](const State& s) {
-        EdgeBodyContact::Residual rs;
-        c.term.residual(s, rs, nullptr);
-        return Eigen::VectorXd(rs);
-      };
+      const fd::VectorFunction F = fd::residual_of(c.term);
       EXPECT_TRUE(fd::check_vector_jacobian(F, c.q, kDofs, J));
     }
   }
@@ -505,11 +501,7 @@ TEST(EdgeBodyFriction, ResidualFormReproducesValueAndGradient) {
       c.term.residual(c.q, r, &J);
       EXPECT_NEAR(0.5 * r.squaredNorm(), D, 1e-13 * D);
       EXPECT_TRUE((J.transpose() * r).isApprox(g, 1e-12));
-      const fd::VectorFunction F = [&c](const State& s) {
-        EdgeBodyFriction::Residual rs;
-        c.term.residual(s, rs, nullptr);
-        return Eigen::VectorXd(rs);
-      };
+      const fd::VectorFunction F = fd::residual_of(c.term);
       EXPECT_TRUE(fd::check_vector_jacobian(F, c.q, kDofs, J));
     }
   }
@@ -527,13 +519,7 @@ TEST(EdgeBodyFriction, MixedBlockOfTheLaggedStepMatchesFiniteDifferences) {
         for (const double slip : {0.3e-2, 5e-2}) {
           SCOPED_TRACE(trace("angle of B, slip, region", angle_b, slip, static_cast<int>(region)));
           const FrictionCase<4> c = friction_case<4>(shape, angle_b, slip, 1e-2, 1e4, rng, 0.002, region);
-          const fd::VectorFunction C = [&c](const State& previous) {
-            EdgeBodyFriction t = c.term;
-            t.begin_step(previous, Step{});
-            LocalGradient<4> g;
-            t.evaluate(c.q, &g, nullptr);
-            return Eigen::VectorXd(g);
-          };
+          const fd::VectorFunction C = fd::lagged_gradient(c.term, c.q);
           const Eigen::MatrixXd J = c.term.previous_jacobian(c.q, c.previous);
           fd::FdOptions o;
           o.step = 2e-7;  // the stick zone's truncation, as in the Lie derivatives' test

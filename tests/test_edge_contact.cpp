@@ -717,11 +717,7 @@ TEST(EdgeContact, ResidualFormReproducesValueAndGradient) {
       }
     }
     EXPECT_GT(in_contact, 0);
-    const fd::VectorFunction F = [&c](const State& s) {
-      EdgeContact::Residual rs;
-      c.term.residual(s, rs, nullptr);
-      return Eigen::VectorXd(rs);
-    };
+    const fd::VectorFunction F = fd::residual_of(c.term);
     EXPECT_TRUE(fd::check_vector_jacobian(F, c.q, dofs_of(c.term), J));
   }
 }
@@ -1115,11 +1111,7 @@ TEST(EdgeFriction, ResidualFormReproducesValueAndGradient) {
       f.term.residual(f.q, r, &J);
       EXPECT_NEAR(0.5 * r.squaredNorm(), D, 1e-13 * D);
       EXPECT_TRUE((J.transpose() * r).isApprox(g, 1e-12));
-      const fd::VectorFunction F = [&f](const State& s) {
-        EdgeFriction::Residual rs;
-        f.term.residual(s, rs, nullptr);
-        return Eigen::VectorXd(rs);
-      };
+      const fd::VectorFunction F = fd::residual_of(f.term);
       fd::FdOptions o;
       o.require_nonzero = fd::NonZero::kAny;
       EXPECT_TRUE(fd::check_vector_jacobian(F, f.q, dofs_of(f.term), J, o));
@@ -1137,13 +1129,7 @@ TEST(EdgeFriction, MixedBlockOfTheLaggedStepMatchesFiniteDifferences) {
     for (const double slip : {0.3e-2, 5e-2}) {
       SCOPED_TRACE(name + trace(", slip", slip));
       const FrictionPair f = clear_of_switch(c, slip, 1e-2, rng);
-      const fd::VectorFunction C = [&f](const State& previous) {
-        EdgeFriction t = f.term;
-        t.begin_step(previous, Step{});
-        LocalGradient<4> g;
-        t.evaluate(f.q, &g, nullptr);
-        return Eigen::VectorXd(g);
-      };
+      const fd::VectorFunction C = fd::lagged_gradient(f.term, f.q);
       const Eigen::MatrixXd J = f.term.previous_jacobian(f.q, f.previous);
       fd::FdOptions o;
       o.step = 2e-7;  // the stick zone's truncation, as in the derivatives' test

@@ -335,11 +335,7 @@ TEST(JointLineTerm, DerivativesResidualAndConstraintMatchFiniteDifferences) {
                     }
                   }
                   EXPECT_LE((J.transpose() * r - g).norm(), 1e-12 * (1.0 + g.norm()));
-                  const fd::VectorFunction residual = [&](const State& s) {
-                    JointLine::Residual rs;
-                    t.residual(s, rs, nullptr);
-                    return Eigen::VectorXd(rs);
-                  };
+                  const fd::VectorFunction residual = fd::residual_of(t);
                   JointLine::ResidualJacobian J_full;
                   t.residual(e.q, r, &J_full);
                   EXPECT_TRUE(fd::check_vector_jacobian(residual, e.q, e.point_pair, Eigen::MatrixXd(J_full)));

@@ -299,11 +299,7 @@ template <class Coordinate>
   if (!(err <= 64 * kEps * (J.norm() * r.norm() + g.norm()))) {
     return ::testing::AssertionFailure() << "Jᵀr differs from g by " << err;
   }
-  const fd::VectorFunction F = [&](const State& s) {
-    typename Limit::Residual rs;
-    limit.residual(s, rs, nullptr);
-    return Eigen::VectorXd(rs);
-  };
+  const fd::VectorFunction F = fd::residual_of(limit);
   const double scale = std::sqrt(limit.stiffness) * (std::abs(limit.bound) + 2.0);
   return fd::check_vector_jacobian(F, c.q, c.dofs, J, fd::FdOptions{}, scale);
 }

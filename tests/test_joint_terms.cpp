@@ -196,11 +196,7 @@ template <class Term>
     return ::testing::AssertionFailure() << "gradient negligible (" << g.norm() << ", tolerance "
                                          << tol << "): Jᵀr = g would prove nothing";
   }
-  const fd::VectorFunction F = [&](const State& s) {
-    typename Term::Residual rs;
-    c.term.residual(s, rs, nullptr);
-    return Eigen::VectorXd(rs);
-  };
+  const fd::VectorFunction F = fd::residual_of(c.term);
   return fd::check_vector_jacobian(F, c.q, c.dofs, J, jacobian,
                                    r_scale < 0.0 ? std::sqrt(c.term.stiffness) : r_scale);
 }

@@ -234,13 +234,7 @@ TEST(MovingColliders, BodyContactAndFrictionAgainstAnyColliderMatchFiniteDiffere
           const Vector3 p_b = q.points[1] + q.rotations[1] * f.contact_point;
           q.points[0] = p_b + slip * fd::random_perpendicular(f.normal, rng) - q.rotations[0] * f.at.local;
           EXPECT_TRUE(fd::check_term(f, q, kBodyDofs, fd::stick_zone())) << "slip " << slip;
-          const fd::VectorFunction C = [&](const State& previous) {
-            BodyFriction t = f;
-            t.begin_step(previous, Step{});
-            LocalGradient<4> g;
-            t.evaluate(q, &g, nullptr);
-            return Eigen::VectorXd(g);
-          };
+          const fd::VectorFunction C = fd::lagged_gradient(f, q);
           EXPECT_TRUE(fd::check_vector_jacobian(C, c.q, kBodyDofs, f.previous_jacobian(q, c.q), fd::stick_zone().gradient))
               << "slip " << slip;
         }
