@@ -841,10 +841,11 @@ Scene parse(const json& root, const std::string& source) {
     // --backends` can switch; their values are checked by SolverOptions::validate.
     if (s.has("ceres")) {
       ObjectReader c(s.get("ceres"), "solver.ceres", source,
-                     {"linear_solver", "trust_region_strategy", "verbose"});
+                     {"linear_solver", "trust_region_strategy", "lie_blocks", "verbose"});
       CeresOptions& o = scene.solver.ceres;
       o.linear_solver = c.string("linear_solver", o.linear_solver);
       o.trust_region_strategy = c.string("trust_region_strategy", o.trust_region_strategy);
+      o.lie_blocks = c.string("lie_blocks", o.lie_blocks);
       o.verbose = c.boolean("verbose", o.verbose);
       c.finish();
     }

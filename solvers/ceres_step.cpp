@@ -18,6 +18,7 @@
 #include "../lib/so3.hpp"
 #include "../manifolds/ceres_manifolds.hpp"
 #include "../manifolds/quaternion.hpp"
+#include "../manifolds/so3_manifold.hpp"
 #include "newton.hpp"
 
 namespace liedyn {
@@ -33,13 +34,15 @@ enum class Storage {
   kPoint,       // x, 3 doubles
   kChart,       // θ, 3 doubles, R = exp(θ) R_ref (Lie: R_ref = R at the start; rotvec: I)
   kQuaternion,  // q, 4 doubles, UnitQuaternionRetraction
+  kSO3,         // q, 4 doubles, SO3Manifold (Lie under CeresOptions::lie_blocks = "manifold")
 };
 
 int storage_size(Storage s) {
   switch (s) {
     case Storage::kPoint: return 3;
     case Storage::kChart: return 3;
-    case Storage::kQuaternion: return 4;
+    case Storage::kQuaternion:
+    case Storage::kSO3: return 4;
   }
   return 0;
 }
@@ -70,6 +73,9 @@ struct Parameters {
       case Storage::kQuaternion:
         T.leftCols<4>() = UnitQuaternionRetraction::lie_to_ambient(p);
         return quat::rotation(Eigen::Map<const Eigen::Vector4d>(p));
+      case Storage::kSO3:
+        T.leftCols<4>() = SO3Manifold::lie_to_ambient(p);
+        return SO3Manifold::rotation(p);
       case Storage::kPoint: break;
     }
     return Matrix3::Identity();
@@ -91,6 +97,7 @@ struct Parameters {
           }
           break;
         case Storage::kQuaternion:
+        case Storage::kSO3:
           Eigen::Map<Eigen::Vector4d>(p, 4) = quat::from_rotation(q.rotations[b.index]);
           break;
       }
@@ -362,8 +369,7 @@ class CeresStepSolver final : public StepSolver {
     ceres::Solver::Options solver = solver_options_;
     // Ceres measures a step as the change of the stored parameters: for a quaternion block
     // ‖Q(q)δ‖ = ½‖δ‖, half the rotation.
-    const double step_scale =
-        options_.rotation == RotationParameterization::kQuaternion ? 0.5 : 1.0;
+    const double step_scale = storage_size(rotation_storage()) == 4 ? 0.5 : 1.0;
     stop_.threshold = step_scale * options_.tolerance;
     int iterations = 0;
     // Rounds until the test holds or the iterations are used up. Gauss–Newton converges only
@@ -455,8 +461,11 @@ class CeresStepSolver final : public StepSolver {
   }
 
   Storage rotation_storage() const {
-    return options_.rotation == RotationParameterization::kQuaternion ? Storage::kQuaternion
-                                                                       : Storage::kChart;
+    if (options_.rotation == RotationParameterization::kQuaternion) return Storage::kQuaternion;
+    if (options_.rotation == RotationParameterization::kLie && options_.ceres.lie_blocks == "manifold") {
+      return Storage::kSO3;
+    }
+    return Storage::kChart;
   }
 
   template <class Form>
@@ -502,6 +511,7 @@ class CeresStepSolver final : public StepSolver {
         case Storage::kPoint:
         case Storage::kChart: problem_->AddParameterBlock(p, 3); break;
         case Storage::kQuaternion: problem_->AddParameterBlock(p, 4, &quaternion_); break;
+        case Storage::kSO3: problem_->AddParameterBlock(p, 4, &so3_); break;
       }
     }
 
@@ -596,6 +606,7 @@ class CeresStepSolver final : public StepSolver {
   std::deque<double> offset_roots_;     // c per offset-root residual (stable addresses)
   std::vector<std::function<void(const State&)>> refresh_;
   UnitQuaternionRetraction quaternion_;
+  SO3Manifold so3_;
   StopOnSmallStep stop_;
   ceres::Solver::Options solver_options_;
   std::unique_ptr<ceres::Problem> problem_;

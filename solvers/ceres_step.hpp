@@ -18,6 +18,9 @@
 //   rotvec — the same chart with R₀ = I: global rotation vectors r = log R;
 //   quat   — UnitQuaternionRetraction (manifolds/ceres_manifolds.hpp): 4 doubles,
 //            Plus = normalize(q + Q(q) δ), the cost returns J_Lie · 4Q(q)ᵀ.
+//   lie with CeresOptions::lie_blocks = "manifold" — SO3Manifold (manifolds/so3_manifold.hpp):
+//            4 doubles, Plus = exp(δ) ⊗ q exactly, the cost returns J_Lie · 4Q(q)ᵀ; the
+//            public manifold, measured against the chart in docs/design.md §9.3.
 // For lie, docs/design.md §9.3 gives the chart or a 9-double "lift" manifold (R itself, Plus =
 // exp(δ) R, J_amb = J_Lie · MinusJacobian). Both were built and measured side by side
 // (`liedyn bench --repeat 5`, Release, 2-vCPU Xeon VM, twice each, tolerance 1e-8): on the

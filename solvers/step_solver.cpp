@@ -49,6 +49,10 @@ void SolverOptions::validate() const {
                      "unknown strategy \"" + ceres.trust_region_strategy +
                          "\" (expected levenberg_marquardt or dogleg)");
   }
+  if (!one_of(ceres.lie_blocks, {"chart", "manifold"})) {
+    throw ModelError("solver.ceres.lie_blocks",
+                     "unknown rotation blocks \"" + ceres.lie_blocks + "\" (expected chart or manifold)");
+  }
   if (!one_of(ipopt.hessian_approximation, {"exact", "limited-memory"})) {
     throw ModelError("solver.ipopt.hessian_approximation",
                      "unknown approximation \"" + ipopt.hessian_approximation +

@@ -52,6 +52,11 @@ struct CeresOptions {
   std::string linear_solver = "auto";
   // "levenberg_marquardt" or "dogleg".
   std::string trust_region_strategy = "levenberg_marquardt";
+  // How a rotation block is handed to Ceres under "rotation": "lie" (solvers/ceres_step.hpp):
+  // "chart" — 3 doubles θ, R = exp(θ) R₀ re-centred at every solve; "manifold" — 4 doubles, a
+  // unit quaternion on liedyn::SO3Manifold (manifolds/so3_manifold.hpp). Ignored by rotvec and
+  // quat, which have their own storage.
+  std::string lie_blocks = "chart";
   // Ceres's per-iteration progress on stdout.
   bool verbose = false;
 };
