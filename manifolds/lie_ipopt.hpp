@@ -24,7 +24,8 @@
 // `recentre_angle`, the references move to the solution (R0_i ← R_i, θ_i = 0) and Ipopt solves
 // again from there (warm-started multipliers), up to `max_recentrings` times. A solution is
 // the same point on the manifold in any chart: the KKT conditions in θ are the Lie ones times
-// the invertible J_l(θ).
+// the invertible J_l(θ) (‖θ‖ < 2π), so a solve that converged with re-centrings used up is
+// still reported converged, its message saying how far the last chart moved.
 //
 // Tangent layout (gradients, Jacobian columns, Hessian rows and columns): rotation i at 3i
 // (its world-frame rotation vector, as everywhere in liedyn), then v at 3r.
@@ -86,15 +87,17 @@ struct LieIpoptOptions {
   // Ipopt's derivative checker at the start of each solve, on the chart derivatives:
   // "none", "first-order", "second-order" (findings on the console).
   std::string derivative_test = "none";
+  // If not empty, Ipopt also writes its log there, at print level max(print_level, 5).
+  std::string output_file;
 
   // Throws std::invalid_argument naming the field and the rule.
   void validate() const;
 };
 
 enum class LieIpoptTermination {
-  kConverged,      // Ipopt's Solve_Succeeded in a chart that needed no re-centring
+  kConverged,      // Ipopt's Solve_Succeeded in the last chart
   kAcceptable,     // Ipopt's Solved_To_Acceptable_Level
-  kNoConvergence,  // iteration limit, or re-centrings used up with θ still large
+  kNoConvergence,  // Ipopt's iteration (or time) limit
   kFailure,        // any other Ipopt status (infeasible, restoration failed, evaluation errors)
 };
 
@@ -111,7 +114,8 @@ struct LieIpoptSummary {
 
 // Solves from x (x.vector's size sets n; rotations must be rotations to round-off) and leaves
 // the final point in x (also when not converged). Throws std::invalid_argument for invalid
-// options or a problem whose sizes disagree with x.
+// options, an x that is not a point of the manifold, hessian = "exact" without
+// lagrangian_hessian, or an output_file that cannot be opened.
 LieIpoptSummary solve_with_ipopt(LieNlp& problem, LiePoint& x, const LieIpoptOptions& options = {});
 
 }  // namespace liedyn

@@ -1,0 +1,392 @@
+#include "lie_ipopt.hpp"
+
+#include <IpIpoptApplication.hpp>
+#include <IpSolveStatistics.hpp>
+#include <IpTNLP.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numbers>
+#include <stdexcept>
+
+#include "../lib/so3.hpp"
+#include "../solvers/ipopt_status.hpp"
+#include "rotation_vector.hpp"
+
+namespace liedyn {
+
+void LieNlp::vector_bounds(Eigen::VectorXd& lower, Eigen::VectorXd& upper) const {
+  lower.setConstant(-std::numeric_limits<double>::infinity());
+  upper.setConstant(std::numeric_limits<double>::infinity());
+}
+
+bool LieNlp::constraint_values(const LiePoint&, Eigen::VectorXd&, Eigen::MatrixXd*) { return true; }
+
+bool LieNlp::lagrangian_hessian(const LiePoint&, double, const Eigen::VectorXd&, Eigen::MatrixXd&) {
+  return false;
+}
+
+void LieIpoptOptions::validate() const {
+  const auto fail = [](const std::string& field, const std::string& rule) {
+    throw std::invalid_argument("LieIpoptOptions::" + field + ": " + rule);
+  };
+  if (!(tolerance > 0.0) || !std::isfinite(tolerance)) fail("tolerance", "must be finite and > 0");
+  if (max_iterations < 1) fail("max_iterations", "must be ≥ 1");
+  if (max_recentrings < 0) fail("max_recentrings", "must be ≥ 0");
+  if (!(recentre_angle > 0.0 && recentre_angle <= std::numbers::pi)) fail("recentre_angle", "must be in (0, π]");
+  if (hessian != "auto" && hessian != "exact" && hessian != "limited-memory") {
+    fail("hessian", "unknown \"" + hessian + "\" (expected auto, exact or limited-memory)");
+  }
+  if (print_level < 0 || print_level > 12) fail("print_level", "must be in [0, 12]");
+  if (derivative_test != "none" && derivative_test != "first-order" &&
+      derivative_test != "second-order") {
+    fail("derivative_test",
+         "unknown \"" + derivative_test + "\" (expected none, first-order or second-order)");
+  }
+}
+
+namespace {
+
+using Eigen::MatrixXd;
+using Eigen::VectorXd;
+using Index = Ipopt::Index;
+using Number = Ipopt::Number;
+
+// Ipopt's infinity (nlp_lower_bound_inf / nlp_upper_bound_inf default to ∓1e19).
+constexpr double kIpoptInfinity = 2e19;
+double to_ipopt(double bound) {
+  return std::clamp(bound, -kIpoptInfinity, kIpoptInfinity);
+}
+
+// The NLP in chart variables z = (θ_1, …, θ_r, v) (lie_ipopt.hpp), around references R0.
+class ChartNlp final : public Ipopt::TNLP {
+ public:
+  ChartNlp(LieNlp& problem, const LiePoint& start, bool exact_hessian)
+      : problem_(problem),
+        rotations_(static_cast<int>(start.rotations.size())),
+        n_(start.tangent_size()),
+        m_(problem.constraints()),
+        exact_hessian_(exact_hessian),
+        reference_(start.rotations),
+        left_jacobian_(start.rotations.size(), Eigen::Matrix3d::Identity()),
+        point_(start),
+        z_(VectorXd::Zero(n_)),
+        z_lower_(VectorXd::Zero(0)),
+        z_upper_(VectorXd::Zero(0)),
+        lambda_(VectorXd::Zero(m_)),
+        gradient_(n_),
+        jacobian_(m_, n_),
+        constraints_(m_) {
+    z_.tail(n_ - 3 * rotations_) = start.vector;
+  }
+
+  // Chart around the current point: R0 ← R, θ = 0 (multipliers kept for a warm start).
+  void recentre() {
+    for (int i = 0; i < rotations_; ++i) {
+      reference_[i] = point_.rotations[i];
+      z_.segment<3>(3 * i).setZero();
+      left_jacobian_[i].setIdentity();
+    }
+    have_gradient_ = have_jacobian_ = false;
+  }
+  double largest_chart_angle() const {
+    double largest = 0.0;
+    for (int i = 0; i < rotations_; ++i) largest = std::max(largest, z_.segment<3>(3 * i).norm());
+    return largest;
+  }
+  const LiePoint& point() const { return point_; }
+  const VectorXd& multipliers() const { return lambda_; }
+  double objective() const { return objective_; }
+  const VectorXd& constraint_values() const { return constraints_; }
+  Ipopt::SolverReturn final_status() const { return final_status_; }
+  bool warm() const { return warm_; }
+
+  bool get_nlp_info(Index& n, Index& m, Index& nnz_jac_g, Index& nnz_h_lag,
+                    IndexStyleEnum& index_style) override {
+    n = n_;
+    m = m_;
+    nnz_jac_g = m_ * n_;
+    nnz_h_lag = exact_hessian_ ? n_ * (n_ + 1) / 2 : 0;
+    index_style = C_STYLE;
+    return true;
+  }
+
+  bool get_bounds_info(Index, Number* x_l, Number* x_u, Index, Number* g_l, Number* g_u) override {
+    const int v = n_ - 3 * rotations_;
+    VectorXd lower(v), upper(v);
+    problem_.vector_bounds(lower, upper);
+    for (int i = 0; i < 3 * rotations_; ++i) {  // charts: unbounded
+      x_l[i] = -kIpoptInfinity;
+      x_u[i] = kIpoptInfinity;
+    }
+    for (int j = 0; j < v; ++j) {
+      x_l[3 * rotations_ + j] = to_ipopt(lower(j));
+      x_u[3 * rotations_ + j] = to_ipopt(upper(j));
+    }
+    VectorXd c_lower(m_), c_upper(m_);
+    problem_.constraint_bounds(c_lower, c_upper);
+    for (int r = 0; r < m_; ++r) {
+      g_l[r] = to_ipopt(c_lower(r));
+      g_u[r] = to_ipopt(c_upper(r));
+    }
+    return true;
+  }
+
+  bool get_starting_point(Index, bool init_x, Number* x, bool init_z, Number* z_L, Number* z_U,
+                          Index, bool init_lambda, Number* lambda) override {
+    if (init_x) Eigen::Map<VectorXd>(x, n_) = z_;
+    if (init_z) {  // a warm start: the last solve's bound multipliers
+      if (z_lower_.size() != n_) return false;
+      Eigen::Map<VectorXd>(z_L, n_) = z_lower_;
+      Eigen::Map<VectorXd>(z_U, n_) = z_upper_;
+    }
+    if (init_lambda) Eigen::Map<VectorXd>(lambda, m_) = lambda_;
+    return true;
+  }
+
+  bool eval_f(Index, const Number* x, bool new_x, Number& f) override {
+    if (new_x) set(x);
+    double value = 0.0;
+    if (!problem_.objective(point_, value, nullptr) || !std::isfinite(value)) return false;
+    f = value;
+    return true;
+  }
+
+  bool eval_grad_f(Index, const Number* x, bool new_x, Number* grad_f) override {
+    if (new_x) set(x);
+    if (!lie_gradient()) return false;
+    Eigen::Map<VectorXd> g(grad_f, n_);
+    g = gradient_;
+    for (int i = 0; i < rotations_; ++i) {  // ∂f/∂θ_i = J_l(θ_i)ᵀ g_i
+      g.segment<3>(3 * i) = left_jacobian_[i].transpose() * gradient_.segment<3>(3 * i);
+    }
+    return true;
+  }
+
+  bool eval_g(Index, const Number* x, bool new_x, Index, Number* g) override {
+    if (new_x) set(x);
+    VectorXd c(m_);
+    if (!problem_.constraint_values(point_, c, nullptr) || !c.allFinite()) return false;
+    Eigen::Map<VectorXd>(g, m_) = c;
+    return true;
+  }
+
+  bool eval_jac_g(Index, const Number* x, bool new_x, Index, Index, Index* iRow, Index* jCol,
+                  Number* values) override {
+    if (values == nullptr) {  // dense, row by row
+      Index k = 0;
+      for (int r = 0; r < m_; ++r) {
+        for (int c = 0; c < n_; ++c, ++k) {
+          iRow[k] = r;
+          jCol[k] = c;
+        }
+      }
+      return true;
+    }
+    if (new_x) set(x);
+    if (!lie_jacobian()) return false;
+    Eigen::Map<Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>> J(values, m_, n_);
+    J = jacobian_;
+    for (int i = 0; i < rotations_; ++i) {  // ∂c/∂θ_i = A_i J_l(θ_i)
+      J.middleCols<3>(3 * i) = jacobian_.middleCols<3>(3 * i) * left_jacobian_[i];
+    }
+    return true;
+  }
+
+  bool eval_h(Index, const Number* x, bool new_x, Number obj_factor, Index, const Number* lambda,
+              bool, Index, Index* iRow, Index* jCol, Number* values) override {
+    if (values == nullptr) {  // the lower triangle, row by row
+      Index k = 0;
+      for (int r = 0; r < n_; ++r) {
+        for (int c = 0; c <= r; ++c, ++k) {
+          iRow[k] = r;
+          jCol[k] = c;
+        }
+      }
+      return true;
+    }
+    if (new_x) set(x);
+    const Eigen::Map<const VectorXd> l(lambda, m_);
+    MatrixXd H = MatrixXd::Zero(n_, n_);
+    if (!problem_.lagrangian_hessian(point_, obj_factor, l, H) || !H.allFinite()) return false;
+    if (!lie_gradient() || !lie_jacobian()) return false;
+    const VectorXd lagrangian_gradient = obj_factor * gradient_ + jacobian_.transpose() * l;
+    // Jᵀ H J with J = diag(J_l(θ_1), …, J_l(θ_r), I), then C(θ_i, ∇L_i) on each rotation's
+    // diagonal block.
+    for (int i = 0; i < rotations_; ++i) {
+      H.middleRows<3>(3 * i) = left_jacobian_[i].transpose() * H.middleRows<3>(3 * i);
+    }
+    for (int i = 0; i < rotations_; ++i) {
+      H.middleCols<3>(3 * i) = H.middleCols<3>(3 * i) * left_jacobian_[i];
+      H.block<3, 3>(3 * i, 3 * i) += rotvec::hessian_correction(
+          z_.segment<3>(3 * i), lagrangian_gradient.segment<3>(3 * i));
+    }
+    Index k = 0;
+    for (int r = 0; r < n_; ++r) {
+      for (int c = 0; c <= r; ++c) values[k++] = 0.5 * (H(r, c) + H(c, r));
+    }
+    return true;
+  }
+
+  void finalize_solution(Ipopt::SolverReturn status, Index, const Number* x, const Number* z_L,
+                         const Number* z_U, Index, const Number*, const Number* lambda,
+                         Number obj_value, const Ipopt::IpoptData*,
+                         Ipopt::IpoptCalculatedQuantities*) override {
+    final_status_ = status;
+    set(x);
+    z_lower_ = Eigen::Map<const VectorXd>(z_L, n_);
+    z_upper_ = Eigen::Map<const VectorXd>(z_U, n_);
+    lambda_ = Eigen::Map<const VectorXd>(lambda, m_);
+    objective_ = obj_value;
+    warm_ = true;
+    // Keep the rotations rotations: exp(θ) R0 drifts from SO(3) by round-off per re-centring.
+    for (Eigen::Matrix3d& R : point_.rotations) R = so3::orthonormalize(R);
+    constraints_.resize(m_);
+    if (m_ > 0 && !problem_.constraint_values(point_, constraints_, nullptr)) {
+      constraints_.setConstant(std::numeric_limits<double>::quiet_NaN());
+    }
+  }
+
+ private:
+  // Writes the chart point z into point_ (R_i = exp(θ_i) R0_i, with J_l(θ_i)).
+  void set(const Number* x) {
+    z_ = Eigen::Map<const VectorXd>(x, n_);
+    for (int i = 0; i < rotations_; ++i) {
+      point_.rotations[i] = so3::exp(z_.segment<3>(3 * i), &left_jacobian_[i]) * reference_[i];
+    }
+    point_.vector = z_.tail(n_ - 3 * rotations_);
+    have_gradient_ = have_jacobian_ = false;
+  }
+  bool lie_gradient() {
+    if (have_gradient_) return true;
+    double value = 0.0;
+    gradient_.setZero();
+    have_gradient_ = problem_.objective(point_, value, &gradient_) && gradient_.allFinite();
+    return have_gradient_;
+  }
+  bool lie_jacobian() {
+    if (have_jacobian_) return true;
+    VectorXd c(m_);
+    jacobian_.setZero();
+    have_jacobian_ = m_ == 0 || (problem_.constraint_values(point_, c, &jacobian_) && jacobian_.allFinite());
+    return have_jacobian_;
+  }
+
+  LieNlp& problem_;
+  int rotations_, n_, m_;
+  bool exact_hessian_;
+  std::vector<Eigen::Matrix3d> reference_;      // R0 per rotation
+  std::vector<Eigen::Matrix3d> left_jacobian_;  // J_l(θ) per rotation
+  LiePoint point_;                              // at z_
+  VectorXd z_, z_lower_, z_upper_, lambda_;
+  VectorXd gradient_;  // Lie gradient of f at point_ (when have_gradient_)
+  MatrixXd jacobian_;  // Lie Jacobian of c at point_ (when have_jacobian_)
+  VectorXd constraints_;
+  bool have_gradient_ = false, have_jacobian_ = false, warm_ = false;
+  double objective_ = 0.0;
+  Ipopt::SolverReturn final_status_ = Ipopt::UNASSIGNED;
+};
+
+// The largest violation of c_L ≤ c ≤ c_U.
+double bound_violation(const VectorXd& c, const VectorXd& lower, const VectorXd& upper) {
+  double worst = 0.0;
+  for (Eigen::Index r = 0; r < c.size(); ++r) {
+    if (!std::isfinite(c(r))) return std::numeric_limits<double>::infinity();
+    worst = std::max({worst, lower(r) - c(r), c(r) - upper(r)});
+  }
+  return worst;
+}
+
+}  // namespace
+
+LieIpoptSummary solve_with_ipopt(LieNlp& problem, LiePoint& x, const LieIpoptOptions& options) {
+  options.validate();
+  const int m = problem.constraints();
+  if (m < 0) throw std::invalid_argument("solve_with_ipopt: constraints() returned a negative count");
+  for (std::size_t i = 0; i < x.rotations.size(); ++i) {
+    const Eigen::Matrix3d& R = x.rotations[i];
+    if (!R.allFinite() || (R.transpose() * R - Eigen::Matrix3d::Identity()).norm() > 1e-6 ||
+        R.determinant() < 0.0) {
+      throw std::invalid_argument("solve_with_ipopt: x.rotations[" + std::to_string(i) +
+                                  "] is not a rotation (RᵀR = I, det R = 1 to 1e-6)");
+    }
+  }
+  if (!x.vector.allFinite()) throw std::invalid_argument("solve_with_ipopt: x.vector is not finite");
+
+  // Whether the exact Hessian is available: asked once, at the start.
+  bool exact = false;
+  if (options.hessian != "limited-memory") {
+    Eigen::MatrixXd H = Eigen::MatrixXd::Zero(x.tangent_size(), x.tangent_size());
+    exact = problem.lagrangian_hessian(x, 1.0, Eigen::VectorXd::Zero(m), H);
+    if (!exact && options.hessian == "exact") {
+      throw std::invalid_argument(
+          "LieIpoptOptions::hessian: \"exact\" but the problem's lagrangian_hessian returns false");
+    }
+  }
+
+  auto* nlp = new ChartNlp(problem, x, exact);
+  const Ipopt::SmartPtr<Ipopt::TNLP> tnlp = nlp;  // owns it (Ipopt's reference count)
+  Ipopt::SmartPtr<Ipopt::IpoptApplication> app = new Ipopt::IpoptApplication();
+  Ipopt::OptionsList& o = *app->Options();
+  o.SetIntegerValue("print_level", options.print_level);
+  if (options.print_level == 0) o.SetStringValue("sb", "yes");
+  if (!options.output_file.empty()) {
+    o.SetStringValue("output_file", options.output_file);
+    o.SetIntegerValue("file_print_level", std::max(options.print_level, 5));
+  }
+  o.SetStringValue("linear_solver", "mumps");
+  o.SetStringValue("hessian_approximation", exact ? "exact" : "limited-memory");
+  o.SetStringValue("derivative_test", options.derivative_test);
+  // The checker moves the starting point by up to this much per variable: within the chart.
+  o.SetNumericValue("point_perturbation_radius", 0.1);
+  o.SetNumericValue("tol", options.tolerance);
+  // Initialize("") reads no options file; in Ipopt 3.11 it fails only when the output file
+  // cannot be opened.
+  if (app->Initialize("") != Ipopt::Solve_Succeeded) {
+    throw std::invalid_argument("LieIpoptOptions::output_file: cannot open \"" +
+                                options.output_file + "\" for writing");
+  }
+
+  LieIpoptSummary summary;
+  Ipopt::ApplicationReturnStatus status = Ipopt::Internal_Error;
+  for (;;) {
+    o.SetIntegerValue("max_iter", std::max(0, options.max_iterations - summary.iterations));
+    if (nlp->warm()) o.SetStringValue("warm_start_init_point", "yes");
+    status = summary.solves == 0 ? app->OptimizeTNLP(tnlp) : app->ReOptimizeTNLP(tnlp);
+    ++summary.solves;
+    if (Ipopt::SmartPtr<Ipopt::SolveStatistics> stats = app->Statistics(); IsValid(stats)) {
+      summary.iterations += stats->IterationCount();
+    }
+    const bool solved = status == Ipopt::Solve_Succeeded || status == Ipopt::Solved_To_Acceptable_Level;
+    const double angle = nlp->largest_chart_angle();
+    if (!solved || angle <= options.recentre_angle || summary.solves > options.max_recentrings ||
+        summary.iterations >= options.max_iterations) {
+      summary.message = std::string("Ipopt: ") + ipopt_status_name(status) + " after " +
+                        std::to_string(summary.solves) + " solve(s)";
+      if (solved && angle > options.recentre_angle) {
+        summary.message += "; the last chart moved a rotation by " + std::to_string(angle) +
+                           " rad (> recentre_angle) with no re-centring left";
+      }
+      break;
+    }
+    nlp->recentre();
+  }
+
+  x = nlp->point();
+  summary.objective = nlp->objective();
+  summary.multipliers = nlp->multipliers();
+  Eigen::VectorXd lower(m), upper(m);
+  problem.constraint_bounds(lower, upper);
+  summary.constraint_violation = bound_violation(nlp->constraint_values(), lower, upper);
+  switch (status) {
+    case Ipopt::Solve_Succeeded: summary.termination = LieIpoptTermination::kConverged; break;
+    case Ipopt::Solved_To_Acceptable_Level: summary.termination = LieIpoptTermination::kAcceptable; break;
+    case Ipopt::Maximum_Iterations_Exceeded:
+    case Ipopt::Maximum_CpuTime_Exceeded: summary.termination = LieIpoptTermination::kNoConvergence; break;
+    default: summary.termination = LieIpoptTermination::kFailure; break;
+  }
+  return summary;
+}
+
+}  // namespace liedyn

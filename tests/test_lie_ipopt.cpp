@@ -1,0 +1,365 @@
+// The public Ipopt adapter (manifolds/lie_ipopt.hpp): Ipopt's derivative checker on the chart
+// derivatives it builds from Lie ones, solutions against closed forms, the Lie KKT
+// conditions at the solution, re-centring from far starts (angles up to π − 1e-6), bounds,
+// exact against limited-memory Hessians, and the errors.
+
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <Eigen/Dense>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <numbers>
+#include <random>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+
+#include "lib/so3.hpp"
+#include "lib/state.hpp"
+#include "manifolds/lie_ipopt.hpp"
+
+namespace liedyn {
+namespace {
+
+using Eigen::Matrix3d;
+using Eigen::MatrixXd;
+using Eigen::Vector3d;
+using Eigen::VectorXd;
+
+// f(R) = −tr(R Mᵀ) = ½‖R − M‖²_F + const: the chordal mean of rotations summing to M.
+// With B = R Mᵀ and exp(δ) ≈ I + hat(δ) + ½ hat(δ)², tr(hat(δ) B) = −2 δ·vee(B) and
+// tr(hat(δ)² B) = δᵀBδ − ‖δ‖² tr B give
+//   Lie gradient 2 vee(B),   Lie Hessian tr(B) I − ½(B + Bᵀ).
+// Its minimiser is the polar factor of M.
+struct Chordal {
+  Matrix3d M;
+  double value(const Matrix3d& R) const { return -(R * M.transpose()).trace(); }
+  Vector3d gradient(const Matrix3d& R) const { return 2.0 * so3::vee(R * M.transpose()); }
+  Matrix3d hessian(const Matrix3d& R) const {
+    const Matrix3d B = R * M.transpose();
+    return B.trace() * Matrix3d::Identity() - 0.5 * (B + B.transpose());
+  }
+  Matrix3d minimiser() const {
+    const Eigen::JacobiSVD<Matrix3d> svd(M, Eigen::ComputeFullU | Eigen::ComputeFullV);
+    Matrix3d D = Matrix3d::Identity();
+    D(2, 2) = (svd.matrixU() * svd.matrixV().transpose()).determinant();
+    return svd.matrixU() * D * svd.matrixV().transpose();
+  }
+};
+
+// A point a = R ā of a rotation paired with a vector v: t = a·v.
+//   ∂t/∂δ = a × v,  ∂t/∂v = a,
+//   ∂²t/∂δ² = ½(a vᵀ + v aᵀ) − (a·v) I   (lib/state.hpp, rotated_point_curvature),
+//   ∂²t/∂δ∂v = hat(a)   (∂(a × v)/∂v).
+struct Pairing {
+  static void add_hessian(const Vector3d& a, const Vector3d& v, double weight, int rotation,
+                          int vector, MatrixXd& H) {
+    H.block<3, 3>(rotation, rotation) += weight * rotated_point_curvature(a, v);
+    H.block<3, 3>(rotation, vector) += weight * so3::hat(a);
+    H.block<3, 3>(vector, rotation) += weight * so3::hat(a).transpose();
+  }
+};
+
+// Two rotations and a 3-vector:
+//   f = −tr(R₁M₁ᵀ) − tr(R₂M₂ᵀ) + ½‖v − b‖² + κ v·(R₁e₁),
+//   c = v·(R₂e₃) − 1 = 0   (optional).
+// Tangent layout: R₁ at 0, R₂ at 3, v at 6.
+class TwoRotations final : public LieNlp {
+ public:
+  Chordal f1{}, f2{};
+  Vector3d b = Vector3d(0.3, -0.2, 1.4);
+  double kappa = 0.4;
+  bool constrained = true;
+  bool hessian = true;
+  Vector3d upper = Vector3d::Constant(std::numeric_limits<double>::infinity());
+
+  int constraints() const override { return constrained ? 1 : 0; }
+  void vector_bounds(VectorXd& lower, VectorXd& up) const override {
+    lower.setConstant(-std::numeric_limits<double>::infinity());
+    up = upper;
+  }
+  bool objective(const LiePoint& x, double& f, VectorXd* g) override {
+    const Matrix3d &R1 = x.rotations[0], &R2 = x.rotations[1];
+    const Vector3d v = x.vector, a = R1.col(0);
+    f = f1.value(R1) + f2.value(R2) + 0.5 * (v - b).squaredNorm() + kappa * v.dot(a);
+    if (g != nullptr) {
+      g->segment<3>(0) = f1.gradient(R1) + kappa * a.cross(v);
+      g->segment<3>(3) = f2.gradient(R2);
+      g->segment<3>(6) = v - b + kappa * a;
+    }
+    return true;
+  }
+  bool constraint_values(const LiePoint& x, VectorXd& c, MatrixXd* J) override {
+    if (!constrained) return true;
+    const Vector3d a = x.rotations[1].col(2), v = x.vector;
+    c(0) = a.dot(v) - 1.0;
+    if (J != nullptr) {
+      J->setZero();
+      J->block<1, 3>(0, 3) = a.cross(v).transpose();
+      J->block<1, 3>(0, 6) = a.transpose();
+    }
+    return true;
+  }
+  bool lagrangian_hessian(const LiePoint& x, double sigma, const VectorXd& lambda,
+                          MatrixXd& H) override {
+    if (!hessian) return false;
+    const Vector3d v = x.vector;
+    H.setZero();
+    H.block<3, 3>(0, 0) = sigma * f1.hessian(x.rotations[0]);
+    H.block<3, 3>(3, 3) = sigma * f2.hessian(x.rotations[1]);
+    H.block<3, 3>(6, 6) = sigma * Matrix3d::Identity();
+    Pairing::add_hessian(x.rotations[0].col(0), v, sigma * kappa, 0, 6, H);
+    if (constrained) Pairing::add_hessian(x.rotations[1].col(2), v, lambda(0), 3, 6, H);
+    return true;
+  }
+};
+
+Matrix3d random_rotation(std::mt19937& rng) {
+  std::normal_distribution<double> n(0.0, 1.0);
+  Vector3d axis(n(rng), n(rng), n(rng));
+  std::uniform_real_distribution<double> angle(0.0, std::numbers::pi);
+  return so3::exp(angle(rng) * axis.normalized());
+}
+
+Matrix3d random_matrix(std::mt19937& rng) {
+  std::normal_distribution<double> n(0.0, 1.0);
+  Matrix3d M;
+  for (int i = 0; i < 9; ++i) M(i) = n(rng);
+  return M;
+}
+
+TwoRotations make_problem(unsigned seed) {
+  std::mt19937 rng(seed);
+  TwoRotations p;
+  p.f1.M = 2.0 * random_rotation(rng) + 0.3 * random_matrix(rng);
+  p.f2.M = 2.0 * random_rotation(rng) + 0.3 * random_matrix(rng);
+  return p;
+}
+
+LiePoint start_point(unsigned seed) {
+  std::mt19937 rng(seed + 1000);
+  LiePoint x;
+  x.rotations = {random_rotation(rng), random_rotation(rng)};
+  x.vector = Vector3d(0.5, 0.5, 0.5);
+  return x;
+}
+
+int count(const std::string& text, const std::string& what) {
+  int n = 0;
+  for (auto at = text.find(what); at != std::string::npos; at = text.find(what, at + 1)) ++n;
+  return n;
+}
+
+std::filesystem::path log_path(const std::string& name) {
+  return std::filesystem::temp_directory_path() /
+         ("liedyn_lie_ipopt_" + name + "_" + std::to_string(::getpid()) + ".txt");
+}
+
+// ‖σ∇f + Aᵀλ‖∞ in Lie coordinates: zero at a KKT point without active bounds.
+double lie_kkt_residual(TwoRotations& p, const LiePoint& x, const VectorXd& lambda) {
+  double f;
+  VectorXd g(x.tangent_size());
+  p.objective(x, f, &g);
+  if (p.constraints() > 0) {
+    VectorXd c(1);
+    MatrixXd J(1, x.tangent_size());
+    p.constraint_values(x, c, &J);
+    g += J.transpose() * lambda;
+  }
+  return g.lpNorm<Eigen::Infinity>();
+}
+
+TEST(LieIpopt, DerivativeCheckerFindsNoErrorsInTheChartDerivatives) {
+  for (const bool constrained : {false, true}) {
+    SCOPED_TRACE(constrained ? "constrained" : "unconstrained");
+    TwoRotations p = make_problem(1);
+    p.constrained = constrained;
+    LiePoint x = start_point(1);
+    LieIpoptOptions options;
+    options.derivative_test = "second-order";
+    options.output_file = log_path("checker").string();
+    // Every solve starts at θ = 0 and the checker moves it by up to 0.1 per variable, so
+    // J_l(θ) ≠ I and C(θ, g) ≠ 0 are exercised; far starts re-centre and check again.
+    const LieIpoptSummary summary = solve_with_ipopt(p, x, options);
+    EXPECT_TRUE(summary.converged()) << summary.message;
+    std::ifstream in(options.output_file);
+    std::stringstream text;
+    text << in.rdbuf();
+    std::filesystem::remove(options.output_file);
+    const std::string log = text.str();
+    EXPECT_EQ(count(log, "Starting derivative checker for second derivatives."), summary.solves);
+    EXPECT_EQ(count(log, "No errors detected by derivative checker."), summary.solves)
+        << log.substr(0, 6000);
+    EXPECT_EQ(count(log, "Derivative checker detected"), 0);
+  }
+}
+
+TEST(LieIpopt, ReachesThePolarFactorFromEveryStartingAngle) {
+  // Unconstrained, κ = 0: each rotation's minimiser is the polar factor of its M.
+  for (const double angle : {0.0, 1e-9, 1e-4, 1.0, 2.5, std::numbers::pi - 1e-6}) {
+    for (const char* hessian : {"exact", "limited-memory"}) {
+      SCOPED_TRACE("start " + std::to_string(angle) + " rad away, " + hessian);
+      TwoRotations p = make_problem(2);
+      p.constrained = false;
+      p.kappa = 0.0;
+      const Matrix3d R1 = p.f1.minimiser(), R2 = p.f2.minimiser();
+      LiePoint x;
+      const Vector3d axis1 = Vector3d(1.0, 2.0, -0.5).normalized();
+      const Vector3d axis2 = Vector3d(-0.3, 0.4, 1.0).normalized();
+      x.rotations = {so3::exp(angle * axis1) * R1, so3::exp(angle * axis2) * R2};
+      x.vector = Vector3d::Zero();
+      LieIpoptOptions options;
+      options.hessian = hessian;
+      const LieIpoptSummary summary = solve_with_ipopt(p, x, options);
+      ASSERT_TRUE(summary.converged()) << summary.message;
+      EXPECT_LT(so3::distance(x.rotations[0], R1), 1e-6);
+      EXPECT_LT(so3::distance(x.rotations[1], R2), 1e-6);
+      EXPECT_LT((x.vector - p.b).lpNorm<Eigen::Infinity>(), 1e-7);
+      EXPECT_LT((x.rotations[0].transpose() * x.rotations[0] - Matrix3d::Identity()).norm(), 1e-14);
+      // A chart that moved a rotation by more than recentre_angle (1 rad) is followed by a
+      // re-centred solve.
+      if (angle > options.recentre_angle + 0.1) {
+        EXPECT_GE(summary.solves, 2);
+      }
+      if (angle < 1e-3) {
+        EXPECT_EQ(summary.solves, 1);
+      }
+    }
+  }
+}
+
+TEST(LieIpopt, ConstrainedSolutionMeetsTheLieKktConditions) {
+  for (const unsigned seed : {3u, 4u, 5u}) {
+    SCOPED_TRACE("seed " + std::to_string(seed));
+    LiePoint solutions[2];
+    int k = 0;
+    for (const char* hessian : {"exact", "limited-memory"}) {
+      TwoRotations p = make_problem(seed);
+      LiePoint x = start_point(seed);
+      LieIpoptOptions options;
+      options.hessian = hessian;
+      const LieIpoptSummary summary = solve_with_ipopt(p, x, options);
+      ASSERT_TRUE(summary.converged()) << hessian << ": " << summary.message;
+      EXPECT_LT(summary.constraint_violation, 1e-9);
+      EXPECT_LT(std::abs(x.rotations[1].col(2).dot(x.vector) - 1.0), 1e-9);
+      ASSERT_EQ(summary.multipliers.size(), 1);
+      // Ipopt's tolerance is on its scaled KKT error; the Lie residual is the same residual
+      // times J_l(θ)⁻ᵀ, θ small at the end.
+      EXPECT_LT(lie_kkt_residual(p, x, summary.multipliers), 1e-7) << hessian;
+      double f;
+      p.objective(x, f, nullptr);
+      EXPECT_NEAR(summary.objective, f, 1e-12 * (1.0 + std::abs(f)));
+      solutions[k++] = x;
+    }
+    // Exact and limited-memory Hessians find the same local minimiser from the same start.
+    EXPECT_LT(so3::distance(solutions[0].rotations[0], solutions[1].rotations[0]), 1e-5);
+    EXPECT_LT(so3::distance(solutions[0].rotations[1], solutions[1].rotations[1]), 1e-5);
+    EXPECT_LT((solutions[0].vector - solutions[1].vector).norm(), 1e-5);
+  }
+}
+
+TEST(LieIpopt, ExactHessianTakesFewerIterationsThanLimitedMemory) {
+  // A wrong chart Hessian (missing J_l or C) would cost Newton its fast local convergence;
+  // the checker test above is the direct check, this one the consequence.
+  int iterations[2];
+  int k = 0;
+  for (const char* hessian : {"exact", "limited-memory"}) {
+    TwoRotations p = make_problem(6);
+    LiePoint x = start_point(6);
+    LieIpoptOptions options;
+    options.hessian = hessian;
+    const LieIpoptSummary summary = solve_with_ipopt(p, x, options);
+    ASSERT_TRUE(summary.converged()) << summary.message;
+    iterations[k++] = summary.iterations;
+  }
+  EXPECT_LT(iterations[0], iterations[1]);
+}
+
+TEST(LieIpopt, VectorBoundsHold) {
+  TwoRotations p = make_problem(7);
+  p.constrained = false;
+  p.kappa = 0.0;
+  p.upper = Vector3d(0.1, 10.0, 10.0);  // b = (0.3, …): the first bound is active
+  LiePoint x = start_point(7);
+  x.vector.setZero();
+  const LieIpoptSummary summary = solve_with_ipopt(p, x);
+  ASSERT_TRUE(summary.converged()) << summary.message;
+  EXPECT_NEAR(x.vector(0), 0.1, 1e-8);
+  EXPECT_NEAR(x.vector(1), p.b(1), 1e-7);
+  EXPECT_NEAR(x.vector(2), p.b(2), 1e-7);
+}
+
+TEST(LieIpopt, RejectsBadOptionsAndPoints) {
+  const auto expect_invalid = [](const LieIpoptOptions& o, const std::string& field) {
+    try {
+      o.validate();
+      ADD_FAILURE() << "accepted a bad " << field;
+    } catch (const std::invalid_argument& e) {
+      EXPECT_NE(std::string(e.what()).find(field), std::string::npos) << e.what();
+    }
+  };
+  LieIpoptOptions o;
+  EXPECT_NO_THROW(o.validate());
+  o.tolerance = 0.0;
+  expect_invalid(o, "tolerance");
+  o = {};
+  o.tolerance = std::numeric_limits<double>::quiet_NaN();
+  expect_invalid(o, "tolerance");
+  o = {};
+  o.max_iterations = 0;
+  expect_invalid(o, "max_iterations");
+  o = {};
+  o.max_recentrings = -1;
+  expect_invalid(o, "max_recentrings");
+  o = {};
+  o.recentre_angle = 4.0;
+  expect_invalid(o, "recentre_angle");
+  o = {};
+  o.hessian = "bfgs";
+  expect_invalid(o, "hessian");
+  o = {};
+  o.print_level = 13;
+  expect_invalid(o, "print_level");
+  o = {};
+  o.derivative_test = "third-order";
+  expect_invalid(o, "derivative_test");
+
+  TwoRotations p = make_problem(8);
+  LiePoint x = start_point(8);
+  x.rotations[1] *= 1.01;  // not orthonormal
+  EXPECT_THROW(solve_with_ipopt(p, x), std::invalid_argument);
+  x = start_point(8);
+  x.rotations[0] = -x.rotations[0];  // det = −1
+  EXPECT_THROW(solve_with_ipopt(p, x), std::invalid_argument);
+
+  x = start_point(8);
+  p.hessian = false;
+  LieIpoptOptions exact;
+  exact.hessian = "exact";
+  EXPECT_THROW(solve_with_ipopt(p, x, exact), std::invalid_argument);
+  // "auto" falls back to the quasi-Newton approximation.
+  EXPECT_TRUE(solve_with_ipopt(p, x).converged());
+
+  LieIpoptOptions file;
+  file.output_file = "/nonexistent-directory/ipopt.txt";
+  x = start_point(8);
+  EXPECT_THROW(solve_with_ipopt(p, x, file), std::invalid_argument);
+}
+
+TEST(LieIpopt, ReportsAnIterationLimit) {
+  TwoRotations p = make_problem(9);
+  LiePoint x = start_point(9);
+  LieIpoptOptions options;
+  options.max_iterations = 2;
+  const LieIpoptSummary summary = solve_with_ipopt(p, x, options);
+  EXPECT_EQ(summary.termination, LieIpoptTermination::kNoConvergence) << summary.message;
+  EXPECT_FALSE(summary.converged());
+  EXPECT_LE(summary.iterations, 2);
+  EXPECT_NE(summary.message.find("Maximum_Iterations_Exceeded"), std::string::npos) << summary.message;
+}
+
+}  // namespace
+}  // namespace liedyn
