@@ -12,7 +12,7 @@
 
 #include "../lib/so3.hpp"
 #include "../solvers/ipopt_status.hpp"
-#include "rotation_vector.hpp"
+#include "rotation_chart.hpp"
 
 namespace liedyn {
 
@@ -59,7 +59,8 @@ double to_ipopt(double bound) {
   return std::clamp(bound, -kIpoptInfinity, kIpoptInfinity);
 }
 
-// The NLP in chart variables z = (θ_1, …, θ_r, v) (lie_ipopt.hpp), around references R0.
+// The NLP in chart variables z = (θ_1, …, θ_r, v) (lie_ipopt.hpp), around references R0: the
+// rotation-vector chart of the step back-ends (rotation_chart.hpp) over this layout.
 class ChartNlp final : public Ipopt::TNLP {
  public:
   ChartNlp(LieNlp& problem, const LiePoint& start, bool exact_hessian)
@@ -68,8 +69,7 @@ class ChartNlp final : public Ipopt::TNLP {
         n_(start.tangent_size()),
         m_(problem.constraints()),
         exact_hessian_(exact_hessian),
-        reference_(start.rotations),
-        left_jacobian_(start.rotations.size(), Eigen::Matrix3d::Identity()),
+        chart_(rotation_offsets(rotations_), n_),
         point_(start),
         z_(VectorXd::Zero(n_)),
         z_lower_(VectorXd::Zero(0)),
@@ -79,20 +79,20 @@ class ChartNlp final : public Ipopt::TNLP {
         jacobian_(m_, n_),
         constraints_(m_) {
     z_.tail(n_ - 3 * rotations_) = start.vector;
+    for (int i = 0; i < rotations_; ++i) chart_.set_reference(i, start.rotations[i]);
   }
 
   // Chart around the current point: R0 ← R, θ = 0 (multipliers kept for a warm start).
   void recentre() {
     for (int i = 0; i < rotations_; ++i) {
-      reference_[i] = point_.rotations[i];
+      chart_.set_reference(i, point_.rotations[i]);
       z_.segment<3>(3 * i).setZero();
-      left_jacobian_[i].setIdentity();
     }
     have_gradient_ = have_jacobian_ = false;
   }
   double largest_chart_angle() const {
     double largest = 0.0;
-    for (int i = 0; i < rotations_; ++i) largest = std::max(largest, z_.segment<3>(3 * i).norm());
+    for (int i = 0; i < rotations_; ++i) largest = std::max(largest, chart_.r(i).norm());
     return largest;
   }
   const LiePoint& point() const { return point_; }
@@ -158,9 +158,7 @@ class ChartNlp final : public Ipopt::TNLP {
     if (!lie_gradient()) return false;
     Eigen::Map<VectorXd> g(grad_f, n_);
     g = gradient_;
-    for (int i = 0; i < rotations_; ++i) {  // ∂f/∂θ_i = J_l(θ_i)ᵀ g_i
-      g.segment<3>(3 * i) = left_jacobian_[i].transpose() * gradient_.segment<3>(3 * i);
-    }
+    chart_.to_chart_gradient(g);  // ∂f/∂θ_i = J_l(θ_i)ᵀ g_i
     return true;
   }
 
@@ -189,7 +187,7 @@ class ChartNlp final : public Ipopt::TNLP {
     Eigen::Map<Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>> J(values, m_, n_);
     J = jacobian_;
     for (int i = 0; i < rotations_; ++i) {  // ∂c/∂θ_i = A_i J_l(θ_i)
-      J.middleCols<3>(3 * i) = jacobian_.middleCols<3>(3 * i) * left_jacobian_[i];
+      J.middleCols<3>(3 * i) = jacobian_.middleCols<3>(3 * i) * chart_.jacobian(i);
     }
     return true;
   }
@@ -215,13 +213,13 @@ class ChartNlp final : public Ipopt::TNLP {
     // Jᵀ H J with J = diag(J_l(θ_1), …, J_l(θ_r), I), then C(θ_i, ∇L_i) on each rotation's
     // diagonal block.
     for (int i = 0; i < rotations_; ++i) {
-      H.middleRows<3>(3 * i) = left_jacobian_[i].transpose() * H.middleRows<3>(3 * i);
+      H.middleRows<3>(3 * i) = (chart_.jacobian(i).transpose() * H.middleRows<3>(3 * i)).eval();
     }
     for (int i = 0; i < rotations_; ++i) {
-      H.middleCols<3>(3 * i) = H.middleCols<3>(3 * i) * left_jacobian_[i];
-      H.block<3, 3>(3 * i, 3 * i) += rotvec::hessian_correction(
-          z_.segment<3>(3 * i), lagrangian_gradient.segment<3>(3 * i));
+      H.middleCols<3>(3 * i) = (H.middleCols<3>(3 * i) * chart_.jacobian(i)).eval();
     }
+    DenseHessianSink<MatrixXd> sink{H};
+    chart_.add_corrections(lagrangian_gradient, sink);
     Index k = 0;
     for (int r = 0; r < n_; ++r) {
       for (int c = 0; c <= r; ++c) values[k++] = 0.5 * (H(r, c) + H(c, r));
@@ -249,12 +247,15 @@ class ChartNlp final : public Ipopt::TNLP {
   }
 
  private:
+  static std::vector<int> rotation_offsets(int rotations) {
+    std::vector<int> offsets;
+    for (int i = 0; i < rotations; ++i) offsets.push_back(3 * i);
+    return offsets;
+  }
   // Writes the chart point z into point_ (R_i = exp(θ_i) R0_i, with J_l(θ_i)).
   void set(const Number* x) {
     z_ = Eigen::Map<const VectorXd>(x, n_);
-    for (int i = 0; i < rotations_; ++i) {
-      point_.rotations[i] = so3::exp(z_.segment<3>(3 * i), &left_jacobian_[i]) * reference_[i];
-    }
+    for (int i = 0; i < rotations_; ++i) point_.rotations[i] = chart_.set(i, z_.segment<3>(3 * i));
     point_.vector = z_.tail(n_ - 3 * rotations_);
     have_gradient_ = have_jacobian_ = false;
   }
@@ -276,9 +277,8 @@ class ChartNlp final : public Ipopt::TNLP {
   LieNlp& problem_;
   int rotations_, n_, m_;
   bool exact_hessian_;
-  std::vector<Eigen::Matrix3d> reference_;      // R0 per rotation
-  std::vector<Eigen::Matrix3d> left_jacobian_;  // J_l(θ) per rotation
-  LiePoint point_;                              // at z_
+  RotationVectorChart chart_;  // R_i = exp(θ_i) R0_i, and J_l(θ_i)
+  LiePoint point_;             // at z_
   VectorXd z_, z_lower_, z_upper_, lambda_;
   VectorXd gradient_;  // Lie gradient of f at point_ (when have_gradient_)
   MatrixXd jacobian_;  // Lie Jacobian of c at point_ (when have_jacobian_)

@@ -2,7 +2,8 @@
 // The rotation-vector chart of a component: every rotation is R = exp(r) R_ref, with a fixed
 // reference R_ref per rotation (the identity unless set_reference says otherwise: the global
 // rotation vectors of a Newton solve; Ipopt's tangent increments use R_ref = R at the start,
-// solvers/ipopt_step.hpp). Since exp(r + dr) = exp(J_l(r) dr) exp(r), R_ref changes nothing
+// solvers/ipopt_step.hpp, and so does the public Ipopt adapter, manifolds/lie_ipopt.hpp, over
+// any tangent layout). Since exp(r + dr) = exp(J_l(r) dr) exp(r), R_ref changes nothing
 // below. Assembly turns the Lie gradient and Hessian that the terms provide into the
 // derivatives with respect to the r's (manifolds/rotation_vector.hpp):
 //   g_r = J_l(r)ᵀ g,   H_rr' = J_l(r)ᵀ H_rr' J_l(r')  (+ C(r, g) on the diagonal),
@@ -21,17 +22,19 @@ namespace liedyn {
 class RotationVectorChart {
  public:
   RotationVectorChart() = default;
-  explicit RotationVectorChart(const Component& component)
-      : offsets_(component.rotations.size()),
-        r_(component.rotations.size(), Vector3::Zero()),
-        J_(component.rotations.size(), Matrix3::Identity()),
-        reference_(component.rotations.size(), Matrix3::Identity()),
-        rotation_of_block_(component.dofs / 3, -1) {
-    for (std::size_t i = 0; i < component.rotations.size(); ++i) {
-      offsets_[i] = component.rotations[i].offset;
+  // Rotation i's 3 entries at offsets[i] (a multiple of 3) of a tangent vector of `size`.
+  RotationVectorChart(std::vector<int> offsets, int size)
+      : offsets_(std::move(offsets)),
+        r_(offsets_.size(), Vector3::Zero()),
+        J_(offsets_.size(), Matrix3::Identity()),
+        reference_(offsets_.size(), Matrix3::Identity()),
+        rotation_of_block_((size + 2) / 3, -1) {
+    for (std::size_t i = 0; i < offsets_.size(); ++i) {
       rotation_of_block_[offsets_[i] / 3] = static_cast<int>(i);
     }
   }
+  explicit RotationVectorChart(const Component& component)
+      : RotationVectorChart(rotation_offsets(component), component.dofs) {}
 
   // Sets rotation i's vector and returns exp(r) R_ref.
   Matrix3 set(std::size_t i, const Vector3& r) {
@@ -39,6 +42,7 @@ class RotationVectorChart {
     return so3::exp(r, &J_[i]) * reference_[i];
   }
   const Vector3& r(std::size_t i) const { return r_[i]; }
+  const Matrix3& jacobian(std::size_t i) const { return J_[i]; }  // J_l(r_i)
   // Re-centres rotation i on R: R_ref = R, r = 0 (so J_l = I).
   void set_reference(std::size_t i, const Matrix3& R) {
     reference_[i] = R;
@@ -69,15 +73,33 @@ class RotationVectorChart {
   // rotation entries by J_l(r)ᵀ g.
   template <class Vector, class Sink>
   void finish(Vector& g, Sink& sink) const {
+    add_corrections(g, sink);
+    to_chart_gradient(g);
+  }
+  // The two halves of finish: C(r, g) from a Lie gradient g (e.g. a Lagrangian's) into
+  // `sink`, and g's rotation entries ← J_l(r)ᵀ g.
+  template <class Vector, class Sink>
+  void add_corrections(const Vector& g, Sink& sink) const {
     for (std::size_t i = 0; i < offsets_.size(); ++i) {
       const int o = offsets_[i];
-      const Vector3 g_lie = g.template segment<3>(o);
-      sink.add(o, o, rotvec::hessian_correction(r_[i], g_lie));
-      g.template segment<3>(o) = J_[i].transpose() * g_lie;
+      sink.add(o, o, rotvec::hessian_correction(r_[i], g.template segment<3>(o)));
+    }
+  }
+  template <class Vector>
+  void to_chart_gradient(Vector& g) const {
+    for (std::size_t i = 0; i < offsets_.size(); ++i) {
+      const int o = offsets_[i];
+      g.template segment<3>(o) = (J_[i].transpose() * g.template segment<3>(o)).eval();
     }
   }
 
  private:
+  static std::vector<int> rotation_offsets(const Component& component) {
+    std::vector<int> offsets;
+    for (const DofBlock& b : component.rotations) offsets.push_back(b.offset);
+    return offsets;
+  }
+
   std::vector<int> offsets_;            // per rotation, in the tangent vector
   std::vector<Vector3> r_;              // per rotation
   std::vector<Matrix3> J_;              // per rotation: J_l(r)
