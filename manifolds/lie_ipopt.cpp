@@ -357,6 +357,9 @@ LieIpoptSummary solve_with_ipopt(LieNlp& problem, LiePoint& x, const LieIpoptOpt
     ++summary.solves;
     if (Ipopt::SmartPtr<Ipopt::SolveStatistics> stats = app->Statistics(); IsValid(stats)) {
       summary.iterations += stats->IterationCount();
+      double constraint_violation, complementarity, kkt_error;
+      stats->Infeasibilities(summary.dual_infeasibility, constraint_violation, complementarity,
+                             kkt_error);
     }
     const bool solved = status == Ipopt::Solve_Succeeded || status == Ipopt::Solved_To_Acceptable_Level;
     const double angle = nlp->largest_chart_angle();

@@ -108,6 +108,9 @@ struct LieIpoptSummary {
   int solves = 0;        // 1 + re-centrings
   double objective = 0.0;
   double constraint_violation = 0.0;  // max over rows of the bound violation at the solution
+  // Ipopt's unscaled dual infeasibility ‖∇L‖∞ at the end of the last solve (chart
+  // coordinates, bound multipliers included; the Lie one times J_l(θ)ᵀ).
+  double dual_infeasibility = 0.0;
   Eigen::VectorXd multipliers;        // λ of the constraint rows
   bool converged() const { return termination == LieIpoptTermination::kConverged; }
 };

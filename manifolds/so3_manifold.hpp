@@ -32,6 +32,10 @@
 //
 // RightMultiplyByPlusJacobian is overridden: for the J · 4Q(q)ᵀ above it returns J to
 // round-off, in 12 multiply–adds per row.
+//
+// Ownership: a ceres::Problem deletes its manifolds unless its options say
+// manifold_ownership = DO_NOT_TAKE_OWNERSHIP; one SO3Manifold (stateless) may serve every block.
+// Usage, with examples: docs/manifolds.md.
 
 #include <ceres/manifold.h>
 

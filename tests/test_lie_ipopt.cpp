@@ -244,6 +244,7 @@ TEST(LieIpopt, ConstrainedSolutionMeetsTheLieKktConditions) {
       const LieIpoptSummary summary = solve_with_ipopt(p, x, options);
       ASSERT_TRUE(summary.converged()) << hessian << ": " << summary.message;
       EXPECT_LT(summary.constraint_violation, 1e-9);
+      EXPECT_LT(summary.dual_infeasibility, 1e-7);
       EXPECT_LT(std::abs(x.rotations[1].col(2).dot(x.vector) - 1.0), 1e-9);
       ASSERT_EQ(summary.multipliers.size(), 1);
       // Ipopt's tolerance is on its scaled KKT error; the Lie residual is the same residual
