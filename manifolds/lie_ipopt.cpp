@@ -6,6 +6,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <unordered_map>
+#include <utility>
 #include <limits>
 #include <numbers>
 #include <stdexcept>
@@ -24,6 +27,13 @@ void LieNlp::vector_bounds(Eigen::VectorXd& lower, Eigen::VectorXd& upper) const
 bool LieNlp::constraint_values(const LiePoint&, Eigen::VectorXd&, Eigen::MatrixXd*) { return true; }
 
 bool LieNlp::lagrangian_hessian(const LiePoint&, double, const Eigen::VectorXd&, Eigen::MatrixXd&) {
+  return false;
+}
+
+bool LieNlp::constraint_jacobian(const LiePoint&, Eigen::SparseMatrix<double>&) { return false; }
+
+bool LieNlp::lagrangian_hessian(const LiePoint&, double, const Eigen::VectorXd&,
+                                Eigen::SparseMatrix<double>&) {
   return false;
 }
 
@@ -50,6 +60,7 @@ namespace {
 
 using Eigen::MatrixXd;
 using Eigen::VectorXd;
+using Sparse = Eigen::SparseMatrix<double>;
 using Index = Ipopt::Index;
 using Number = Ipopt::Number;
 
@@ -59,16 +70,48 @@ double to_ipopt(double bound) {
   return std::clamp(bound, -kIpoptInfinity, kIpoptInfinity);
 }
 
+// A fixed sparsity pattern handed to Ipopt: its entries (row, column) in order, and where each
+// one's value goes.
+class Pattern {
+ public:
+  void add(int row, int column) { entries_.emplace_back(row, column); }
+  // Sorts, drops repeats and indexes the entries.
+  void finish() {
+    std::sort(entries_.begin(), entries_.end());
+    entries_.erase(std::unique(entries_.begin(), entries_.end()), entries_.end());
+    slot_.clear();
+    for (std::size_t k = 0; k < entries_.size(); ++k) slot_[key(entries_[k])] = static_cast<int>(k);
+  }
+  Index size() const { return static_cast<Index>(entries_.size()); }
+  void structure(Index* rows, Index* columns) const {
+    for (std::size_t k = 0; k < entries_.size(); ++k) {
+      rows[k] = entries_[k].first;
+      columns[k] = entries_[k].second;
+    }
+  }
+  // Where (row, column)'s value goes, or −1 if it is not in the pattern.
+  int slot(int row, int column) const {
+    const auto it = slot_.find(key({row, column}));
+    return it == slot_.end() ? -1 : it->second;
+  }
+
+ private:
+  static std::int64_t key(const std::pair<int, int>& e) {
+    return (static_cast<std::int64_t>(e.first) << 32) | static_cast<std::uint32_t>(e.second);
+  }
+  std::vector<std::pair<int, int>> entries_;
+  std::unordered_map<std::int64_t, int> slot_;
+};
+
 // The NLP in chart variables z = (θ_1, …, θ_r, v) (lie_ipopt.hpp), around references R0: the
 // rotation-vector chart of the step back-ends (rotation_chart.hpp) over this layout.
 class ChartNlp final : public Ipopt::TNLP {
  public:
-  ChartNlp(LieNlp& problem, const LiePoint& start, bool exact_hessian)
+  ChartNlp(LieNlp& problem, const LiePoint& start)
       : problem_(problem),
         rotations_(static_cast<int>(start.rotations.size())),
         n_(start.tangent_size()),
         m_(problem.constraints()),
-        exact_hessian_(exact_hessian),
         chart_(rotation_offsets(rotations_), n_),
         point_(start),
         z_(VectorXd::Zero(n_)),
@@ -80,6 +123,44 @@ class ChartNlp final : public Ipopt::TNLP {
         constraints_(m_) {
     z_.tail(n_ - 3 * rotations_) = start.vector;
     for (int i = 0; i < rotations_; ++i) chart_.set_reference(i, start.rotations[i]);
+  }
+
+  // The patterns (lie_ipopt.hpp), and whether the exact Hessian is used: `hessian` is
+  // LieIpoptOptions::hessian; the problem's Hessian is asked for once here (σ = 1, λ = 1, so
+  // that no term weighted by a multiplier is left out of a sparse pattern) unless it is
+  // "limited-memory". Dense problems get whole matrices; sparse ones the nonzeros of their
+  // derivatives at the start, widened to whole rotation blocks, and every rotation's diagonal
+  // block of the Hessian (C(θ, ∇L)). False if the Jacobian cannot be evaluated there.
+  bool record_patterns(const std::string& hessian_option) {
+    Sparse hessian(n_, n_);
+    exact_hessian_ = hessian_option != "limited-memory" && lie_hessian(1.0, VectorXd::Ones(m_), hessian);
+    if (hessian_option == "exact" && !exact_hessian_) {
+      throw std::invalid_argument(
+          "LieIpoptOptions::hessian: \"exact\" but the problem's lagrangian_hessian returns false");
+    }
+    if (problem_.sparse() && !lie_jacobian()) return false;
+    const bool dense = !problem_.sparse();
+    for (int r = 0; r < m_; ++r) {
+      for (int c = 0; dense && c < n_; ++c) jacobian_pattern_.add(r, c);
+    }
+    for (int k = 0; !dense && k < jacobian_.outerSize(); ++k) {
+      for (Sparse::InnerIterator it(jacobian_, k); it; ++it) {
+        const auto [first, width] = block(static_cast<int>(it.col()));
+        for (int c = first; c < first + width; ++c) jacobian_pattern_.add(static_cast<int>(it.row()), c);
+      }
+    }
+    if (exact_hessian_) {
+      for (int r = 0; dense && r < n_; ++r) {
+        for (int c = 0; c <= r; ++c) hessian_pattern_.add(r, c);
+      }
+      for (int k = 0; !dense && k < hessian.outerSize(); ++k) {
+        for (Sparse::InnerIterator it(hessian, k); it; ++it) add_block_pair(static_cast<int>(it.row()), static_cast<int>(it.col()));
+      }
+      for (int i = 0; i < rotations_; ++i) add_block_pair(3 * i, 3 * i);
+    }
+    jacobian_pattern_.finish();
+    hessian_pattern_.finish();
+    return true;
   }
 
   // Chart around the current point: R0 ← R, θ = 0 (multipliers kept for a warm start).
@@ -101,13 +182,14 @@ class ChartNlp final : public Ipopt::TNLP {
   const VectorXd& constraint_values() const { return constraints_; }
   Ipopt::SolverReturn final_status() const { return final_status_; }
   bool warm() const { return warm_; }
+  bool exact_hessian() const { return exact_hessian_; }
 
   bool get_nlp_info(Index& n, Index& m, Index& nnz_jac_g, Index& nnz_h_lag,
                     IndexStyleEnum& index_style) override {
     n = n_;
     m = m_;
-    nnz_jac_g = m_ * n_;
-    nnz_h_lag = exact_hessian_ ? n_ * (n_ + 1) / 2 : 0;
+    nnz_jac_g = jacobian_pattern_.size();
+    nnz_h_lag = hessian_pattern_.size();
     index_style = C_STYLE;
     return true;
   }
@@ -172,58 +254,36 @@ class ChartNlp final : public Ipopt::TNLP {
 
   bool eval_jac_g(Index, const Number* x, bool new_x, Index, Index, Index* iRow, Index* jCol,
                   Number* values) override {
-    if (values == nullptr) {  // dense, row by row
-      Index k = 0;
-      for (int r = 0; r < m_; ++r) {
-        for (int c = 0; c < n_; ++c, ++k) {
-          iRow[k] = r;
-          jCol[k] = c;
-        }
-      }
+    if (values == nullptr) {
+      jacobian_pattern_.structure(iRow, jCol);
       return true;
     }
     if (new_x) set(x);
     if (!lie_jacobian()) return false;
-    Eigen::Map<Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>> J(values, m_, n_);
-    J = jacobian_;
-    for (int i = 0; i < rotations_; ++i) {  // ∂c/∂θ_i = A_i J_l(θ_i)
-      J.middleCols<3>(3 * i) = jacobian_.middleCols<3>(3 * i) * chart_.jacobian(i);
-    }
-    return true;
+    const Sparse J = jacobian_ * chart_matrix();  // ∂c/∂θ_i = A_i J_l(θ_i)
+    return scatter(J, jacobian_pattern_, false, values);
   }
 
   bool eval_h(Index, const Number* x, bool new_x, Number obj_factor, Index, const Number* lambda,
               bool, Index, Index* iRow, Index* jCol, Number* values) override {
-    if (values == nullptr) {  // the lower triangle, row by row
-      Index k = 0;
-      for (int r = 0; r < n_; ++r) {
-        for (int c = 0; c <= r; ++c, ++k) {
-          iRow[k] = r;
-          jCol[k] = c;
-        }
-      }
+    if (values == nullptr) {  // the lower triangle
+      hessian_pattern_.structure(iRow, jCol);
       return true;
     }
     if (new_x) set(x);
     const Eigen::Map<const VectorXd> l(lambda, m_);
-    MatrixXd H = MatrixXd::Zero(n_, n_);
-    if (!problem_.lagrangian_hessian(point_, obj_factor, l, H) || !H.allFinite()) return false;
+    Sparse H(n_, n_);
+    if (!lie_hessian(obj_factor, l, H)) return false;
     if (!lie_gradient() || !lie_jacobian()) return false;
     const VectorXd lagrangian_gradient = obj_factor * gradient_ + jacobian_.transpose() * l;
-    // Jᵀ H J with J = diag(J_l(θ_1), …, J_l(θ_r), I), then C(θ_i, ∇L_i) on each rotation's
+    // Tᵀ H T with T = diag(J_l(θ_1), …, J_l(θ_r), I), then C(θ_i, ∇L_i) on each rotation's
     // diagonal block.
-    for (int i = 0; i < rotations_; ++i) {
-      H.middleRows<3>(3 * i) = (chart_.jacobian(i).transpose() * H.middleRows<3>(3 * i)).eval();
-    }
-    for (int i = 0; i < rotations_; ++i) {
-      H.middleCols<3>(3 * i) = (H.middleCols<3>(3 * i) * chart_.jacobian(i)).eval();
-    }
-    DenseHessianSink<MatrixXd> sink{H};
+    const Sparse T = chart_matrix();
+    const Sparse symmetric = 0.5 * (H + Sparse(H.transpose()));
+    const Sparse charted = Sparse(T.transpose()) * symmetric * T;
+    if (!scatter(charted, hessian_pattern_, true, values)) return false;
+    CorrectionSink sink{*this, values};
     chart_.add_corrections(lagrangian_gradient, sink);
-    Index k = 0;
-    for (int r = 0; r < n_; ++r) {
-      for (int c = 0; c <= r; ++c) values[k++] = 0.5 * (H(r, c) + H(c, r));
-    }
     return true;
   }
 
@@ -247,6 +307,59 @@ class ChartNlp final : public Ipopt::TNLP {
   }
 
  private:
+  // The entries of variable `index`'s block: a rotation's three, or a vector entry alone.
+  std::pair<int, int> block(int index) const {
+    return index < 3 * rotations_ ? std::pair{index - index % 3, 3} : std::pair{index, 1};
+  }
+  // Every lower-triangle entry of the block pair holding (row, column).
+  void add_block_pair(int row, int column) {
+    const auto [r0, rows] = block(row);
+    const auto [c0, columns] = block(column);
+    for (int r = r0; r < r0 + rows; ++r) {
+      for (int c = c0; c < c0 + columns; ++c) {
+        if (r >= c) hessian_pattern_.add(r, c);
+      }
+    }
+  }
+  // T = diag(J_l(θ_1), …, J_l(θ_r), I): a change of the chart variables as a Lie perturbation.
+  Sparse chart_matrix() const {
+    std::vector<Eigen::Triplet<double>> t;
+    t.reserve(9 * rotations_ + n_);
+    for (int i = 0; i < rotations_; ++i) {
+      for (int a = 0; a < 3; ++a) {
+        for (int b = 0; b < 3; ++b) t.emplace_back(3 * i + a, 3 * i + b, chart_.jacobian(i)(a, b));
+      }
+    }
+    for (int j = 3 * rotations_; j < n_; ++j) t.emplace_back(j, j, 1.0);
+    Sparse T(n_, n_);
+    T.setFromTriplets(t.begin(), t.end());
+    return T;
+  }
+  // Writes A's entries (its lower triangle only if `lower`) into `values` at their slots of
+  // `pattern`, the others 0; false if A has a nonzero outside the pattern or is not finite.
+  static bool scatter(const Sparse& A, const Pattern& pattern, bool lower, Number* values) {
+    std::fill(values, values + pattern.size(), 0.0);
+    for (int k = 0; k < A.outerSize(); ++k) {
+      for (Sparse::InnerIterator it(A, k); it; ++it) {
+        if (lower && it.row() < it.col()) continue;
+        const int slot = pattern.slot(static_cast<int>(it.row()), static_cast<int>(it.col()));
+        if (!std::isfinite(it.value()) || (slot < 0 && it.value() != 0.0)) return false;
+        if (slot >= 0) values[slot] += it.value();
+      }
+    }
+    return true;
+  }
+  // Receives the chart's C(θ, g) blocks (RotationVectorChart::add_corrections) into the
+  // Hessian's values (every rotation's diagonal block is in the pattern).
+  struct CorrectionSink {
+    const ChartNlp& nlp;
+    Number* values;
+    void add(int row, int column, const Eigen::Matrix3d& block) {
+      for (int a = 0; a < 3; ++a) {
+        for (int b = 0; b <= a; ++b) values[nlp.hessian_pattern_.slot(row + a, column + b)] += block(a, b);
+      }
+    }
+  };
   static std::vector<int> rotation_offsets(int rotations) {
     std::vector<int> offsets;
     for (int i = 0; i < rotations; ++i) offsets.push_back(3 * i);
@@ -266,22 +379,54 @@ class ChartNlp final : public Ipopt::TNLP {
     have_gradient_ = problem_.objective(point_, value, &gradient_) && gradient_.allFinite();
     return have_gradient_;
   }
+  // The constraints' Lie Jacobian at point_, as a sparse matrix whichever way it is given.
   bool lie_jacobian() {
     if (have_jacobian_) return true;
-    VectorXd c(m_);
+    jacobian_.resize(m_, n_);
     jacobian_.setZero();
-    have_jacobian_ = m_ == 0 || (problem_.constraint_values(point_, c, &jacobian_) && jacobian_.allFinite());
+    if (m_ == 0) {
+      have_jacobian_ = true;
+    } else if (problem_.sparse()) {
+      have_jacobian_ = problem_.constraint_jacobian(point_, jacobian_) && jacobian_.rows() == m_ &&
+                       jacobian_.cols() == n_;
+      jacobian_.makeCompressed();
+      have_jacobian_ = have_jacobian_ && finite(jacobian_);
+    } else {
+      VectorXd c(m_);
+      MatrixXd dense = MatrixXd::Zero(m_, n_);
+      have_jacobian_ = problem_.constraint_values(point_, c, &dense) && dense.allFinite();
+      jacobian_ = dense.sparseView(0.0, 0.0);
+    }
     return have_jacobian_;
+  }
+  // The Lie Hessian of σf + λᵀc at point_, likewise.
+  bool lie_hessian(double sigma, const VectorXd& lambda, Sparse& H) {
+    H.resize(n_, n_);
+    H.setZero();
+    if (problem_.sparse()) {
+      const bool given = problem_.lagrangian_hessian(point_, sigma, lambda, H) && H.rows() == n_ &&
+                         H.cols() == n_;
+      H.makeCompressed();
+      return given && finite(H);
+    }
+    MatrixXd dense = MatrixXd::Zero(n_, n_);
+    if (!problem_.lagrangian_hessian(point_, sigma, lambda, dense) || !dense.allFinite()) return false;
+    H = dense.sparseView(0.0, 0.0);
+    return true;
+  }
+  static bool finite(const Sparse& A) {
+    return std::all_of(A.valuePtr(), A.valuePtr() + A.nonZeros(), [](double v) { return std::isfinite(v); });
   }
 
   LieNlp& problem_;
   int rotations_, n_, m_;
-  bool exact_hessian_;
+  bool exact_hessian_ = false;
   RotationVectorChart chart_;  // R_i = exp(θ_i) R0_i, and J_l(θ_i)
   LiePoint point_;             // at z_
   VectorXd z_, z_lower_, z_upper_, lambda_;
   VectorXd gradient_;  // Lie gradient of f at point_ (when have_gradient_)
-  MatrixXd jacobian_;  // Lie Jacobian of c at point_ (when have_jacobian_)
+  Sparse jacobian_;    // Lie Jacobian of c at point_ (when have_jacobian_)
+  Pattern jacobian_pattern_, hessian_pattern_;
   VectorXd constraints_;
   bool have_gradient_ = false, have_jacobian_ = false, warm_ = false;
   double objective_ = 0.0;
@@ -314,19 +459,13 @@ LieIpoptSummary solve_with_ipopt(LieNlp& problem, LiePoint& x, const LieIpoptOpt
   }
   if (!x.vector.allFinite()) throw std::invalid_argument("solve_with_ipopt: x.vector is not finite");
 
-  // Whether the exact Hessian is available: asked once, at the start.
-  bool exact = false;
-  if (options.hessian != "limited-memory") {
-    Eigen::MatrixXd H = Eigen::MatrixXd::Zero(x.tangent_size(), x.tangent_size());
-    exact = problem.lagrangian_hessian(x, 1.0, Eigen::VectorXd::Zero(m), H);
-    if (!exact && options.hessian == "exact") {
-      throw std::invalid_argument(
-          "LieIpoptOptions::hessian: \"exact\" but the problem's lagrangian_hessian returns false");
-    }
-  }
-
-  auto* nlp = new ChartNlp(problem, x, exact);
+  auto* nlp = new ChartNlp(problem, x);
   const Ipopt::SmartPtr<Ipopt::TNLP> tnlp = nlp;  // owns it (Ipopt's reference count)
+  if (!nlp->record_patterns(options.hessian)) {
+    LieIpoptSummary failed;
+    failed.message = "the problem's derivatives cannot be evaluated at the starting point";
+    return failed;
+  }
   Ipopt::SmartPtr<Ipopt::IpoptApplication> app = new Ipopt::IpoptApplication();
   Ipopt::OptionsList& o = *app->Options();
   o.SetIntegerValue("print_level", options.print_level);
@@ -336,7 +475,7 @@ LieIpoptSummary solve_with_ipopt(LieNlp& problem, LiePoint& x, const LieIpoptOpt
     o.SetIntegerValue("file_print_level", std::max(options.print_level, 5));
   }
   o.SetStringValue("linear_solver", "mumps");
-  o.SetStringValue("hessian_approximation", exact ? "exact" : "limited-memory");
+  o.SetStringValue("hessian_approximation", nlp->exact_hessian() ? "exact" : "limited-memory");
   o.SetStringValue("derivative_test", options.derivative_test);
   // The checker moves the starting point by up to this much per variable: within the chart.
   o.SetNumericValue("point_perturbation_radius", 0.1);

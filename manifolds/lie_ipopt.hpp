@@ -30,13 +30,19 @@
 // Tangent layout (gradients, Jacobian columns, Hessian rows and columns): rotation i at 3i
 // (its world-frame rotation vector, as everywhere in liedyn), then v at 3r.
 //
-// Dense derivatives: the Jacobian is m × (3r + n) and the Hessian (3r + n)², handed to Ipopt
-// as dense patterns. Meant for problems of up to a few thousand variables.
+// Dense or sparse derivatives. By default the Jacobian (m × (3r + n)) and the Hessian
+// ((3r + n)²) are dense matrices and Ipopt gets dense patterns. A problem whose derivatives are
+// sparse (a trajectory, a graph) returns true from sparse() and fills Eigen sparse matrices
+// instead, which Ipopt then gets as sparse patterns: the nonzeros of the first evaluation, at
+// the starting point (explicit zeros count), widened to whole 3×3 blocks of rotations (the
+// chart's J_l(θ) mixes a rotation's three columns). A later evaluation with an entry outside
+// that pattern is an evaluation error (Ipopt shortens its step, or stops).
 //
 // Thread safety: a call owns its problem for its duration; separate problems may be solved on
 // separate threads.
 
 #include <Eigen/Core>
+#include <Eigen/SparseCore>
 #include <string>
 #include <vector>
 
@@ -67,13 +73,22 @@ class LieNlp {
 
   // f(x), and its Lie gradient (tangent layout) when `gradient` is non-null.
   virtual bool objective(const LiePoint& x, double& f, Eigen::VectorXd* gradient) = 0;
-  // c(x) (size m), and its Lie Jacobian (m × tangent size) when `jacobian` is non-null.
+  // c(x) (size m), and its Lie Jacobian (m × tangent size) when `jacobian` is non-null (only
+  // asked for when sparse() is false).
   virtual bool constraint_values(const LiePoint& x, Eigen::VectorXd& c, Eigen::MatrixXd* jacobian);
   // The Lie Hessian of L = σ f + λᵀc (tangent size squared): ∂²L(exp(θ) R, v)/∂(θ, v)² at
   // θ = 0, symmetric (lib/so3.hpp). Return false if you do not provide it: Ipopt's
   // limited-memory quasi-Newton approximation is used instead (LieIpoptOptions::hessian).
   virtual bool lagrangian_hessian(const LiePoint& x, double sigma, const Eigen::VectorXd& lambda,
                                   Eigen::MatrixXd& hessian);
+
+  // The sparse alternative: when sparse() is true, the two methods below are called instead of
+  // the dense derivatives above (both matrices are given sized and empty; the Hessian is the
+  // whole symmetric matrix, both triangles). Their defaults return false.
+  virtual bool sparse() const { return false; }
+  virtual bool constraint_jacobian(const LiePoint& x, Eigen::SparseMatrix<double>& jacobian);
+  virtual bool lagrangian_hessian(const LiePoint& x, double sigma, const Eigen::VectorXd& lambda,
+                                  Eigen::SparseMatrix<double>& hessian);
 };
 
 struct LieIpoptOptions {
