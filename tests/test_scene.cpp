@@ -443,11 +443,12 @@ TEST(SceneErrors, UnknownSolverChoices) {
 TEST(Scene, BackendsAndTheirOptions) {
   const Scene ceres = parse_scene(
       scene(kBody, R"("solver": {"backend": "ceres", "ceres": {"linear_solver": "dense_qr",
-            "trust_region_strategy": "dogleg", "verbose": true}}, )"),
+            "trust_region_strategy": "dogleg", "lie_blocks": "manifold", "verbose": true}}, )"),
       kSource);
   EXPECT_EQ(ceres.solver.backend, Backend::kCeres);
   EXPECT_EQ(ceres.solver.ceres.linear_solver, "dense_qr");
   EXPECT_EQ(ceres.solver.ceres.trust_region_strategy, "dogleg");
+  EXPECT_EQ(ceres.solver.ceres.lie_blocks, "manifold");
   EXPECT_TRUE(ceres.solver.ceres.verbose);
   const Scene ipopt = parse_scene(
       scene(kBody, R"("solver": {"backend": "ipopt", "rotation": "rotvec", "ipopt": {
@@ -464,6 +465,7 @@ TEST(Scene, BackendsAndTheirOptions) {
   const Scene plain = parse_scene(scene(), kSource);
   EXPECT_EQ(plain.solver.backend, Backend::kNewton);
   EXPECT_EQ(plain.solver.ceres.linear_solver, "auto");
+  EXPECT_EQ(plain.solver.ceres.lie_blocks, "chart");
   EXPECT_EQ(plain.solver.ipopt.hessian_approximation, "exact");
 }
 
@@ -472,6 +474,8 @@ TEST(SceneErrors, BackendOptions) {
                   "solver.ceres.linear_solver", "unknown linear solver");
   expect_rejected(scene(kBody, R"("solver": {"ceres": {"trust_region_strategy": "lbfgs"}}, )"),
                   "solver.ceres.trust_region_strategy", "unknown strategy");
+  expect_rejected(scene(kBody, R"("solver": {"ceres": {"lie_blocks": "quat"}}, )"),
+                  "solver.ceres.lie_blocks", "unknown rotation blocks");
   expect_rejected(scene(kBody, R"("solver": {"ceres": {"verbose": 1}}, )"), "solver.ceres.verbose",
                   "true or false");
   expect_rejected(scene(kBody, R"("solver": {"ceres": {"threads": 2}}, )"), "solver.ceres.threads");
