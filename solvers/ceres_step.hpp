@@ -13,22 +13,14 @@
 // keeps small.
 //
 // Rotation blocks (SolverOptions::rotation):
-//   lie    — the chart: 3 doubles θ, R = exp(θ) R₀ with R₀ = R where the solve (or round, below)
-//            starts, Jacobian J_Lie J_l(θ) (= J_Lie at θ = 0), no manifold needed;
-//   rotvec — the same chart with R₀ = I: global rotation vectors r = log R;
+//   lie    — CeresOptions::lie_blocks = "manifold" (default): SO3Manifold
+//            (manifolds/so3_manifold.hpp), 4 doubles, Plus = exp(δ) ⊗ q exactly, the cost
+//            returns J_Lie · 4Q(q)ᵀ; "chart": 3 doubles θ, R = exp(θ) R₀ with R₀ = R where the
+//            solve (or round, below) starts, Jacobian J_Lie J_l(θ) (= J_Lie at θ = 0), no
+//            manifold needed. Why the manifold is the default: docs/design.md §9.3;
+//   rotvec — the chart with R₀ = I: global rotation vectors r = log R;
 //   quat   — UnitQuaternionRetraction (manifolds/ceres_manifolds.hpp): 4 doubles,
 //            Plus = normalize(q + Q(q) δ), the cost returns J_Lie · 4Q(q)ᵀ.
-//   lie with CeresOptions::lie_blocks = "manifold" — SO3Manifold (manifolds/so3_manifold.hpp):
-//            4 doubles, Plus = exp(δ) ⊗ q exactly, the cost returns J_Lie · 4Q(q)ᵀ; the
-//            public manifold, measured against the chart in docs/design.md §9.3.
-// For lie, docs/design.md §9.3 gives the chart or a 9-double "lift" manifold (R itself, Plus =
-// exp(δ) R, J_amb = J_Lie · MinusJacobian). Both were built and measured side by side
-// (`liedyn bench --repeat 5`, Release, 2-vCPU Xeon VM, twice each, tolerance 1e-8): on the
-// butterfly bolt (1000 frames) the chart took 0.0235–0.0245 s and 2.04 iterations per frame,
-// the lift 0.0306–0.0386 s and 2.20; on the helix (969 DOFs, 100 frames) the chart took
-// 1.19–1.42 s, the lift 1.60–1.65 s, at the same iterations (12.6 against 12.4). The chart
-// wins by 1.1–1.6×: a third of the parameters, 3×3 instead of 3×9 Jacobian blocks, and no
-// re-orthonormalisation in Plus. The lift was removed.
 //
 // Linear solver: DENSE_QR up to kDenseLimit DOFs, SPARSE_NORMAL_CHOLESKY with SuiteSparse
 // beyond (CeresOptions::linear_solver). The problem (parameter blocks, residual blocks) is

@@ -443,12 +443,12 @@ TEST(SceneErrors, UnknownSolverChoices) {
 TEST(Scene, BackendsAndTheirOptions) {
   const Scene ceres = parse_scene(
       scene(kBody, R"("solver": {"backend": "ceres", "ceres": {"linear_solver": "dense_qr",
-            "trust_region_strategy": "dogleg", "lie_blocks": "manifold", "verbose": true}}, )"),
+            "trust_region_strategy": "dogleg", "lie_blocks": "chart", "verbose": true}}, )"),
       kSource);
   EXPECT_EQ(ceres.solver.backend, Backend::kCeres);
   EXPECT_EQ(ceres.solver.ceres.linear_solver, "dense_qr");
   EXPECT_EQ(ceres.solver.ceres.trust_region_strategy, "dogleg");
-  EXPECT_EQ(ceres.solver.ceres.lie_blocks, "manifold");
+  EXPECT_EQ(ceres.solver.ceres.lie_blocks, "chart");
   EXPECT_TRUE(ceres.solver.ceres.verbose);
   const Scene ipopt = parse_scene(
       scene(kBody, R"("solver": {"backend": "ipopt", "rotation": "rotvec", "ipopt": {
@@ -465,7 +465,7 @@ TEST(Scene, BackendsAndTheirOptions) {
   const Scene plain = parse_scene(scene(), kSource);
   EXPECT_EQ(plain.solver.backend, Backend::kNewton);
   EXPECT_EQ(plain.solver.ceres.linear_solver, "auto");
-  EXPECT_EQ(plain.solver.ceres.lie_blocks, "chart");
+  EXPECT_EQ(plain.solver.ceres.lie_blocks, "manifold");
   EXPECT_EQ(plain.solver.ipopt.hessian_approximation, "exact");
 }
 
