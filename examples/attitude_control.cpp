@@ -295,6 +295,16 @@ double effort(const Trajectory& z) {
   return e;
 }
 
+// E's Lie gradient (its torque entries h τ_k) and Lie Hessian (h I on each torque, times σ).
+void add_effort_gradient(const Trajectory& z, Eigen::VectorXd& gradient) {
+  for (int k = 0; k < kSteps; ++k) gradient.segment<3>(tau_column(k)) += kStep * z.tau[k];
+}
+void add_effort_hessian(double sigma, Eigen::MatrixXd& hessian) {
+  for (int k = 0; k < kSteps; ++k) {
+    hessian.block<3, 3>(tau_column(k), tau_column(k)).diagonal().array() += sigma * kStep;
+  }
+}
+
 // ---------------------------------------------------------------------------------------------
 // Ipopt, soft: minimise F.
 
@@ -307,7 +317,7 @@ class SoftNlp final : public liedyn::LieNlp {
     f = effort(z);
     if (gradient) {
       gradient->setZero(x.tangent_size());
-      for (int k = 0; k < kSteps; ++k) gradient->segment<3>(tau_column(k)) += kStep * z.tau[k];
+      add_effort_gradient(z, *gradient);
     }
     for (const Block& b : residual_blocks(z, R_target_)) {
       f += 0.5 * kWeight * b.value.squaredNorm();
@@ -325,9 +335,7 @@ class SoftNlp final : public liedyn::LieNlp {
                           const Eigen::VectorXd& /*lambda*/, Eigen::MatrixXd& hessian) override {
     const Trajectory z = trajectory_of(x);
     hessian.setZero(x.tangent_size(), x.tangent_size());
-    for (int k = 0; k < kSteps; ++k) {
-      hessian.block<3, 3>(tau_column(k), tau_column(k)).diagonal().array() += sigma * kStep;
-    }
+    add_effort_hessian(sigma, hessian);
     for (const Block& b : residual_blocks(z, R_target_)) {
       const Matrix9 H = b.jacobian.transpose() * b.jacobian + b.hessian(b.value);
       scatter_hessian(b, H, sigma * kWeight, hessian);
@@ -352,7 +360,7 @@ class HardNlp final : public liedyn::LieNlp {
     f = effort(z);
     if (gradient) {
       gradient->setZero(x.tangent_size());
-      for (int k = 0; k < kSteps; ++k) gradient->segment<3>(tau_column(k)) = kStep * z.tau[k];
+      add_effort_gradient(z, *gradient);
     }
     return std::isfinite(f);
   }
@@ -381,9 +389,7 @@ class HardNlp final : public liedyn::LieNlp {
                           Eigen::MatrixXd& hessian) override {
     const std::vector<Block> blocks = residual_blocks(trajectory_of(x), R_target_);
     hessian.setZero(x.tangent_size(), x.tangent_size());
-    for (int k = 0; k < kSteps; ++k) {
-      hessian.block<3, 3>(tau_column(k), tau_column(k)).diagonal().array() += sigma * kStep;
-    }
+    add_effort_hessian(sigma, hessian);
     for (std::size_t i = 0; i < blocks.size(); ++i) {
       const Block& b = blocks[i];
       scatter_hessian(b, b.hessian(lambda.segment<3>(3 * static_cast<int>(i))), 1.0, hessian);

@@ -23,48 +23,22 @@
 #include "rod_models.hpp"
 #include "solvers/ceres_step.hpp"
 #include "solvers/simulator.hpp"
+#include "trajectory_compare.hpp"
 
 namespace liedyn {
 namespace {
 
 const std::filesystem::path kScenes = std::filesystem::path(LIEDYN_SOURCE_DIR) / "problems/scenes";
 
-struct Trajectory {
-  std::vector<State> states;  // after each frame
-  int iterations = 0;
-};
+using test::deviation;
+using test::Trajectory;
 
 Trajectory run(const Scene& scene, Backend backend, int frames,
         RotationParameterization rotation = RotationParameterization::kLie) {
   SolverOptions options = scene.solver;
   options.backend = backend;
   options.rotation = rotation;
-  Simulator sim(scene.model, options);
-  Trajectory out;
-  for (int k = 1; k <= frames; ++k) {
-    const StepReport r = sim.step();
-    EXPECT_TRUE(r.converged()) << to_string(backend) << " frame " << k << ": "
-                               << to_string(r.status) << " " << r.message;
-    if (!r.state_updated()) break;
-    out.iterations += r.iterations;
-    out.states.push_back(sim.state());
-  }
-  return out;
-}
-
-// Largest position (m) and rotation (rad) difference over all frames.
-std::pair<double, double> deviation(const Trajectory& a, const Trajectory& b) {
-  double dx = 0.0, dR = 0.0;
-  EXPECT_EQ(a.states.size(), b.states.size());
-  for (std::size_t k = 0; k < std::min(a.states.size(), b.states.size()); ++k) {
-    for (std::size_t i = 0; i < a.states[k].points.size(); ++i) {
-      dx = std::max(dx, (a.states[k].points[i] - b.states[k].points[i]).cwiseAbs().maxCoeff());
-    }
-    for (std::size_t i = 0; i < a.states[k].rotations.size(); ++i) {
-      dR = std::max(dR, so3::distance(a.states[k].rotations[i], b.states[k].rotations[i]));
-    }
-  }
-  return {dx, dR};
+  return test::run_frames(scene.model, options, frames, to_string(backend));
 }
 
 void expect_backends_agree(const std::string& file, int frames, double tolerance = 1e-9) {
@@ -107,6 +81,24 @@ TEST(Backends, CeresUnderEveryParameterisation) {
   }
 }
 
+// Every way a rotation reaches Ceres (solvers/ceres_step.hpp): lie on SO3Manifold (the
+// default) or on the re-centred chart, rotvec's chart, quat's retraction.
+struct CeresBlocks {
+  RotationParameterization rotation;
+  const char* lie_blocks;
+  std::string name() const { return std::string(to_string(rotation)) + "/" + lie_blocks; }
+  SolverOptions options(SolverOptions o) const {
+    o.backend = Backend::kCeres;
+    o.rotation = rotation;
+    o.ceres.lie_blocks = lie_blocks;
+    return o;
+  }
+};
+const CeresBlocks kCeresBlocks[] = {{RotationParameterization::kLie, "manifold"},
+                                   {RotationParameterization::kLie, "chart"},
+                                   {RotationParameterization::kRotationVector, "chart"},
+                                   {RotationParameterization::kQuaternion, "chart"}};
+
 // Ceres's GradientChecker on every residual block (check_ceres_gradients): each analytic
 // Jacobian, mapped to tangent space through our manifolds, against Ceres's numeric
 // differentiation through their Plus. Covers every term type — inertia with folded gravity
@@ -124,13 +116,9 @@ TEST(Backends, CeresGradientCheckPassesOnEveryTerm) {
     const Scene scene = load_scene(kScenes / file);
     Simulator sim(scene.model, scene.solver);
     for (int k = 0; k < 2; ++k) ASSERT_TRUE(sim.step().state_updated());
-    for (const auto rotation : {RotationParameterization::kLie,
-                                RotationParameterization::kRotationVector,
-                                RotationParameterization::kQuaternion}) {
-      SCOPED_TRACE(std::string(file) + " " + to_string(rotation));
-      SolverOptions options = scene.solver;
-      options.backend = Backend::kCeres;
-      options.rotation = rotation;
+    for (const CeresBlocks& blocks : kCeresBlocks) {
+      SCOPED_TRACE(std::string(file) + " " + blocks.name());
+      SolverOptions options = blocks.options(scene.solver);
       for (Component& c : build_components(scene.model)) {
         c.potential.begin_step(sim.state(), sim.last_step());
         State q = sim.state();
@@ -167,13 +155,9 @@ TEST(Backends, CeresGradientCheckAtTheExtremes) {
       model.forces.push_back(
           ForceSpec{BodyPoint{0, Vector3(0.1, 0.0, 0.05)}, scale * Vector3(0.0, 3.0, 1.0), {}});
       model.torques.push_back(TorqueSpec{0, scale * Vector3(0.2, 0.0, -0.1), {}});
-      for (const auto rotation : {RotationParameterization::kLie,
-                                  RotationParameterization::kRotationVector,
-                                  RotationParameterization::kQuaternion}) {
-        SCOPED_TRACE(fd::trace(to_string(rotation), angle, scale));
-        SolverOptions options;
-        options.backend = Backend::kCeres;
-        options.rotation = rotation;
+      for (const CeresBlocks& blocks : kCeresBlocks) {
+        SCOPED_TRACE(fd::trace(blocks.name().c_str(), angle, scale));
+        const SolverOptions options = blocks.options(SolverOptions{});
         std::vector<Component> components = build_components(model);
         ASSERT_EQ(components.size(), 1u);
         Component& c = components[0];

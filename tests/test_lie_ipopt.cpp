@@ -172,28 +172,32 @@ double lie_kkt_residual(TwoRotations& p, const LiePoint& x, const VectorXd& lamb
   return g.lpNorm<Eigen::Infinity>();
 }
 
+// Solves from x with Ipopt's second-order derivative checker on, which must find no error
+// in any solve. Every solve starts at θ = 0 and the checker moves it by up to 0.1 per
+// variable, so J_l(θ) ≠ I and C(θ, g) ≠ 0 are exercised; far starts re-centre and check again.
+void expect_checker_finds_no_errors(LieNlp& problem, LiePoint x) {
+  LieIpoptOptions options;
+  options.derivative_test = "second-order";
+  options.output_file = log_path("checker").string();
+  const LieIpoptSummary summary = solve_with_ipopt(problem, x, options);
+  EXPECT_TRUE(summary.converged()) << summary.message;
+  std::ifstream in(options.output_file);
+  std::stringstream text;
+  text << in.rdbuf();
+  std::filesystem::remove(options.output_file);
+  const std::string log = text.str();
+  EXPECT_EQ(count(log, "Starting derivative checker for second derivatives."), summary.solves);
+  EXPECT_EQ(count(log, "No errors detected by derivative checker."), summary.solves)
+      << log.substr(0, 6000);
+  EXPECT_EQ(count(log, "Derivative checker detected"), 0);
+}
+
 TEST(LieIpopt, DerivativeCheckerFindsNoErrorsInTheChartDerivatives) {
   for (const bool constrained : {false, true}) {
     SCOPED_TRACE(constrained ? "constrained" : "unconstrained");
     TwoRotations p = make_problem(1);
     p.constrained = constrained;
-    LiePoint x = start_point(1);
-    LieIpoptOptions options;
-    options.derivative_test = "second-order";
-    options.output_file = log_path("checker").string();
-    // Every solve starts at θ = 0 and the checker moves it by up to 0.1 per variable, so
-    // J_l(θ) ≠ I and C(θ, g) ≠ 0 are exercised; far starts re-centre and check again.
-    const LieIpoptSummary summary = solve_with_ipopt(p, x, options);
-    EXPECT_TRUE(summary.converged()) << summary.message;
-    std::ifstream in(options.output_file);
-    std::stringstream text;
-    text << in.rdbuf();
-    std::filesystem::remove(options.output_file);
-    const std::string log = text.str();
-    EXPECT_EQ(count(log, "Starting derivative checker for second derivatives."), summary.solves);
-    EXPECT_EQ(count(log, "No errors detected by derivative checker."), summary.solves)
-        << log.substr(0, 6000);
-    EXPECT_EQ(count(log, "Derivative checker detected"), 0);
+    expect_checker_finds_no_errors(p, start_point(1));
   }
 }
 
@@ -353,20 +357,7 @@ TEST(LieIpopt, SparseDerivativesGiveTheDenseSolve) {
     dense.constrained = constrained;
     SparseTwoRotations sparse(dense);
     // The chart derivatives through the sparse patterns, by Ipopt's checker.
-    {
-      LiePoint x = start_point(10);
-      LieIpoptOptions checked;
-      checked.derivative_test = "second-order";
-      checked.output_file = log_path("sparse").string();
-      const LieIpoptSummary s = solve_with_ipopt(sparse, x, checked);
-      EXPECT_TRUE(s.converged()) << s.message;
-      std::ifstream in(checked.output_file);
-      std::stringstream text;
-      text << in.rdbuf();
-      std::filesystem::remove(checked.output_file);
-      EXPECT_EQ(count(text.str(), "No errors detected by derivative checker."), s.solves)
-          << text.str().substr(0, 6000);
-    }
+    expect_checker_finds_no_errors(sparse, start_point(10));
     LiePoint x_dense = start_point(10), x_sparse = start_point(10);
     const LieIpoptSummary s = solve_with_ipopt(sparse, x_sparse);
     const LieIpoptSummary d = solve_with_ipopt(dense, x_dense);

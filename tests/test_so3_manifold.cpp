@@ -7,7 +7,8 @@
 //     differences, exp and log against extended precision, rejected input;
 //   * ceres::GradientChecker on liedyn terms (rotational inertia, rod bend–twist) whose cost
 //     returns J_Lie · lie_to_ambient(q);
-//   * the Ceres step back-end with solver.ceres.lie_blocks = "manifold" against the chart.
+//   * the Ceres step back-end with solver.ceres.lie_blocks = "manifold" against the chart
+//     (check_ceres_gradients runs over both kinds of blocks in tests/test_backends.cpp).
 //
 // Round-off bounds below count roundings of O(1) numbers (unit quaternions, rotation
 // entries): eps = 2.2e-16 per operation, a few operations per stage.
@@ -41,6 +42,7 @@
 #include "problems/scene.hpp"
 #include "solvers/ceres_step.hpp"
 #include "solvers/simulator.hpp"
+#include "trajectory_compare.hpp"
 #include "solvers/step_solver.hpp"
 
 namespace liedyn {
@@ -723,38 +725,25 @@ TEST(SO3ManifoldCeres, TheStepBackEndHandsCeresTheManifold) {
   }
 }
 
-struct Trajectory {
-  std::vector<State> states;  // after each frame
-  int iterations = 0;
-};
+using test::deviation;
+using test::Trajectory;
 
 Trajectory run(const Scene& scene, const char* lie_blocks, int frames) {
-  Simulator sim(scene.model, ceres_options(scene.solver, lie_blocks));
-  Trajectory out;
-  for (int k = 1; k <= frames; ++k) {
-    const StepReport r = sim.step();
-    EXPECT_TRUE(r.converged()) << lie_blocks << " frame " << k << ": " << to_string(r.status) << " "
-                               << r.message;
-    if (!r.state_updated()) break;
-    out.iterations += r.iterations;
-    out.states.push_back(sim.state());
-  }
-  return out;
+  return test::run_frames(scene.model, ceres_options(scene.solver, lie_blocks), frames, lie_blocks);
 }
 
-// Largest position (m) and rotation (rad) difference over all frames.
-std::pair<double, double> deviation(const Trajectory& a, const Trajectory& b) {
-  double dx = 0.0, dR = 0.0;
-  EXPECT_EQ(a.states.size(), b.states.size());
-  for (std::size_t k = 0; k < std::min(a.states.size(), b.states.size()); ++k) {
-    for (std::size_t i = 0; i < a.states[k].points.size(); ++i) {
-      dx = std::max(dx, (a.states[k].points[i] - b.states[k].points[i]).cwiseAbs().maxCoeff());
-    }
-    for (std::size_t i = 0; i < a.states[k].rotations.size(); ++i) {
-      dR = std::max(dR, so3::distance(a.states[k].rotations[i], b.states[k].rotations[i]));
-    }
-  }
-  return {dx, dR};
+// The scene's first `frames` frames with both kinds of blocks, at tolerance 1e-9: within 1e-6
+// m and rad of each other, frame by frame.
+void expect_manifold_agrees_with_chart(const char* file, int frames) {
+  Scene scene = load_scene(kScenes / file);
+  scene.solver.tolerance = 1e-9;
+  const Trajectory chart = run(scene, "chart", frames);
+  const Trajectory manifold = run(scene, "manifold", frames);
+  ASSERT_EQ(static_cast<int>(manifold.states.size()), frames);
+  const auto [dx, dR] = deviation(chart, manifold);
+  EXPECT_LE(dx, 1e-6);
+  EXPECT_LE(dR, 1e-6);
+  EXPECT_GT(manifold.iterations, 0);
 }
 
 // Both blocks end every step only when the shared convergence test holds (‖δ‖∞ ≤ tolerance,
@@ -765,96 +754,13 @@ std::pair<double, double> deviation(const Trajectory& a, const Trajectory& b) {
 // instability grows deviations by e^{λt}, λ = ω √((I₂−I₁)(I₃−I₂)/(I₁I₃)) ≈ 1.07/s, a factor
 // ≈ 3 over 100 frames (1 s): at tolerance 1e-9, ≤ 100 · 2e-9 · 3 = 6e-7 < 1e-6.
 TEST(SO3ManifoldCeres, ManifoldAndChartAgreeOnATumblingBody) {
-  Scene scene = load_scene(kScenes / "butterfly_bolt.json");
-  scene.solver.tolerance = 1e-9;
-  const int frames = 100;
-  const Trajectory chart = run(scene, "chart", frames);
-  const Trajectory manifold = run(scene, "manifold", frames);
-  ASSERT_EQ(static_cast<int>(manifold.states.size()), frames);
-  const auto [dx, dR] = deviation(chart, manifold);
-  EXPECT_LE(dx, 1e-6);
-  EXPECT_LE(dR, 1e-6);
-  EXPECT_GT(manifold.iterations, 0);
+  expect_manifold_agrees_with_chart("butterfly_bolt.json", 100);
 }
 
 // The dynamic cantilever (20 edges, clamped at one end, tip load; 117 DOFs: sparse): 20 frames,
 // ≤ 20 · 2e-9 = 4e-8 for a stable, damped (backward Euler) rod; 1e-6 leaves a factor 25.
 TEST(SO3ManifoldCeres, ManifoldAndChartAgreeOnACantilever) {
-  Scene scene = load_scene(kScenes / "cantilever.json");
-  scene.solver.tolerance = 1e-9;
-  const int frames = 20;
-  const Trajectory chart = run(scene, "chart", frames);
-  const Trajectory manifold = run(scene, "manifold", frames);
-  ASSERT_EQ(static_cast<int>(manifold.states.size()), frames);
-  const auto [dx, dR] = deviation(chart, manifold);
-  EXPECT_LE(dx, 1e-6);
-  EXPECT_LE(dR, 1e-6);
-  EXPECT_GT(manifold.iterations, 0);
-}
-
-// check_ceres_gradients (solvers/ceres_step.hpp) with SO3Manifold blocks, on every term type
-// of these scenes, as Backends.CeresGradientCheckPassesOnEveryTerm does for the other blocks:
-// central differences (step 1e-6) through Plus, whose truncation and round-off are ~1e-9 of a
-// block's largest entry; 1e-6 flags any wrong entry, sign or factor.
-TEST(SO3ManifoldCeres, GradientCheckPassesOnEveryTerm) {
-  std::mt19937 rng(173);
-  for (const char* file : {"heavy_top.json", "butterfly_bolt.json", "cantilever_static.json",
-                           "cantilever.json", "hanging_rod.json", "rod_pendulum.json",
-                           "pendulum.json"}) {
-    SCOPED_TRACE(file);
-    const Scene scene = load_scene(kScenes / file);
-    Simulator sim(scene.model, scene.solver);
-    for (int k = 0; k < 2; ++k) ASSERT_TRUE(sim.step().state_updated());
-    const SolverOptions options = ceres_options(scene.solver, "manifold");
-    for (Component& c : build_components(scene.model)) {
-      c.potential.begin_step(sim.state(), sim.last_step());
-      State q = sim.state();  // off the minimiser, so that no residual vanishes
-      std::uniform_real_distribution<double> u(-1e-2, 1e-2);
-      for (const DofBlock& b : c.points) q.points[b.index] += Vector3(u(rng), u(rng), u(rng));
-      for (const DofBlock& b : c.rotations) {
-        q.rotations[b.index] = so3::exp(Vector3(u(rng), u(rng), u(rng))) * q.rotations[b.index];
-      }
-      const CeresGradientCheck check = check_ceres_gradients(std::move(c), options, q);
-      EXPECT_GT(check.residual_blocks, 0);
-      EXPECT_LE(check.worst_error, 1e-6) << check.worst_term;
-    }
-  }
-}
-
-// The same at a body in every orientation of fd::kAngles (0, 1e-9, …, π − 1e-6, π, near 2π),
-// with tiny and huge masses, steps and loads, a force off its centre and a torque (offset-root
-// residuals), as Backends.CeresGradientCheckAtTheExtremes.
-TEST(SO3ManifoldCeres, GradientCheckAtTheExtremes) {
-  std::mt19937 rng(179);
-  for (const double angle : fd::kAngles) {
-    for (const double scale : {1e-6, 1.0, 1e6}) {
-      SCOPED_TRACE(fd::trace("angle, scale", angle, scale));
-      Model model;
-      model.time_step = scale < 1.0 ? 1e-5 : (scale > 1.0 ? 1.0 : 0.01);
-      model.gravity = Vector3(0.0, 0.0, -9.81);
-      RigidBody b;
-      b.mass = scale;
-      b.inertia = scale * Matrix3(Vector3(0.02, 0.03, 0.04).asDiagonal());
-      b.orientation = fd::rotation_at(angle, rng);
-      b.angular_velocity = Vector3(1.0, -2.0, 0.5);
-      model.bodies.push_back(b);
-      model.forces.push_back(
-          ForceSpec{BodyPoint{0, Vector3(0.1, 0.0, 0.05)}, scale * Vector3(0.0, 3.0, 1.0), {}});
-      model.torques.push_back(TorqueSpec{0, scale * Vector3(0.2, 0.0, -0.1), {}});
-      std::vector<Component> components = build_components(model);
-      ASSERT_EQ(components.size(), 1u);
-      Component& c = components[0];
-      const State q0 = model.initial_state();
-      c.potential.begin_step(q0, model.initial_step());
-      State q = q0;  // off the minimiser: a small turn and shift
-      q.rotations[0] = so3::exp(Vector3(1e-3, -2e-3, 5e-4)) * q.rotations[0];
-      q.points[0] += Vector3(1e-3, 2e-3, -1e-3);
-      const CeresGradientCheck check =
-          check_ceres_gradients(std::move(c), ceres_options(SolverOptions{}, "manifold"), q);
-      EXPECT_EQ(check.residual_blocks, 4);  // two inertias, the force, the torque
-      EXPECT_LE(check.worst_error, 1e-6) << check.worst_term;
-    }
-  }
+  expect_manifold_agrees_with_chart("cantilever.json", 20);
 }
 
 }  // namespace
