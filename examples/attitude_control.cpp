@@ -295,9 +295,14 @@ double effort(const Trajectory& z) {
   return e;
 }
 
-// E's Lie gradient (its torque entries h τ_k) and Lie Hessian (h I on each torque, times σ).
-void add_effort_gradient(const Trajectory& z, Eigen::VectorXd& gradient) {
-  for (int k = 0; k < kSteps; ++k) gradient.segment<3>(tau_column(k)) += kStep * z.tau[k];
+// E, and its Lie gradient (h τ_k on the torques, 0 elsewhere) when `gradient` is non-null;
+// and its Lie Hessian (h I on each torque), times σ.
+double effort(const Trajectory& z, int tangent_size, Eigen::VectorXd* gradient) {
+  if (gradient) {
+    gradient->setZero(tangent_size);
+    for (int k = 0; k < kSteps; ++k) gradient->segment<3>(tau_column(k)) = kStep * z.tau[k];
+  }
+  return effort(z);
 }
 void add_effort_hessian(double sigma, Eigen::MatrixXd& hessian) {
   for (int k = 0; k < kSteps; ++k) {
@@ -314,11 +319,7 @@ class SoftNlp final : public liedyn::LieNlp {
 
   bool objective(const liedyn::LiePoint& x, double& f, Eigen::VectorXd* gradient) override {
     const Trajectory z = trajectory_of(x);
-    f = effort(z);
-    if (gradient) {
-      gradient->setZero(x.tangent_size());
-      add_effort_gradient(z, *gradient);
-    }
+    f = effort(z, x.tangent_size(), gradient);
     for (const Block& b : residual_blocks(z, R_target_)) {
       f += 0.5 * kWeight * b.value.squaredNorm();
       if (!gradient) continue;
@@ -357,11 +358,7 @@ class HardNlp final : public liedyn::LieNlp {
 
   bool objective(const liedyn::LiePoint& x, double& f, Eigen::VectorXd* gradient) override {
     const Trajectory z = trajectory_of(x);
-    f = effort(z);
-    if (gradient) {
-      gradient->setZero(x.tangent_size());
-      add_effort_gradient(z, *gradient);
-    }
+    f = effort(z, x.tangent_size(), gradient);
     return std::isfinite(f);
   }
 
