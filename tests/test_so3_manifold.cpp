@@ -16,6 +16,7 @@
 #include <ceres/ceres.h>
 #include <ceres/gradient_checker.h>
 #include <ceres/manifold_test_utils.h>
+#include <ceres/product_manifold.h>
 #include <gtest/gtest.h>
 
 #include <Eigen/Dense>
@@ -145,6 +146,30 @@ TEST(SO3Manifold, CeresInvariantsHoldAtRandomPoints) {
     if (y.dot(x) < 0.0) y = -y;  // x's hemisphere (see above)
     SCOPED_TRACE(trial);
     expect_invariants(x, delta, y);
+  }
+}
+
+// A pose block of 7 doubles (position, then quaternion) for users who want one: Ceres's
+// ProductManifold of R³ and SO3Manifold, whose tangent is (translation, left rotation vector),
+// the pair liedyn's bodies use as two blocks (docs/manifolds.md). The invariants hold for the
+// product as for its factor.
+TEST(SO3Manifold, PoseBlocksAsAProductWithR3KeepTheInvariants) {
+  using namespace ceres;  // the macro names ceres::Vector and the matchers unqualified
+  const ProductManifold<EuclideanManifold<3>, SO3Manifold> pose{EuclideanManifold<3>{}, SO3Manifold{}};
+  EXPECT_EQ(pose.AmbientSize(), 7);
+  EXPECT_EQ(pose.TangentSize(), 6);
+  std::mt19937 rng(107);
+  for (int trial = 0; trial < 50; ++trial) {
+    SCOPED_TRACE(trial);
+    const Vector4 qx = random_quaternion(rng);
+    Vector4 qy = random_quaternion(rng);
+    if (qy.dot(qx) < 0.0) qy = -qy;  // qx's hemisphere, as above
+    ceres::Vector x(7), y(7), delta(6);
+    x << 3.0 * fd::random_unit(rng), qx;
+    y << -2.0 * fd::random_unit(rng), qy;
+    delta << fd::random_unit(rng),
+        std::uniform_real_distribution<double>(1e-4, kPi - 1e-6)(rng) * fd::random_unit(rng);
+    EXPECT_THAT_MANIFOLD_INVARIANTS_HOLD(pose, x, delta, y, kInvariantTolerance);
   }
 }
 
