@@ -69,6 +69,7 @@
 #include <ceres/ceres.h>
 
 #include <Eigen/Dense>
+#include <Eigen/SparseCore>
 #include <algorithm>
 #include <array>
 #include <chrono>
@@ -348,13 +349,16 @@ class SoftNlp final : public liedyn::LieNlp {
   Matrix3 R_target_;
 };
 
-// Ipopt, hard: minimise E subject to every residual block = 0.
+// Ipopt, hard: minimise E subject to every residual block = 0. Its derivatives are banded
+// (block k touches R_k, ω_k, τ_k and step k + 1 only): with `sparse` the adapter gets them as
+// sparse matrices (LieNlp::sparse()), otherwise as dense ones; the same NLP either way.
 
 class HardNlp final : public liedyn::LieNlp {
  public:
-  explicit HardNlp(const Matrix3& R_target) : R_target_(R_target) {}
+  HardNlp(const Matrix3& R_target, bool sparse) : R_target_(R_target), sparse_(sparse) {}
 
   int constraints() const override { return 6 * kSteps + 6; }  // r_k, s_k, t, ω_N; equalities
+  bool sparse() const override { return sparse_; }
 
   bool objective(const liedyn::LiePoint& x, double& f, Eigen::VectorXd* gradient) override {
     const Trajectory z = trajectory_of(x);
@@ -366,36 +370,77 @@ class HardNlp final : public liedyn::LieNlp {
                          Eigen::MatrixXd* jacobian) override {
     const std::vector<Block> blocks = residual_blocks(trajectory_of(x), R_target_);
     c.resize(constraints());
-    if (jacobian) jacobian->setZero(constraints(), x.tangent_size());
-    for (std::size_t i = 0; i < blocks.size(); ++i) {
-      const Block& b = blocks[i];
-      c.segment<3>(3 * static_cast<int>(i)) = b.value;
-      if (!jacobian) continue;
-      for (int s = 0; s < 3; ++s) {
-        if (b.columns[s] >= 0) {
-          jacobian->block<3, 3>(3 * static_cast<int>(i), b.columns[s]) =
-              b.jacobian.middleCols<3>(3 * s);
-        }
-      }
+    for (std::size_t i = 0; i < blocks.size(); ++i) c.segment<3>(3 * static_cast<int>(i)) = blocks[i].value;
+    if (jacobian) {
+      jacobian->setZero(constraints(), x.tangent_size());
+      jacobian_blocks(blocks, [&](int row, int column, const Matrix3& B) {
+        jacobian->block<3, 3>(row, column) += B;
+      });
     }
     return c.allFinite();
+  }
+  bool constraint_jacobian(const liedyn::LiePoint& x, Eigen::SparseMatrix<double>& jacobian) override {
+    std::vector<Eigen::Triplet<double>> entries;
+    jacobian_blocks(residual_blocks(trajectory_of(x), R_target_),
+                    [&](int row, int column, const Matrix3& B) { add_entries(row, column, B, entries); });
+    jacobian.setFromTriplets(entries.begin(), entries.end());
+    return true;
   }
 
   // ∇²(σ E + λᵀc) = σ h I on the torques + Σ_blocks Hess(λ of the block's rows).
   bool lagrangian_hessian(const liedyn::LiePoint& x, double sigma, const Eigen::VectorXd& lambda,
                           Eigen::MatrixXd& hessian) override {
-    const std::vector<Block> blocks = residual_blocks(trajectory_of(x), R_target_);
     hessian.setZero(x.tangent_size(), x.tangent_size());
-    add_effort_hessian(sigma, hessian);
-    for (std::size_t i = 0; i < blocks.size(); ++i) {
-      const Block& b = blocks[i];
-      scatter_hessian(b, b.hessian(lambda.segment<3>(3 * static_cast<int>(i))), 1.0, hessian);
-    }
+    hessian_blocks(residual_blocks(trajectory_of(x), R_target_), sigma, lambda,
+                   [&](int row, int column, const Matrix3& B) { hessian.block<3, 3>(row, column) += B; });
+    return true;
+  }
+  bool lagrangian_hessian(const liedyn::LiePoint& x, double sigma, const Eigen::VectorXd& lambda,
+                          Eigen::SparseMatrix<double>& hessian) override {
+    std::vector<Eigen::Triplet<double>> entries;
+    hessian_blocks(residual_blocks(trajectory_of(x), R_target_), sigma, lambda,
+                   [&](int row, int column, const Matrix3& B) { add_entries(row, column, B, entries); });
+    hessian.setFromTriplets(entries.begin(), entries.end());  // repeated entries are summed
     return true;
   }
 
  private:
+  // f(row, column, B) for every 3×3 block B of the constraints' Lie Jacobian.
+  template <class F>
+  static void jacobian_blocks(const std::vector<Block>& blocks, F&& f) {
+    for (std::size_t i = 0; i < blocks.size(); ++i) {
+      const Block& b = blocks[i];
+      for (int s = 0; s < 3; ++s) {
+        if (b.columns[s] >= 0) f(3 * static_cast<int>(i), b.columns[s], b.jacobian.middleCols<3>(3 * s));
+      }
+    }
+  }
+  // f(row, column, B) for every 3×3 block B of ∇²(σ E + λᵀc) (a place may come more than once).
+  template <class F>
+  static void hessian_blocks(const std::vector<Block>& blocks, double sigma,
+                             const Eigen::VectorXd& lambda, F&& f) {
+    for (int k = 0; k < kSteps; ++k) {
+      f(tau_column(k), tau_column(k), Matrix3(sigma * kStep * Matrix3::Identity()));
+    }
+    for (std::size_t i = 0; i < blocks.size(); ++i) {
+      const Block& b = blocks[i];
+      const Matrix9 H = b.hessian(lambda.segment<3>(3 * static_cast<int>(i)));
+      for (int s = 0; s < 3; ++s) {
+        for (int t = 0; t < 3; ++t) {
+          if (b.columns[s] >= 0 && b.columns[t] >= 0) f(b.columns[s], b.columns[t], H.block<3, 3>(3 * s, 3 * t));
+        }
+      }
+    }
+  }
+  // All nine entries, zeros too: the pattern the adapter records must hold every later value.
+  static void add_entries(int row, int column, const Matrix3& B, std::vector<Eigen::Triplet<double>>& out) {
+    for (int a = 0; a < 3; ++a) {
+      for (int c = 0; c < 3; ++c) out.emplace_back(row + a, column + c, B(a, c));
+    }
+  }
+
   Matrix3 R_target_;
+  bool sparse_;
 };
 
 // ---------------------------------------------------------------------------------------------
@@ -521,7 +566,7 @@ std::vector<CeresResidual> ceres_residuals(CeresVariables& v, const Matrix3& R_t
 bool check_derivatives(const Trajectory& z, const Matrix3& R_target) {
   const liedyn::LiePoint x = point_of(z);
   SoftNlp soft(R_target);
-  HardNlp hard(R_target);
+  HardNlp hard(R_target, /*sparse=*/false);
   std::mt19937 rng(7);
   std::normal_distribution<double> normal;
   Eigen::VectorXd lambda(hard.constraints());
@@ -573,6 +618,13 @@ bool check_derivatives(const Trajectory& z, const Matrix3& R_target) {
   const double jacobian_error = lie_check::relative_error(A, lie_check::jacobian(c, x, eps));
   const double lagrangian_error =
       lie_check::relative_error(H_L, lie_check::hessian(grad_L, x, eps));
+  // The sparse form gives the same matrices (to the round-off of summing in another order).
+  HardNlp sparse(R_target, /*sparse=*/true);
+  Eigen::SparseMatrix<double> A_sparse(A.rows(), A.cols()), H_sparse(H_L.rows(), H_L.cols());
+  sparse.constraint_jacobian(x, A_sparse);
+  sparse.lagrangian_hessian(x, sigma, lambda, H_sparse);
+  const double sparse_error = std::max(lie_check::relative_error(Eigen::MatrixXd(A_sparse), A),
+                                       lie_check::relative_error(Eigen::MatrixXd(H_sparse), H_L));
 
   SO3Manifold manifold;
   CeresVariables v(z);
@@ -588,11 +640,13 @@ bool check_derivatives(const Trajectory& z, const Matrix3& R_target) {
   std::printf(
       "derivative checks (max |analytic - central difference| / max |entry|, tolerance %.0e):\n"
       "  soft F: Lie gradient %.1e, Lie Hessian %.1e; Ceres Jacobians along Plus %.1e\n"
-      "  hard: effort gradient %.1e, constraint Lie Jacobian %.1e, Lagrangian Lie Hessian %.1e\n",
+      "  hard: effort gradient %.1e, constraint Lie Jacobian %.1e, Lagrangian Lie Hessian %.1e;"
+      " sparse against dense form %.1e\n",
       kDerivativeTolerance, gradient_error, hessian_error, ceres_error, effort_error,
-      jacobian_error, lagrangian_error);
+      jacobian_error, lagrangian_error, sparse_error);
   return std::max({gradient_error, hessian_error, ceres_error, effort_error, jacobian_error,
-                   lagrangian_error}) <= kDerivativeTolerance;
+                   lagrangian_error}) <= kDerivativeTolerance &&
+         sparse_error <= 1e-12;
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -729,14 +783,21 @@ int run() {
   const double soft_seconds = seconds_since(start);
   const Trajectory soft_solution = trajectory_of(soft_point);
 
-  // Ipopt, hard.
-  HardNlp hard(R_target);
+  // Ipopt, hard: with sparse derivatives, and the same NLP with dense ones for comparison.
+  HardNlp hard(R_target, /*sparse=*/true);
   liedyn::LiePoint hard_point = point_of(initial);
   start = std::chrono::steady_clock::now();
   const liedyn::LieIpoptSummary hard_summary =
       liedyn::solve_with_ipopt(hard, hard_point, ipopt_options);
   const double hard_seconds = seconds_since(start);
   const Trajectory hard_solution = trajectory_of(hard_point);
+  HardNlp hard_dense(R_target, /*sparse=*/false);
+  liedyn::LiePoint dense_point = point_of(initial);
+  start = std::chrono::steady_clock::now();
+  const liedyn::LieIpoptSummary dense_summary =
+      liedyn::solve_with_ipopt(hard_dense, dense_point, ipopt_options);
+  const double dense_seconds = seconds_since(start);
+  const Difference sparse_vs_dense = difference(hard_solution, trajectory_of(dense_point));
 
   // F at both soft solutions, by the same function.
   double F_ceres = 0.0, F_ipopt = 0.0;
@@ -762,6 +823,11 @@ int run() {
       hard_summary.converged() ? "converged" : "NOT converged", hard_summary.iterations, E_hard,
       hard_summary.constraint_violation, 1e3 * hard_seconds, hard_summary.message.c_str());
   std::printf(
+      "  the same with dense derivatives: %s, %d iterations, %.0f ms; max differences from the "
+      "sparse solve: rotations %.1e rad, omega %.1e, tau %.1e (relative)\n",
+      dense_summary.converged() ? "converged" : "NOT converged", dense_summary.iterations,
+      1e3 * dense_seconds, sparse_vs_dense.rotation, sparse_vs_dense.omega, sparse_vs_dense.tau);
+  std::printf(
       "soft, Ceres vs Ipopt: F relative difference %.1e (tolerance %.0e); max differences: "
       "rotations %.1e rad, omega %.1e, tau %.1e (relative; tolerance %.0e)\n",
       objective_difference, kObjectiveAgreement, soft_difference.rotation, soft_difference.omega,
@@ -785,6 +851,10 @@ int run() {
   require(ceres_converged, "Ceres (soft) did not converge");
   require(soft_summary.converged(), "Ipopt (soft) did not converge");
   require(hard_summary.converged(), "Ipopt (hard) did not converge");
+  require(dense_summary.converged(), "Ipopt (hard, dense derivatives) did not converge");
+  require(std::max({sparse_vs_dense.rotation, sparse_vs_dense.omega, sparse_vs_dense.tau}) <=
+              kSolutionAgreement,
+          "the sparse and dense forms of the hard problem reach different solutions");
   require(objective_difference <= kObjectiveAgreement,
           "the soft objectives of Ceres and Ipopt differ");
   require(std::max({soft_difference.rotation, soft_difference.omega, soft_difference.tau}) <=
