@@ -138,25 +138,29 @@ class ChartNlp final : public Ipopt::TNLP {
       throw std::invalid_argument(
           "LieIpoptOptions::hessian: \"exact\" but the problem's lagrangian_hessian returns false");
     }
-    if (problem_.sparse() && !lie_jacobian()) return false;
-    const bool dense = !problem_.sparse();
-    for (int r = 0; r < m_; ++r) {
-      for (int c = 0; dense && c < n_; ++c) jacobian_pattern_.add(r, c);
-    }
-    for (int k = 0; !dense && k < jacobian_.outerSize(); ++k) {
-      for (Sparse::InnerIterator it(jacobian_, k); it; ++it) {
-        const auto [first, width] = block(static_cast<int>(it.col()));
-        for (int c = first; c < first + width; ++c) jacobian_pattern_.add(static_cast<int>(it.row()), c);
+    if (!problem_.sparse()) {
+      for (int r = 0; r < m_; ++r) {
+        for (int c = 0; c < n_; ++c) jacobian_pattern_.add(r, c);
       }
-    }
-    if (exact_hessian_) {
-      for (int r = 0; dense && r < n_; ++r) {
+      for (int r = 0; exact_hessian_ && r < n_; ++r) {
         for (int c = 0; c <= r; ++c) hessian_pattern_.add(r, c);
       }
-      for (int k = 0; !dense && k < hessian.outerSize(); ++k) {
-        for (Sparse::InnerIterator it(hessian, k); it; ++it) add_block_pair(static_cast<int>(it.row()), static_cast<int>(it.col()));
+    } else {
+      if (!lie_jacobian()) return false;
+      for (int k = 0; k < jacobian_.outerSize(); ++k) {
+        for (Sparse::InnerIterator it(jacobian_, k); it; ++it) {
+          const auto [first, width] = block(static_cast<int>(it.col()));
+          for (int c = first; c < first + width; ++c) jacobian_pattern_.add(static_cast<int>(it.row()), c);
+        }
       }
-      for (int i = 0; i < rotations_; ++i) add_block_pair(3 * i, 3 * i);
+      if (exact_hessian_) {
+        for (int k = 0; k < hessian.outerSize(); ++k) {
+          for (Sparse::InnerIterator it(hessian, k); it; ++it) {
+            add_block_pair(static_cast<int>(it.row()), static_cast<int>(it.col()));
+          }
+        }
+        for (int i = 0; i < rotations_; ++i) add_block_pair(3 * i, 3 * i);
+      }
     }
     jacobian_pattern_.finish();
     hessian_pattern_.finish();
@@ -180,7 +184,6 @@ class ChartNlp final : public Ipopt::TNLP {
   const VectorXd& multipliers() const { return lambda_; }
   double objective() const { return objective_; }
   const VectorXd& constraint_values() const { return constraints_; }
-  Ipopt::SolverReturn final_status() const { return final_status_; }
   bool warm() const { return warm_; }
   bool exact_hessian() const { return exact_hessian_; }
 
@@ -287,11 +290,10 @@ class ChartNlp final : public Ipopt::TNLP {
     return true;
   }
 
-  void finalize_solution(Ipopt::SolverReturn status, Index, const Number* x, const Number* z_L,
+  void finalize_solution(Ipopt::SolverReturn, Index, const Number* x, const Number* z_L,
                          const Number* z_U, Index, const Number*, const Number* lambda,
                          Number obj_value, const Ipopt::IpoptData*,
                          Ipopt::IpoptCalculatedQuantities*) override {
-    final_status_ = status;
     set(x);
     z_lower_ = Eigen::Map<const VectorXd>(z_L, n_);
     z_upper_ = Eigen::Map<const VectorXd>(z_U, n_);
@@ -430,7 +432,6 @@ class ChartNlp final : public Ipopt::TNLP {
   VectorXd constraints_;
   bool have_gradient_ = false, have_jacobian_ = false, warm_ = false;
   double objective_ = 0.0;
-  Ipopt::SolverReturn final_status_ = Ipopt::UNASSIGNED;
 };
 
 // The largest violation of c_L ≤ c ≤ c_U.
