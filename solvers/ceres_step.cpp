@@ -389,8 +389,10 @@ class CeresStepSolver final : public StepSolver {
       for (const ceres::IterationSummary& it : summary.iterations) {
         if (it.iteration > 0 && it.step_is_successful) {
           // Paper Fig. 4's diagnostics: Ceres's gradient norm ‖x − Plus(x, −g)‖ (for chart
-          // blocks ‖g‖ in the chart's coordinates, like Newton's; about ½‖g‖ for quaternion
-          // blocks) at the start and after the first accepted step of the first round.
+          // blocks ‖g‖ in the chart's coordinates, like Newton's; for the 4-double blocks
+          // (quat's retraction, lie's SO3Manifold) the change of q, 2 sin(‖g‖/4) for a rotation's
+          // g under SO3Manifold, about ½‖g‖ when small) at the start and after the first accepted
+          // step of the first round.
           if (accepted == 0 && std::isnan(report.second_gradient_norm) && iterations == 0) {
             report.second_gradient_norm = it.gradient_norm;
           }
