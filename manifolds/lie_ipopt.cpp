@@ -186,6 +186,7 @@ class ChartNlp final : public Ipopt::TNLP {
   const VectorXd& constraint_values() const { return constraints_; }
   bool warm() const { return warm_; }
   bool exact_hessian() const { return exact_hessian_; }
+  const std::string& error() const { return error_; }
 
   bool get_nlp_info(Index& n, Index& m, Index& nnz_jac_g, Index& nnz_h_lag,
                     IndexStyleEnum& index_style) override {
@@ -250,7 +251,10 @@ class ChartNlp final : public Ipopt::TNLP {
   bool eval_g(Index, const Number* x, bool new_x, Index, Number* g) override {
     if (new_x) set(x);
     VectorXd c(m_);
-    if (!problem_.constraint_values(point_, c, nullptr) || !c.allFinite()) return false;
+    if (!problem_.constraint_values(point_, c, nullptr) || !sized(c, m_, 1, "constraint_values: c") ||
+        !c.allFinite()) {
+      return false;
+    }
     Eigen::Map<VectorXd>(g, m_) = c;
     return true;
   }
@@ -378,7 +382,8 @@ class ChartNlp final : public Ipopt::TNLP {
     if (have_gradient_) return true;
     double value = 0.0;
     gradient_.setZero();
-    have_gradient_ = problem_.objective(point_, value, &gradient_) && gradient_.allFinite();
+    have_gradient_ = problem_.objective(point_, value, &gradient_) &&
+                     sized(gradient_, n_, 1, "objective: the gradient") && gradient_.allFinite();
     return have_gradient_;
   }
   // The constraints' Lie Jacobian at point_, as a sparse matrix whichever way it is given.
@@ -389,14 +394,15 @@ class ChartNlp final : public Ipopt::TNLP {
     if (m_ == 0) {
       have_jacobian_ = true;
     } else if (problem_.sparse()) {
-      have_jacobian_ = problem_.constraint_jacobian(point_, jacobian_) && jacobian_.rows() == m_ &&
-                       jacobian_.cols() == n_;
+      have_jacobian_ = problem_.constraint_jacobian(point_, jacobian_) &&
+                       sized(jacobian_, m_, n_, "constraint_jacobian: the Jacobian");
       jacobian_.makeCompressed();
       have_jacobian_ = have_jacobian_ && finite(jacobian_);
     } else {
       VectorXd c(m_);
       MatrixXd dense = MatrixXd::Zero(m_, n_);
-      have_jacobian_ = problem_.constraint_values(point_, c, &dense) && dense.allFinite();
+      have_jacobian_ = problem_.constraint_values(point_, c, &dense) &&
+                       sized(dense, m_, n_, "constraint_values: the Jacobian") && dense.allFinite();
       jacobian_ = dense.sparseView(0.0, 0.0);
     }
     return have_jacobian_;
@@ -406,15 +412,30 @@ class ChartNlp final : public Ipopt::TNLP {
     H.resize(n_, n_);
     H.setZero();
     if (problem_.sparse()) {
-      const bool given = problem_.lagrangian_hessian(point_, sigma, lambda, H) && H.rows() == n_ &&
-                         H.cols() == n_;
+      const bool given = problem_.lagrangian_hessian(point_, sigma, lambda, H) &&
+                         sized(H, n_, n_, "lagrangian_hessian: the Hessian");
       H.makeCompressed();
       return given && finite(H);
     }
     MatrixXd dense = MatrixXd::Zero(n_, n_);
-    if (!problem_.lagrangian_hessian(point_, sigma, lambda, dense) || !dense.allFinite()) return false;
+    if (!problem_.lagrangian_hessian(point_, sigma, lambda, dense) ||
+        !sized(dense, n_, n_, "lagrangian_hessian: the Hessian") || !dense.allFinite()) {
+      return false;
+    }
     H = dense.sparseView(0.0, 0.0);
     return true;
+  }
+  // False, and the first such error kept for the summary, if the problem resized `a` away from
+  // rows × columns (tangent layout: lie_ipopt.hpp).
+  template <class Matrix>
+  bool sized(const Matrix& a, Eigen::Index rows, Eigen::Index columns, const char* what) {
+    if (a.rows() == rows && a.cols() == columns) return true;
+    if (error_.empty()) {
+      error_ = std::string(what) + " is " + std::to_string(a.rows()) + " × " + std::to_string(a.cols()) +
+               ", expected " + std::to_string(rows) + " × " + std::to_string(columns) +
+               " (3 entries per rotation, then the vector; one row per constraint)";
+    }
+    return false;
   }
   static bool finite(const Sparse& A) {
     return std::all_of(A.valuePtr(), A.valuePtr() + A.nonZeros(), [](double v) { return std::isfinite(v); });
@@ -431,6 +452,7 @@ class ChartNlp final : public Ipopt::TNLP {
   Pattern jacobian_pattern_, hessian_pattern_;
   VectorXd constraints_;
   bool have_gradient_ = false, have_jacobian_ = false, warm_ = false;
+  std::string error_;  // the first malformed answer of the problem (sized)
   double objective_ = 0.0;
 };
 
@@ -465,6 +487,7 @@ LieIpoptSummary solve_with_ipopt(LieNlp& problem, LiePoint& x, const LieIpoptOpt
   if (!nlp->record_patterns(options.hessian)) {
     LieIpoptSummary failed;
     failed.message = "the problem's derivatives cannot be evaluated at the starting point";
+    if (!nlp->error().empty()) failed.message += ": " + nlp->error();
     return failed;
   }
   Ipopt::SmartPtr<Ipopt::IpoptApplication> app = new Ipopt::IpoptApplication();
@@ -507,6 +530,7 @@ LieIpoptSummary solve_with_ipopt(LieNlp& problem, LiePoint& x, const LieIpoptOpt
         summary.iterations >= options.max_iterations) {
       summary.message = std::string("Ipopt: ") + ipopt_status_name(status) + " after " +
                         std::to_string(summary.solves) + " solve(s)";
+      if (!nlp->error().empty()) summary.message += "; the problem's " + nlp->error();
       if (solved && angle > options.recentre_angle) {
         summary.message += "; the last chart moved a rotation by " + std::to_string(angle) +
                            " rad (> recentre_angle) with no re-centring left";

@@ -56,7 +56,8 @@ struct LiePoint {
 };
 
 // Your problem. Every evaluation may return false when it cannot be evaluated at x (Ipopt
-// then shortens its step); derivatives are written into the arrays given, which are sized.
+// then shortens its step); derivatives are written into the arrays given, which are sized. An
+// output resized to another shape is an evaluation error too, named in the summary's message.
 class LieNlp {
  public:
   virtual ~LieNlp() = default;

@@ -439,6 +439,48 @@ TEST(LieIpopt, RejectsBadOptionsAndPoints) {
   EXPECT_THROW(solve_with_ipopt(p, x, file), std::invalid_argument);
 }
 
+// A problem that resizes what it is given gets an evaluation error naming what, not a
+// read past the end.
+class WrongSizes final : public LieNlp {
+ public:
+  TwoRotations inner = make_problem(12);
+  bool short_gradient = false;
+  bool wide_jacobian = false;
+  int constraints() const override { return inner.constraints(); }
+  bool objective(const LiePoint& x, double& f, VectorXd* g) override {
+    inner.objective(x, f, g);
+    if (g != nullptr && short_gradient) g->conservativeResize(g->size() - 1);
+    return true;
+  }
+  bool constraint_values(const LiePoint& x, VectorXd& c, MatrixXd* J) override {
+    inner.constraint_values(x, c, J);
+    if (J != nullptr && wide_jacobian) J->conservativeResize(J->rows(), J->cols() + 3);
+    return true;
+  }
+};
+
+TEST(LieIpopt, ProblemsThatResizeTheirOutputsAreReported) {
+  {
+    WrongSizes p;
+    p.short_gradient = true;
+    LiePoint x = start_point(12);
+    const LieIpoptSummary s = solve_with_ipopt(p, x);
+    EXPECT_FALSE(s.converged());
+    EXPECT_NE(s.message.find("objective: the gradient is 8 × 1, expected 9 × 1"), std::string::npos)
+        << s.message;
+  }
+  {
+    WrongSizes p;
+    p.wide_jacobian = true;
+    LiePoint x = start_point(12);
+    const LieIpoptSummary s = solve_with_ipopt(p, x);
+    EXPECT_FALSE(s.converged());
+    EXPECT_NE(s.message.find("constraint_values: the Jacobian is 1 × 12, expected 1 × 9"),
+              std::string::npos)
+        << s.message;
+  }
+}
+
 TEST(LieIpopt, ReportsAnIterationLimit) {
   TwoRotations p = make_problem(9);
   LiePoint x = start_point(9);
