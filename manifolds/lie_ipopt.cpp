@@ -381,7 +381,7 @@ class ChartNlp final : public Ipopt::TNLP {
   bool lie_gradient() {
     if (have_gradient_) return true;
     double value = 0.0;
-    gradient_.setZero();
+    gradient_.setZero(n_);  // sized again: the problem may have resized it last time
     have_gradient_ = problem_.objective(point_, value, &gradient_) &&
                      sized(gradient_, n_, 1, "objective: the gradient") && gradient_.allFinite();
     return have_gradient_;
