@@ -504,6 +504,25 @@ LieIpoptSummary solve_with_ipopt(LieNlp& problem, LiePoint& x, const LieIpoptOpt
   // The checker moves the starting point by up to this much per variable: within the chart.
   o.SetNumericValue("point_perturbation_radius", 0.1);
   o.SetNumericValue("tol", options.tolerance);
+  // Further options: not those the fields above own or the solve loop sets.
+  const auto check = [](const std::string& name, bool accepted) {
+    static const std::map<std::string, std::string> owned = {
+        {"tol", "tolerance"},           {"max_iter", "max_iterations"},
+        {"hessian_approximation", "hessian"}, {"print_level", "print_level"},
+        {"derivative_test", "derivative_test"}, {"output_file", "output_file"},
+        {"warm_start_init_point", "(set by the re-centring)"}};
+    if (const auto it = owned.find(name); it != owned.end()) {
+      throw std::invalid_argument("LieIpoptOptions: the Ipopt option \"" + name +
+                                  "\" is set through LieIpoptOptions::" + it->second);
+    }
+    if (!accepted) {
+      throw std::invalid_argument("LieIpoptOptions: Ipopt refuses the option \"" + name +
+                                  "\" (unknown, of another type, or its value out of range)");
+    }
+  };
+  for (const auto& [name, value] : options.ipopt_strings) check(name, o.SetStringValue(name, value));
+  for (const auto& [name, value] : options.ipopt_integers) check(name, o.SetIntegerValue(name, value));
+  for (const auto& [name, value] : options.ipopt_numbers) check(name, o.SetNumericValue(name, value));
   // Initialize("") reads no options file; in Ipopt 3.11 it fails only when the output file
   // cannot be opened.
   if (app->Initialize("") != Ipopt::Solve_Succeeded) {

@@ -43,6 +43,7 @@
 
 #include <Eigen/Core>
 #include <Eigen/SparseCore>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -105,6 +106,14 @@ struct LieIpoptOptions {
   std::string derivative_test = "none";
   // If not empty, Ipopt also writes its log there, at print level max(print_level, 5).
   std::string output_file;
+  // Further Ipopt options by name (Ipopt's option list; e.g. {"mu_strategy", "adaptive"},
+  // {"acceptable_tol", 1e-6}). solve_with_ipopt throws std::invalid_argument naming an option
+  // that Ipopt refuses (unknown, of another type, out of range) or that a field above owns
+  // (tol, max_iter, hessian_approximation, print_level, derivative_test, output_file) or the
+  // re-centring sets (warm_start_init_point).
+  std::map<std::string, std::string> ipopt_strings;
+  std::map<std::string, int> ipopt_integers;
+  std::map<std::string, double> ipopt_numbers;
 
   // Throws std::invalid_argument naming the field and the rule.
   void validate() const;

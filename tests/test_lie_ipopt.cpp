@@ -158,6 +158,16 @@ std::filesystem::path log_path(const std::string& name) {
          ("liedyn_lie_ipopt_" + name + "_" + std::to_string(::getpid()) + ".txt");
 }
 
+// The text of an Ipopt log file, which is then removed.
+std::string take_log(const std::string& path) {
+  std::ifstream in(path);
+  std::stringstream text;
+  text << in.rdbuf();
+  in.close();
+  std::filesystem::remove(path);
+  return text.str();
+}
+
 // ‖σ∇f + Aᵀλ‖∞ in Lie coordinates: zero at a KKT point without active bounds.
 double lie_kkt_residual(TwoRotations& p, const LiePoint& x, const VectorXd& lambda) {
   double f;
@@ -181,11 +191,7 @@ void expect_checker_finds_no_errors(LieNlp& problem, LiePoint x) {
   options.output_file = log_path("checker").string();
   const LieIpoptSummary summary = solve_with_ipopt(problem, x, options);
   EXPECT_TRUE(summary.converged()) << summary.message;
-  std::ifstream in(options.output_file);
-  std::stringstream text;
-  text << in.rdbuf();
-  std::filesystem::remove(options.output_file);
-  const std::string log = text.str();
+  const std::string log = take_log(options.output_file);
   EXPECT_EQ(count(log, "Starting derivative checker for second derivatives."), summary.solves);
   EXPECT_EQ(count(log, "No errors detected by derivative checker."), summary.solves)
       << log.substr(0, 6000);
@@ -479,6 +485,45 @@ TEST(LieIpopt, ProblemsThatResizeTheirOutputsAreReported) {
               std::string::npos)
         << s.message;
   }
+}
+
+TEST(LieIpopt, PassesFurtherIpoptOptionsAndRefusesUnknownOnes) {
+  TwoRotations p = make_problem(13);
+  LiePoint x = start_point(13);
+  LieIpoptOptions options;
+  options.ipopt_strings["mu_strategy"] = "adaptive";
+  options.ipopt_integers["max_soc"] = 2;
+  options.ipopt_numbers["bound_push"] = 1e-3;
+  EXPECT_TRUE(solve_with_ipopt(p, x, options).converged());
+  // They reach Ipopt: it lists them among the options set (print_user_options, itself one).
+  LieIpoptOptions checked;
+  checked.output_file = log_path("options").string();
+  checked.ipopt_strings["check_derivatives_for_naninf"] = "yes";
+  checked.ipopt_strings["print_user_options"] = "yes";
+  checked.ipopt_numbers["derivative_test_tol"] = 1e-3;
+  x = start_point(13);
+  EXPECT_TRUE(solve_with_ipopt(p, x, checked).converged());
+  // Ipopt's list of user-set options: name, value, and whether it was used.
+  const std::string log = take_log(checked.output_file);
+  EXPECT_NE(log.find("check_derivatives_for_naninf = yes"), std::string::npos) << log.substr(0, 3000);
+  EXPECT_NE(log.find("derivative_test_tol = 0.001"), std::string::npos) << log.substr(0, 3000);
+  LieIpoptOptions owned;
+  owned.ipopt_integers["max_iter"] = 1;  // LieIpoptOptions::max_iterations
+  x = start_point(13);
+  EXPECT_THROW(solve_with_ipopt(p, x, owned), std::invalid_argument);
+  LieIpoptOptions unknown;
+  unknown.ipopt_strings["no_such_option"] = "yes";
+  x = start_point(13);
+  try {
+    solve_with_ipopt(p, x, unknown);
+    ADD_FAILURE() << "accepted an unknown option";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("no_such_option"), std::string::npos) << e.what();
+  }
+  LieIpoptOptions wrong_type;
+  wrong_type.ipopt_strings["bound_push"] = "small";  // a number
+  x = start_point(13);
+  EXPECT_THROW(solve_with_ipopt(p, x, wrong_type), std::invalid_argument);
 }
 
 TEST(LieIpopt, ReportsAnIterationLimit) {
