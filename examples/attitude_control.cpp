@@ -772,37 +772,38 @@ int run() {
   const bool ceres_converged =
       ceres_summary.IsSolutionUsable() && ceres_summary.termination_type == ceres::CONVERGENCE;
 
-  // Ipopt, soft.
+  // Ipopt from the same guess, exact Hessians: the soft problem, the hard one with sparse
+  // derivatives, and the same hard NLP with dense ones for comparison.
+  struct IpoptRun {
+    liedyn::LieIpoptSummary summary;
+    Trajectory solution;
+    double seconds = 0.0;
+  };
+  const auto solve = [&](liedyn::LieNlp& problem) {
+    liedyn::LiePoint x = point_of(initial);
+    liedyn::LieIpoptOptions options;
+    options.hessian = "exact";
+    const auto t0 = std::chrono::steady_clock::now();
+    IpoptRun run;
+    run.summary = liedyn::solve_with_ipopt(problem, x, options);
+    run.seconds = seconds_since(t0);
+    run.solution = trajectory_of(x);
+    return run;
+  };
   SoftNlp soft(R_target);
-  liedyn::LiePoint soft_point = point_of(initial);
-  liedyn::LieIpoptOptions ipopt_options;
-  ipopt_options.hessian = "exact";
-  start = std::chrono::steady_clock::now();
-  const liedyn::LieIpoptSummary soft_summary =
-      liedyn::solve_with_ipopt(soft, soft_point, ipopt_options);
-  const double soft_seconds = seconds_since(start);
-  const Trajectory soft_solution = trajectory_of(soft_point);
-
-  // Ipopt, hard: with sparse derivatives, and the same NLP with dense ones for comparison.
-  HardNlp hard(R_target, /*sparse=*/true);
-  liedyn::LiePoint hard_point = point_of(initial);
-  start = std::chrono::steady_clock::now();
-  const liedyn::LieIpoptSummary hard_summary =
-      liedyn::solve_with_ipopt(hard, hard_point, ipopt_options);
-  const double hard_seconds = seconds_since(start);
-  const Trajectory hard_solution = trajectory_of(hard_point);
-  HardNlp hard_dense(R_target, /*sparse=*/false);
-  liedyn::LiePoint dense_point = point_of(initial);
-  start = std::chrono::steady_clock::now();
-  const liedyn::LieIpoptSummary dense_summary =
-      liedyn::solve_with_ipopt(hard_dense, dense_point, ipopt_options);
-  const double dense_seconds = seconds_since(start);
-  const Difference sparse_vs_dense = difference(hard_solution, trajectory_of(dense_point));
+  HardNlp hard(R_target, /*sparse=*/true), hard_dense(R_target, /*sparse=*/false);
+  const IpoptRun soft_run = solve(soft), hard_run = solve(hard), dense_run = solve(hard_dense);
+  const liedyn::LieIpoptSummary &soft_summary = soft_run.summary, &hard_summary = hard_run.summary,
+                                &dense_summary = dense_run.summary;
+  const Trajectory &soft_solution = soft_run.solution, &hard_solution = hard_run.solution;
+  const double soft_seconds = soft_run.seconds, hard_seconds = hard_run.seconds,
+               dense_seconds = dense_run.seconds;
+  const Difference sparse_vs_dense = difference(hard_solution, dense_run.solution);
 
   // F at both soft solutions, by the same function.
   double F_ceres = 0.0, F_ipopt = 0.0;
   soft.objective(point_of(ceres_solution), F_ceres, nullptr);
-  soft.objective(soft_point, F_ipopt, nullptr);
+  soft.objective(point_of(soft_solution), F_ipopt, nullptr);
   const double E_hard = effort(hard_solution);
   const double objective_difference = std::abs(F_ceres - F_ipopt) / std::max(F_ceres, F_ipopt);
   const Difference soft_difference = difference(ceres_solution, soft_solution);

@@ -3,19 +3,20 @@
 #include <Eigen/Core>
 
 #include "quaternion.hpp"
+#include "so3_manifold.hpp"
 
 namespace liedyn {
 
 namespace {
 using Vector3 = Eigen::Vector3d;
 using Vector4 = Eigen::Vector4d;
-template <int Rows, int Cols>
-using RowMajor = Eigen::Matrix<double, Rows, Cols, Eigen::RowMajor>;
 }  // namespace
 
+// The retraction and SO3Manifold's exponential agree to first order at δ = 0 (both move q
+// along Q(q) δ), so their Jacobians are SO3Manifold's.
 UnitQuaternionRetraction::LieToAmbient UnitQuaternionRetraction::lie_to_ambient(
     const double* q) {
-  return 4.0 * quat::rate_matrix(Eigen::Map<const Vector4>(q)).transpose();
+  return SO3Manifold::lie_to_ambient(q);
 }
 
 bool UnitQuaternionRetraction::Plus(const double* x, const double* delta,
@@ -26,8 +27,7 @@ bool UnitQuaternionRetraction::Plus(const double* x, const double* delta,
 }
 
 bool UnitQuaternionRetraction::PlusJacobian(const double* x, double* jacobian) const {
-  Eigen::Map<RowMajor<4, 3>>{jacobian} = quat::rate_matrix(Eigen::Map<const Vector4>(x));
-  return true;
+  return SO3Manifold().PlusJacobian(x, jacobian);
 }
 
 bool UnitQuaternionRetraction::Minus(const double* y, const double* x, double* y_minus_x) const {
@@ -44,8 +44,7 @@ bool UnitQuaternionRetraction::Minus(const double* y, const double* x, double* y
 }
 
 bool UnitQuaternionRetraction::MinusJacobian(const double* x, double* jacobian) const {
-  Eigen::Map<RowMajor<3, 4>>{jacobian} = lie_to_ambient(x);
-  return true;
+  return SO3Manifold().MinusJacobian(x, jacobian);
 }
 
 }  // namespace liedyn

@@ -61,8 +61,10 @@ bool SO3Manifold::RightMultiplyByPlusJacobian(const double* x, int num_rows,
   const PlusJacobianMatrix Q = quat::rate_matrix(Eigen::Map<const Vector4>(x));
   const Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, 4, Eigen::RowMajor>> A(ambient_matrix,
                                                                                   num_rows, 4);
-  Eigen::Map<Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>>(tangent_matrix, num_rows, 3) =
-      A * Q;
+  // noalias: Ceres calls this per residual block and iteration; without it Eigen would
+  // evaluate the product into a heap temporary first.
+  Eigen::Map<Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>>(tangent_matrix, num_rows, 3)
+      .noalias() = A * Q;
   return true;
 }
 

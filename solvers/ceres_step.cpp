@@ -70,12 +70,10 @@ struct Parameters {
         T.leftCols<3>() = J;
         return R;
       }
-      case Storage::kQuaternion:
-        T.leftCols<4>() = UnitQuaternionRetraction::lie_to_ambient(p);
-        return quat::rotation(Eigen::Map<const Eigen::Vector4d>(p));
+      case Storage::kQuaternion:  // the retraction and SO3Manifold differ only in Plus
       case Storage::kSO3:
         T.leftCols<4>() = SO3Manifold::lie_to_ambient(p);
-        return SO3Manifold::rotation(p);
+        return quat::rotation(Eigen::Map<const Eigen::Vector4d>(p));
       case Storage::kPoint: break;
     }
     return Matrix3::Identity();

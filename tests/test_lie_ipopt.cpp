@@ -397,31 +397,21 @@ TEST(LieIpopt, RejectsBadOptionsAndPoints) {
       EXPECT_NE(std::string(e.what()).find(field), std::string::npos) << e.what();
     }
   };
-  LieIpoptOptions o;
-  EXPECT_NO_THROW(o.validate());
-  o.tolerance = 0.0;
-  expect_invalid(o, "tolerance");
-  o = {};
-  o.tolerance = std::numeric_limits<double>::quiet_NaN();
-  expect_invalid(o, "tolerance");
-  o = {};
-  o.max_iterations = 0;
-  expect_invalid(o, "max_iterations");
-  o = {};
-  o.max_recentrings = -1;
-  expect_invalid(o, "max_recentrings");
-  o = {};
-  o.recentre_angle = 4.0;
-  expect_invalid(o, "recentre_angle");
-  o = {};
-  o.hessian = "bfgs";
-  expect_invalid(o, "hessian");
-  o = {};
-  o.print_level = 13;
-  expect_invalid(o, "print_level");
-  o = {};
-  o.derivative_test = "third-order";
-  expect_invalid(o, "derivative_test");
+  EXPECT_NO_THROW(LieIpoptOptions{}.validate());
+  const std::pair<const char*, void (*)(LieIpoptOptions&)> bad[] = {
+      {"tolerance", [](LieIpoptOptions& o) { o.tolerance = 0.0; }},
+      {"tolerance", [](LieIpoptOptions& o) { o.tolerance = std::numeric_limits<double>::quiet_NaN(); }},
+      {"max_iterations", [](LieIpoptOptions& o) { o.max_iterations = 0; }},
+      {"max_recentrings", [](LieIpoptOptions& o) { o.max_recentrings = -1; }},
+      {"recentre_angle", [](LieIpoptOptions& o) { o.recentre_angle = 4.0; }},
+      {"hessian", [](LieIpoptOptions& o) { o.hessian = "bfgs"; }},
+      {"print_level", [](LieIpoptOptions& o) { o.print_level = 13; }},
+      {"derivative_test", [](LieIpoptOptions& o) { o.derivative_test = "third-order"; }}};
+  for (const auto& [field, spoil] : bad) {
+    LieIpoptOptions o;
+    spoil(o);
+    expect_invalid(o, field);
+  }
 
   TwoRotations p = make_problem(8);
   LiePoint x = start_point(8);
