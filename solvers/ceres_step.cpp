@@ -73,7 +73,9 @@ struct Parameters {
       case Storage::kQuaternion:  // the retraction and SO3Manifold differ only in Plus
       case Storage::kSO3:
         T.leftCols<4>() = SO3Manifold::lie_to_ambient(p);
-        return quat::rotation(Eigen::Map<const Eigen::Vector4d>(p));
+        // SO3Manifold's rotation normalises q first (what its users get), the retraction's not.
+        return b.storage == Storage::kSO3 ? SO3Manifold::rotation(p)
+                                          : quat::rotation(Eigen::Map<const Eigen::Vector4d>(p));
       case Storage::kPoint: break;
     }
     return Matrix3::Identity();

@@ -56,7 +56,7 @@ struct CeresOptions {
   // "manifold" — 4 doubles, a unit quaternion on liedyn::SO3Manifold
   // (manifolds/so3_manifold.hpp); "chart" — 3 doubles θ, R = exp(θ) R₀ re-centred at every
   // solve. Ignored by rotvec and quat, which have their own storage. The manifold is the
-  // default: measured against the chart, fewer stalls at the same or less time on rods and
+  // default: measured against the chart, fewer stalls in about the same or less time on rods and
   // through contact (docs/design.md §9.3).
   std::string lie_blocks = "manifold";
   // Ceres's per-iteration progress on stdout.
