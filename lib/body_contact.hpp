@@ -165,6 +165,7 @@ struct BodyContact : BodySample {
 struct BodyFriction : BodySample {
   static constexpr int kBlocks = 4;
   static constexpr const char* kName = "body_friction";
+  static constexpr bool kEndOfStep = true;  // term.hpp
   double coefficient = 0.0;  // μ, A's
   double epsilon = 0.0;      // ε = ε_v h, m, > 0
 
@@ -227,6 +228,7 @@ struct BasicEdgeBodyFriction : EdgeBodySample {
   static_assert(N >= 1 && N <= kMaxEdgeQuadraturePoints, "Gauss–Legendre points per edge");
   static constexpr int kBlocks = 4;
   static constexpr const char* kName = "edge_body_friction";
+  static constexpr bool kEndOfStep = true;  // term.hpp
   static constexpr int kQuadraturePoints = N;
   double coefficient = 0.0;  // μ, the rod's
   double epsilon = 0.0;      // ε = ε_v h, m, > 0

@@ -180,6 +180,7 @@ struct BasicEdgeFriction : EdgeEdgeSample {
   static_assert(N >= 1 && N <= kMaxEdgeQuadraturePoints, "Gauss–Legendre points per edge");
   static constexpr int kBlocks = 4;
   static constexpr const char* kName = "edge_friction";
+  static constexpr bool kEndOfStep = true;  // term.hpp
   static constexpr int kQuadraturePoints = N;
   std::array<double, 2> coefficient{0.0, 0.0};  // μ of a's samples, of b's
   std::array<double, 2> epsilon{0.0, 0.0};      // ε = ε_v h of a's samples, of b's, m, > 0

@@ -73,6 +73,7 @@ void friction_residual(const T& term, const State& q, typename T::Residual& r,
 struct Friction : ContactSample {
   static constexpr int kBlocks = 2;
   static constexpr const char* kName = "friction";
+  static constexpr bool kEndOfStep = true;  // term.hpp
   double coefficient = 0.0;  // μ
   double epsilon = 0.0;      // ε = ε_v h, m, > 0
 

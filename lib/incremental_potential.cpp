@@ -21,6 +21,82 @@ void IncrementalPotential::begin_step(const State& previous, const Step& previou
       for (T& t : terms) t.begin_frame(frame);
     }
   });
+  if (integrator_ != Integrator::kTrapezoidal) return;
+  // The history terms' fields (lib/history.hpp). At frame 1 the history is the initial
+  // velocities: the trapezoidal rule's first step, c = ¼ ∇V(q_0) − π_0/h.
+  const bool first = frame <= 1;
+  weighted_terms_gradient(previous, gradient_previous_);
+  if (!first) {
+    older_ = previous;  // same sizes after the first step: no allocation
+    for (std::size_t i = 0; i < older_.points.size(); ++i) older_.points[i] -= previous_step.points[i];
+    for (std::size_t j = 0; j < older_.rotations.size(); ++j) {
+      older_.rotations[j] = previous_step.rotations[j].transpose() * previous.rotations[j];
+    }
+    weighted_terms_gradient(older_, gradient_older_);
+  }
+  const auto lagged = [&](int offset) -> Vector3 {
+    if (first) return 0.25 * gradient_previous_.segment<3>(offset);
+    return 0.5 * gradient_previous_.segment<3>(offset) + 0.25 * gradient_older_.segment<3>(offset);
+  };
+  for (PointHistory& t : terms<PointHistory>()) t.field = lagged(t.offsets[0]);
+  const std::vector<RotationalInertia>& inertia = terms<RotationalInertia>();
+  std::vector<RotationHistory>& history = terms<RotationHistory>();
+  for (std::size_t t = 0; t < history.size(); ++t) {
+    const Matrix3& R = previous.rotations[history[t].rotation];
+    const Matrix3& dR = previous_step.rotations[history[t].rotation];
+    const Matrix3& J = inertia[t].J_over_h2;  // J/h²
+    // μ/h of the previous step (gradient units, ×h²/h² …): 2 vee(R_{k−1} J R_{k−2}ᵀ)/h² with
+    // R_{k−2}ᵀ = R_{k−1}ᵀ ΔR; at frame 1, π_0 h/h² = R_0 I_b R_0ᵀ log(ΔR_0)/h², I_b = tr(J) 1 − J.
+    const Vector3 momentum =
+        first ? Vector3(R * (J.trace() * Matrix3::Identity() - J) * R.transpose() * so3::log(dR))
+              : Vector3(2.0 * so3::vee(R * J * R.transpose() * dR));
+    history[t].field = lagged(history[t].offsets[0]) - momentum;
+    history[t].reference = so3::orthonormalize(dR * R);  // the simulator's first iterate
+  }
+}
+
+void IncrementalPotential::set_integrator(Integrator integrator, int dofs) {
+  integrator_ = integrator;
+  if (integrator != Integrator::kTrapezoidal) return;
+  state_weight_ = 0.25;
+  gradient_previous_.setZero(dofs);
+  gradient_older_.setZero(dofs);
+  for (const TranslationalInertia& t : terms<TranslationalInertia>()) {
+    PointHistory h;
+    h.offsets = t.offsets;
+    h.point = t.point;
+    add(h);
+  }
+  for (RotationalInertia& t : terms<RotationalInertia>()) {
+    t.variational = true;
+    RotationHistory h;
+    h.offsets = t.offsets;
+    h.rotation = t.rotation;
+    add(h);
+  }
+}
+
+double IncrementalPotential::rereference_history(const State& q) {
+  double moved = 0.0;
+  for (RotationHistory& t : terms<RotationHistory>()) moved = std::max(moved, t.rereference(q));
+  return moved;
+}
+
+void IncrementalPotential::weighted_terms_gradient(const State& q, Eigen::VectorXd& g) const {
+  g.setZero();
+  for_each_term_vector([&](const auto& terms) {
+    using T = typename std::decay_t<decltype(terms)>::value_type;
+    if constexpr (!EndOfStep<T>) {
+      LocalGradient<T::kBlocks> g_local;
+      for (const T& t : terms) {
+        if (weight(t) == 1.0) continue;  // an exact constraint
+        t.evaluate(q, &g_local, nullptr);
+        static_for<T::kBlocks>([&](auto i) {
+          if (t.offsets[i] >= 0) g.template segment<3>(t.offsets[i]) += g_local.template segment<3>(3 * i);
+        });
+      }
+    }
+  });
 }
 
 void IncrementalPotential::set_load_scale(double lambda) {
@@ -35,7 +111,7 @@ void IncrementalPotential::set_load_scale(double lambda) {
 double IncrementalPotential::value(const State& q) const {
   double value = 0.0;
   for_each_term_vector([&](const auto& terms) {
-    for (const auto& term : terms) value += term.evaluate(q, nullptr, nullptr);
+    for (const auto& term : terms) value += weight(term) * term.evaluate(q, nullptr, nullptr);
   });
   return value;
 }
@@ -660,6 +736,9 @@ std::vector<Component> build_components(const Model& model, const std::vector<bo
   add_body_contact_terms(model, key, candidates, point_offset, rotation_offset, component_of, components);
   add_edge_contact_terms(model, key, candidates, dofs, components);
   add_rod_body_contact_terms(model, key, candidates, dofs, components);
+  if (!model.static_equilibrium) {
+    for (Component& c : components) c.potential.set_integrator(model.integrator, c.dofs);
+  }
   return components;
 }
 

@@ -1,6 +1,8 @@
 #pragma once
-// The backward-Euler incremental potential Ψ(q_k; q_{k−1}, Δq_{k−1}) (paper §4.2):
-//   Ψ = Σ inertia terms + Σ potentials (gravity, forces, torques, springs).
+// The incremental potential Ψ(q_k; q_{k−1}, Δq_{k−1}) of a time step (paper §4.2):
+//   Ψ = Σ inertia terms + Σ potentials (gravity, forces, torques, springs)
+// under backward Euler; under the trapezoidal integrator (Model::Integrator) the potentials
+// of the state count ¼ and history terms carry the rest (lib/history.hpp, weight() below).
 // One IncrementalPotential per independent component of a model (bodies not coupled by
 // springs are minimised separately). A component composes exactly the term types its
 // scene uses: each type lives in its own vector, and an empty vector costs nothing.
@@ -22,6 +24,7 @@
 #include "contact.hpp"
 #include "edge_contact.hpp"
 #include "friction.hpp"
+#include "history.hpp"
 #include "inertia.hpp"
 #include "joint_limits.hpp"
 #include "joint_terms.hpp"
@@ -48,7 +51,8 @@ class IncrementalPotential {
   // The one list of term types (term.hpp). Every consumer — assembly, begin_step, load
   // scaling, energy, the adjoint, Ceres's residual blocks — iterates it and dispatches on the
   // terms' capabilities; a new term type is added here and in the builder that creates it.
-  using TermTypes = std::tuple<TranslationalInertia, RotationalInertia, Gravity, ConstantForce,
+  using TermTypes = std::tuple<TranslationalInertia, RotationalInertia, PointHistory,
+                               RotationHistory, Gravity, ConstantForce,
                                ConstantTorque, RegionForce, Spring, RodStretch, RodShear,
                                RodBendTwist, CableSegment, JointPoint, JointLine, JointAlignment, JointWeld,
                                JointMotor, JointForceMotor, JointLimit<HingeAngle>,
@@ -82,8 +86,35 @@ class IncrementalPotential {
 
   // Fixes the per-step data (x̃, R̃, R_{k−1}) from the previous state and step, and the
   // scheduled quantities (forces, torques, cable tensions, rest Darboux vectors; term.hpp) of
-  // step `frame` = k ≥ 1, the step that produces q_k.
+  // step `frame` = k ≥ 1, the step that produces q_k. Under the trapezoidal integrator also
+  // the history terms' fields (lib/history.hpp): two gradient assemblies of the weighted
+  // terms, at q_{k−1} and q_{k−2} (one at frame 1, whose history is the initial velocities).
   void begin_step(const State& previous, const Step& previous_step, int frame = 1);
+
+  // The time integrator (Model::Integrator) of a dynamic step, once, after the terms are
+  // added: the trapezoidal one adds a history term beside each inertia term and weights the
+  // other terms (weight()). `dofs` is the component's tangent size.
+  void set_integrator(Integrator integrator, int dofs);
+  Integrator integrator() const { return integrator_; }
+  // The factor of term t in Ψ: 1, or ¼ under the trapezoidal integrator for a term that is
+  // neither EndOfStep (term.hpp) nor an exact Constraint (its force is weighted over three
+  // states, the history holding the other ¾). Every consumer of a term's value, gradient,
+  // Hessian or residual applies it (assembly, value(), the Ceres forms).
+  template <class T>
+  double weight(const T& t) const {
+    if constexpr (EndOfStep<T>) {
+      return 1.0;
+    } else if constexpr (Constraint<T>) {
+      return t.exact ? 1.0 : state_weight_;
+    } else {
+      return state_weight_;
+    }
+  }
+  // Trapezoidal: moves every rotation history's reference to q (RotationHistory::rereference)
+  // and returns the largest angle one moved, 0 without any (StepSolver::solve re-solves while
+  // it exceeds the tolerance).
+  double rereference_history(const State& q);
+  bool has_rotation_history() const { return !terms<RotationHistory>().empty(); }
 
   // Multiplies every load (gravity, forces, torques) by λ (static load stepping).
   void set_load_scale(double lambda);
@@ -200,6 +231,17 @@ class IncrementalPotential {
       }
     });
   }
+  // Σ ∇Ψ_t over the weighted terms (weight() ≠ 1 under the trapezoidal integrator), unweighted,
+  // at q, in the component's tangent layout (g sized by the caller).
+  void weighted_terms_gradient(const State& q, Eigen::VectorXd& g) const;
+
+  Integrator integrator_ = Integrator::kBackwardEuler;
+  double state_weight_ = 1.0;  // weight() of the terms of the state
+  // Trapezoidal scratch, sized by set_integrator: the weighted terms' gradients at q_{k−1}
+  // and q_{k−2}, and the whole state q_{k−2}.
+  Eigen::VectorXd gradient_previous_, gradient_older_;
+  State older_;
+
   template <class Tuple>
   struct VectorsOf;
   template <class... Ts>
@@ -276,7 +318,12 @@ double IncrementalPotential::add_terms(const State& q, Vector& g, Sink& sink, Pa
     const std::size_t end = part.count == 1 ? n : n * (part.index + 1) / part.count;
     for (std::size_t t = begin; t < end; ++t) {
       const Term& term = terms[t];
-      const double term_value = term.evaluate(q, &g_local, &H_local);
+      double term_value = term.evaluate(q, &g_local, &H_local);
+      if (const double w = weight(term); w != 1.0) {
+        term_value *= w;
+        g_local *= w;
+        H_local *= w;
+      }
       value += term_value;
       if (magnitude != nullptr) {
         const double ambient_gradient =

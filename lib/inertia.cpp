@@ -67,6 +67,10 @@ void TranslationalInertia::residual(const State& q, Residual& r, ResidualJacobia
 
 void RotationalInertia::begin_step(const State& previous, const Step& previous_step) {
   const Matrix3& R_prev = previous.rotations[rotation];
+  if (variational) {
+    R_tilde = R_prev;
+    return;
+  }
   R_tilde = (2.0 * Matrix3::Identity() - previous_step.rotations[rotation].transpose()) * R_prev;
 }
 
@@ -94,10 +98,11 @@ double RotationalInertia::evaluate(const State& q, LocalGradient<1>* g,
   return 0.5 * value;
 }
 
-void RotationalInertia::residual(const State& q, Residual& r, ResidualJacobian* J) const {
+void RotationalInertia::residual(const State& q, Residual& r, ResidualJacobian* J,
+                                 const Matrix3& shift) const {
   const Matrix3& R = q.rotations[rotation];
-  // r = vec((R − R̃) J^½/h), column k in rows 3k…3k+2.
-  Eigen::Map<Matrix3>(r.data()) = (R - R_tilde) * sqrt_J_over_h;
+  // r = vec((R − R̃ − S) J^½/h), column k in rows 3k…3k+2.
+  Eigen::Map<Matrix3>(r.data()) = (R - R_tilde - shift) * sqrt_J_over_h;
   if (J != nullptr) {
     const Matrix3 C = R * sqrt_J_over_h;  // columns c_k
     for (int k = 0; k < 3; ++k) {

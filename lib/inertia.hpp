@@ -41,6 +41,7 @@ Matrix3 psd_sqrt(const Matrix3& A);
 struct TranslationalInertia {
   static constexpr int kBlocks = 1;
   static constexpr const char* kName = "translational_inertia";
+  static constexpr bool kEndOfStep = true;  // term.hpp
   std::array<int, kBlocks> offsets{-1};
   int point = -1;
   double mass_over_h2 = 0.0;  // m/h²
@@ -74,6 +75,7 @@ struct TranslationalInertia {
 struct RotationalInertia {
   static constexpr int kBlocks = 1;
   static constexpr const char* kName = "rotational_inertia";
+  static constexpr bool kEndOfStep = true;  // term.hpp
   std::array<int, kBlocks> offsets{-1};
   int rotation = -1;
   Matrix3 J_over_h2 = Matrix3::Zero();  // J/h²
@@ -81,7 +83,12 @@ struct RotationalInertia {
   // J^½/h = psd_sqrt(J/h²), for residual() only; set beside J_over_h2 (build_components).
   Matrix3 sqrt_J_over_h = Matrix3::Zero();
 
-  // R̃ = (2I − ΔR_{k−1}ᵀ) R_{k−1} = 2R_{k−1} − R_{k−2}   (10)
+  // The trapezoidal integrator's discretisation (lib/history.hpp): R̃ = R_{k−1}, the momentum
+  // of the previous step being in the rotation's history term. Set by
+  // IncrementalPotential::set_integrator.
+  bool variational = false;
+
+  // R̃ = (2I − ΔR_{k−1}ᵀ) R_{k−1} = 2R_{k−1} − R_{k−2}   (10),  or R_{k−1} (variational)
   void begin_step(const State& previous, const Step& previous_step);
   double evaluate(const State& q, LocalGradient<1>* g, LocalHessian<1>* H) const;
 
@@ -105,7 +112,10 @@ struct RotationalInertia {
   // r = vec((R − R̃) J^½/h) column-major: r(3k + i) = ((R − R̃) sqrt_J_over_h)(i, k), and
   // ½‖r‖² = ½ tr(D J Dᵀ)/h² = evaluate()'s value (the constant is 0).
   // J rows 3k…3k+2 = −hat(c_k), c_k column k of R J^½/h (derivation at the top).
-  void residual(const State& q, Residual& r, ResidualJacobian* J) const;
+  // With `shift` S, R̃ + S in place of R̃: −tr(R J (R̃ + S)ᵀ)/h² adds −tr(R J Sᵀ)/h², how a
+  // torque field folds in (RotationHistory::inertia_shift).
+  void residual(const State& q, Residual& r, ResidualJacobian* J,
+                const Matrix3& shift = Matrix3::Zero()) const;
 };
 
 }  // namespace liedyn

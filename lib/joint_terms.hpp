@@ -234,6 +234,7 @@ struct JointWeld : JointConstraintState<Matrix3, 2> {
 struct JointMotor {
   static constexpr int kBlocks = 2;
   static constexpr const char* kName = "joint_motor";
+  static constexpr bool kEndOfStep = true;  // term.hpp
   std::array<int, kBlocks> offsets{-1, -1};  // θ_a, θ_b
   int rotation_a = -1, rotation_b = -1;      // State::rotations; b −1: the world
   Vector3 axis_a = Vector3::UnitZ();         // â, unit, in a's body coordinates
@@ -271,6 +272,7 @@ struct JointMotor {
 struct JointForceMotor {
   static constexpr int kBlocks = 4;
   static constexpr const char* kName = "joint_force_motor";
+  static constexpr bool kEndOfStep = true;  // term.hpp
   std::array<int, kBlocks> offsets{-1, -1, -1, -1};  // x_a, θ_a, x_b, θ_b
   AttachedPoint a, b;                                // a: a point with a rotation
   Vector3 axis_a = Vector3::UnitX();                 // â, unit, in a's coordinates

@@ -29,15 +29,18 @@ void ConstantTorque::begin_step(const State& previous, const Step&) {
   R_previous = previous.rotations[rotation];
 }
 
-double ConstantTorque::evaluate(const State& q, LocalGradient<1>* g, LocalHessian<1>* H) const {
-  const Matrix3 P = q.rotations[rotation] * R_previous.transpose();
-  const Vector3 tau = scale * torque;
+double torque_potential(const Matrix3& P, const Vector3& tau, LocalGradient<1>* g,
+                        LocalHessian<1>* H) {
   if (g != nullptr) *g = -0.5 * (P.trace() * tau - P.transpose() * tau);
   if (H != nullptr) {
     const Matrix3 T = so3::hat(tau);
     *H = 0.25 * (P * T - T * P.transpose()) - 0.5 * (T * P).trace() * Matrix3::Identity();
   }
   return -tau.dot(so3::vee(P));
+}
+
+double ConstantTorque::evaluate(const State& q, LocalGradient<1>* g, LocalHessian<1>* H) const {
+  return torque_potential(q.rotations[rotation] * R_previous.transpose(), scale * torque, g, H);
 }
 
 Matrix3 ConstantTorque::torque_jacobian(const State& q) const {

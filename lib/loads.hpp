@@ -65,6 +65,11 @@ struct ConstantForce {
 //   DV/DR = −½ (tr(P) I − P)ᵀ τ,
 //   D²V/DR² = ¼ (P hat(τ) − hat(τ) Pᵀ) − ½ tr(hat(τ) P) I.
 // Derived by substituting exp(θ) ≈ I + hat(θ) + ½hat(θ)² (paper §3.2); FD-checked in tests.
+// torque_potential evaluates V, its gradient and Hessian for given P and τ (also the torque
+// fields of the trapezoidal integrator, lib/history.hpp).
+double torque_potential(const Matrix3& P, const Vector3& tau, LocalGradient<1>* g,
+                        LocalHessian<1>* H);
+
 struct ConstantTorque {
   static constexpr int kBlocks = 1;
   static constexpr const char* kName = "torque";

@@ -139,6 +139,21 @@ void validate_body_contact(const RigidBody& b, const std::string& path) {
 ModelError::ModelError(std::string field, const std::string& reason)
     : std::invalid_argument(field + ": " + reason), field_(std::move(field)) {}
 
+const char* to_string(Integrator integrator) {
+  switch (integrator) {
+    case Integrator::kBackwardEuler: return "backward_euler";
+    case Integrator::kTrapezoidal: return "trapezoidal";
+  }
+  return "unknown";
+}
+
+std::optional<Integrator> parse_integrator(std::string_view name) {
+  for (const auto i : {Integrator::kBackwardEuler, Integrator::kTrapezoidal}) {
+    if (name == to_string(i)) return i;
+  }
+  return std::nullopt;
+}
+
 void Model::validate() const {
   if (!std::isfinite(time_step) || time_step <= 0.0) {
     throw ModelError("time_step", "must be a finite positive number of seconds");

@@ -6,6 +6,7 @@
 
 #include <stdexcept>
 #include <string>
+#include <string_view>
 #include <utility>
 #include <limits>
 #include <optional>
@@ -147,8 +148,22 @@ struct TorqueSpec {
   ScheduledParameter<3> control;     // per-step torques and their slot in γ (lib/term.hpp)
 };
 
+// How a dynamic step discretises time (docs/design.md §14; static mode has no time and
+// ignores it):
+//   * backward_euler — the paper's incremental potential: first order, dissipative;
+//   * trapezoidal — second order and time-reversible: the trapezoidal rule on the forces of
+//     conservative terms, ¼ (f_k + 2 f_{k−1} + f_{k−2}), and the Lie group variational
+//     discretisation of rotational inertia (discrete momentum 2 vee(R_k J R_{k−1}ᵀ)/h), solved
+//     as a minimisation (lib/history.hpp). Friction, motors and exact joints act at the
+//     step's end, as under backward Euler.
+enum class Integrator { kBackwardEuler, kTrapezoidal };
+// The scene file's names ("backward_euler", "trapezoidal") and back (nullopt for another).
+const char* to_string(Integrator integrator);
+std::optional<Integrator> parse_integrator(std::string_view name);
+
 struct Model {
   double time_step = 0.01;  // h, s, > 0
+  Integrator integrator = Integrator::kBackwardEuler;
   Vector3 gravity = Vector3::Zero();
   std::vector<RigidBody> bodies;
   std::vector<SpringSpec> springs;

@@ -26,6 +26,12 @@
 //   EnergyOfState     — `static constexpr bool kEnergyOfState = true`: its value is a
 //                         potential energy of the state (what frames.csv reports), unlike the
 //                         inertia, torque, cable and friction terms.
+//   EndOfStep         — `static constexpr bool kEndOfStep = true`: its force belongs to the
+//                         step as a whole, not to a state (inertia, friction, motors, the
+//                         trapezoidal integrator's history, lib/history.hpp). An integrator
+//                         that weights the forces of states (Model::Integrator, trapezoidal)
+//                         applies it once, at the step's end; the others — the conservative
+//                         terms — and the elastic (not exact) Constraint terms it weights.
 //   ReadsPreviousStep — C = ∇Ψ_t depends on q_{k−1} or Δq_{k−1}: the adjoint's mixed blocks
 //                         (paper §5, docs/design.md §8), with z the term's part of the
 //                         component's adjoint vector (zeros where a block is not a DOF):
@@ -128,6 +134,9 @@ concept LoadScaled = requires(T& t) { { t.scale } -> std::same_as<double&>; };
 
 template <class T>
 concept EnergyOfState = requires { requires T::kEnergyOfState; };
+
+template <class T>
+concept EndOfStep = requires { requires T::kEndOfStep; };
 
 template <class T>
 concept ReadsPreviousStep =

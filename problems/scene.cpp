@@ -792,7 +792,7 @@ Scene parse(const json& root, const std::string& source) {
   Scene scene;
   scene.source = source;
   ObjectReader top(root, "", source,
-                   {"description", "time_step", "frames", "gravity", "mode", "solver", "bodies",
+                   {"description", "time_step", "integrator", "frames", "gravity", "mode", "solver", "bodies",
                     "rods", "colliders", "springs", "joints", "forces", "torques", "optimization",
                     "analytic"});
   scene.description = top.string("description", "");
@@ -805,6 +805,13 @@ Scene parse(const json& root, const std::string& source) {
     top.fail("mode", "must be \"dynamic\" or \"static\" (got \"" + mode + "\")");
   }
   scene.model.static_equilibrium = mode == "static";
+  const std::string integrator = top.string("integrator", "backward_euler");
+  if (const auto parsed = parse_integrator(integrator)) {
+    scene.model.integrator = *parsed;
+  } else {
+    top.fail("integrator", "unknown integrator \"" + integrator +
+                               "\" (expected \"backward_euler\" or \"trapezoidal\")");
+  }
   scene.model.load_steps = std::max(scene.frames, 1);
 
   if (top.has("solver")) {

@@ -61,6 +61,11 @@ DifferentiableSimulation::DifferentiableSimulation(Model base, ParameterSet para
       objective_(std::move(objective)),
       options_(options) {
   options_.validate();
+  if (!base_.static_equilibrium && base_.integrator != Integrator::kBackwardEuler) {
+    throw ModelError("integrator", std::string("the adjoint supports backward_euler only: ") +
+                                       to_string(base_.integrator) +
+                                       " has no adjoint yet (run it forward with liedyn run)");
+  }
   parameters_.apply(base_, initial_parameters()).validate();
 }
 

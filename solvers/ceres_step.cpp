@@ -1,5 +1,7 @@
 #include "ceres_step.hpp"
 
+#include <Eigen/Eigenvalues>
+
 #include <ceres/ceres.h>
 #include <glog/logging.h>
 
@@ -120,7 +122,8 @@ struct Parameters {
   bool reference_is_start = true;  // kChart: Lie increments (true) or rotation vectors (false)
 };
 
-// A residual form: r(q) ∈ R^kResiduals of a term with kBlocks blocks, and its Lie Jacobian.
+// A residual form: r(q) ∈ R^kResiduals of a term with kBlocks blocks, and its Lie Jacobian,
+// times √w for the term's weight w in Ψ (IncrementalPotential::weight).
 // Returns false where the form is not defined (Ceres then rejects the trial point).
 template <class Term>
 struct TermForm {
@@ -129,9 +132,14 @@ struct TermForm {
   using Residual = typename Term::Residual;
   using Jacobian = typename Term::ResidualJacobian;
   const Term* term;
+  double root_weight = 1.0;  // √w
   const std::array<int, kBlocks>& offsets() const { return term->offsets; }
   bool operator()(const State& q, Residual& r, Jacobian* J) const {
     term->residual(q, r, J);
+    if (root_weight != 1.0) {
+      r *= root_weight;
+      if (J != nullptr) *J *= root_weight;
+    }
     return true;
   }
 };
@@ -152,8 +160,25 @@ struct FoldedInertiaForm {
   }
 };
 
+// Rotational inertia with the trapezoidal integrator's torque field on its rotation folded in
+// (RotationHistory::inertia_shift): R̃ + S in place of R̃.
+struct FoldedRotationForm {
+  static constexpr int kBlocks = 1;
+  static constexpr int kResiduals = RotationalInertia::kResiduals;
+  using Residual = RotationalInertia::Residual;
+  using Jacobian = RotationalInertia::ResidualJacobian;
+  const RotationalInertia* term;
+  const Matrix3* shift;  // S
+  const std::array<int, 1>& offsets() const { return term->offsets; }
+  bool operator()(const State& q, Residual& r, Jacobian* J) const {
+    term->residual(q, r, J, *shift);
+    return true;
+  }
+};
+
 // A linear load V (gravity, a force or a torque that cannot be folded: static mode, a force
-// with a lever arm, a torque) as one residual r = √(2(V + c)), J = gᵀ/r, with the constant c
+// with a lever arm, a torque), weighted (w V, IncrementalPotential::weight), as one residual
+// r = √(2(w V + c)), J = w gᵀ/r, with the constant c
 // set before each solve so that V + c = β > 0 at the start (CeresStepSolver::refresh). Exact
 // in value and gradient; its Gauss–Newton curvature g gᵀ/(2(V + c)) is spurious but small
 // for a large β, and where V + c ≤ 0 the trial point is rejected.
@@ -165,13 +190,17 @@ struct OffsetRootForm {
   using Jacobian = Eigen::Matrix<double, 1, 3 * kBlocks>;
   const Term* term;
   const double* offset;  // c
+  double weight = 1.0;   // w
   const std::array<int, kBlocks>& offsets() const { return term->offsets; }
   bool operator()(const State& q, Residual& r, Jacobian* J) const {
     LocalGradient<kBlocks> g;
-    const double twice = 2.0 * (term->evaluate(q, J != nullptr ? &g : nullptr, nullptr) + *offset);
+    const double twice =
+        2.0 * (weight * term->evaluate(q, J != nullptr ? &g : nullptr, nullptr) + *offset);
     if (!(twice > 0.0)) return false;
     r(0) = std::sqrt(twice);
-    if (J != nullptr) *J = g.transpose() / r(0);
+    if (J != nullptr) {  // g/r unweighted: the same rounding as before weights existed
+      *J = weight == 1.0 ? Jacobian(g.transpose() / r(0)) : Jacobian((weight / r(0)) * g.transpose());
+    }
     return true;
   }
 };
@@ -528,14 +557,40 @@ class CeresStepSolver final : public StepSolver {
     refresh_.push_back([this](const State&) {
       for (Vector3& l : loads_) l.setZero();
     });
+    // The trapezoidal integrator's torque field on a rotation folds into the rotation's inertia
+    // where J is invertible (a rod of zero radius or a flat body has a singular J: the field
+    // is then an offset root, on which Ceres stalls sooner).
+    const std::vector<RotationHistory>& history = P.terms<RotationHistory>();
+    std::vector<bool> folded(history.size(), false);
+    shifts_.assign(history.size(), Matrix3::Zero());  // no reallocation below: forms keep &shifts_[t]
     P.for_each_term_vector([&](const auto& terms) {
       using T = typename std::decay_t<decltype(terms)>::value_type;
       if constexpr (std::is_same_v<T, TranslationalInertia>) {
         for (std::size_t t = 0; t < terms.size(); ++t) {
           add(FoldedInertiaForm{&terms[t], &loads_[t]}, T::kName);
         }
+      } else if constexpr (std::is_same_v<T, RotationalInertia>) {
+        for (std::size_t t = 0; t < terms.size(); ++t) {
+          const Eigen::SelfAdjointEigenSolver<Matrix3> eigen(terms[t].J_over_h2);
+          const Vector3 lambda = eigen.eigenvalues();  // ascending
+          if (t < history.size() && lambda(0) > 1e-10 * lambda(2)) {
+            folded[t] = true;
+            const Matrix3 J_inverse = eigen.eigenvectors() * lambda.cwiseInverse().asDiagonal() *
+                                      eigen.eigenvectors().transpose();
+            refresh_.push_back([this, &h = history[t], J_inverse, t](const State&) {
+              shifts_[t] = h.inertia_shift(J_inverse);
+            });
+            add(FoldedRotationForm{&terms[t], &shifts_[t]}, "rotational_inertia (with history)");
+          } else {
+            add(TermForm<T>{&terms[t]}, T::kName);
+          }
+        }
+      } else if constexpr (std::is_same_v<T, RotationHistory>) {
+        for (std::size_t t = 0; t < terms.size(); ++t) {
+          if (!folded[t]) add_offset_root(terms[t], 1.0);
+        }
       } else if constexpr (HasResidual<T>) {
-        for (const T& t : terms) add(TermForm<T>{&t}, T::kName);
+        for (const T& t : terms) add(TermForm<T>{&t, std::sqrt(P.weight(t))}, T::kName);
       } else {
         for (const T& t : terms) {
           if constexpr (PointLoad<T>) {
@@ -543,16 +598,16 @@ class CeresStepSolver final : public StepSolver {
             Vector3 force;
             if (t.offsets[0] >= 0 && t.point_load(point, force) && inertia_of_point[point] >= 0) {
               const int k = inertia_of_point[point];
-              refresh_.push_back([this, &t, k](const State&) {
+              refresh_.push_back([this, &t, k, w = P.weight(t)](const State&) {
                 int p = -1;
                 Vector3 f;
                 t.point_load(p, f);
-                loads_[k] += f;
+                loads_[k] += w * f;
               });
               continue;
             }
           }
-          add_offset_root(t);
+          add_offset_root(t, P.weight(t));
         }
       }
     });
@@ -582,14 +637,15 @@ class CeresStepSolver final : public StepSolver {
   }
 
   template <class Term>
-  void add_offset_root(const Term& term) {
+  void add_offset_root(const Term& term, double weight) {
     static const std::string label = std::string(Term::kName) + " (offset root)";
     offset_roots_.push_back(0.0);
     double* c = &offset_roots_.back();
-    add(OffsetRootForm<Term>{&term, c}, label.c_str());
-    refresh_.push_back([&term, c](const State& q) {
+    add(OffsetRootForm<Term>{&term, c, weight}, label.c_str());
+    refresh_.push_back([&term, c, weight](const State& q) {
       LocalGradient<Term::kBlocks> g;
-      const double v = term.evaluate(q, &g, nullptr);
+      const double v = weight * term.evaluate(q, &g, nullptr);
+      g *= weight;
       // β: ten times the change of V over a move of the size of the state. Larger would
       // leave Ceres's cost (which includes β) less room above its round-off; a trial point
       // beyond it is rejected, and the next round resets c there.
@@ -605,6 +661,7 @@ class CeresStepSolver final : public StepSolver {
   State scratch_;
   ComponentSnapshot entry_;  // the component's blocks on entry
   std::vector<Vector3> loads_;          // folded loads, per translational inertia term
+  std::vector<Matrix3> shifts_;         // folded torque fields, per rotation history term
   std::deque<double> offset_roots_;     // c per offset-root residual (stable addresses)
   std::vector<std::function<void(const State&)>> refresh_;
   UnitQuaternionRetraction quaternion_;

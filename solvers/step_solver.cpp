@@ -134,6 +134,8 @@ void StepReport::merge(const StepReport& other) {
   psi += other.psi;
   constraint_violation = std::max(constraint_violation, other.constraint_violation);
   multiplier_updates = std::max(multiplier_updates, other.multiplier_updates);
+  history_updates = std::max(history_updates, other.history_updates);
+  history_moved = std::max(history_moved, other.history_moved);
   if (!other.message.empty()) message += (message.empty() ? "" : "; ") + other.message;
 }
 
@@ -166,11 +168,30 @@ StepReport StepSolver::solve(State& q) {
   }
   entry_.save(c, q);
   StepReport report = minimize(q);
-  if (report.state_updated() && has_exact_constraints_) {
-    enforce_exact_constraints(q, report);
-    if (!report.state_updated()) entry_.restore(c, q);
+  IncrementalPotential& P = component().potential;
+  for (;;) {
+    if (report.state_updated() && has_exact_constraints_) enforce_exact_constraints(q, report);
+    if (!report.state_updated() || !P.has_rotation_history()) break;
+    // The trapezoidal integrator's torque fields are exact where their reference is
+    // (lib/history.hpp): solve again from the new reference until it no longer moves.
+    const double moved = P.rereference_history(q);
+    report.history_moved = moved;
+    if (moved <= tolerance_) break;
+    if (report.history_updates == kMaxHistoryUpdates) {
+      if (report.converged()) report.status = StepStatus::kMaxIterations;
+      const std::string message = "trapezoidal history: the torque fields' reference still moved " +
+                                  short_number(moved) + " rad > tolerance after " +
+                                  std::to_string(kMaxHistoryUpdates) + " updates";
+      report.message = report.message.empty() ? message : message + "; " + report.message;
+      break;
+    }
+    accumulate(report, minimize(q));
+    ++report.history_updates;
   }
-  if (!report.state_updated()) return report;  // q restored
+  if (!report.state_updated()) {
+    entry_.restore(c, q);
+    return report;
+  }
   if (const char* what = non_finite_value(report, q)) {
     entry_.restore(c, q);
     std::string message = std::string("not finite at the end of the step: ") + what +
@@ -185,6 +206,23 @@ StepReport StepSolver::solve(State& q) {
   return report;
 }
 
+void StepSolver::accumulate(StepReport& report, StepReport next) {
+  // The step's totals, and the last solve's final values.
+  next.iterations += report.iterations;
+  next.regularized_iterations += report.regularized_iterations;
+  next.factorizations += report.factorizations;
+  next.assemblies += report.assemblies;
+  next.assembly_seconds += report.assembly_seconds;
+  next.solve_seconds += report.solve_seconds;
+  next.first_gradient_norm = report.first_gradient_norm;
+  next.second_gradient_norm = report.second_gradient_norm;
+  next.first_hessian_condition = report.first_hessian_condition;
+  next.multiplier_updates = report.multiplier_updates;
+  next.history_updates = report.history_updates;
+  next.history_moved = report.history_moved;
+  report = std::move(next);
+}
+
 void StepSolver::enforce_exact_constraints(State& q, StepReport& report) {
   IncrementalPotential& P = component().potential;
   double violation = P.constraint_violation(q);
@@ -196,20 +234,8 @@ void StepSolver::enforce_exact_constraints(State& q, StepReport& report) {
     }
     previous = violation;
     P.update_multipliers(q);
-    const StepReport next = minimize(q);
-    // The step's totals, and the last solve's final values.
-    StepReport total = next;
-    total.iterations += report.iterations;
-    total.regularized_iterations += report.regularized_iterations;
-    total.factorizations += report.factorizations;
-    total.assemblies += report.assemblies;
-    total.assembly_seconds += report.assembly_seconds;
-    total.solve_seconds += report.solve_seconds;
-    total.first_gradient_norm = report.first_gradient_norm;
-    total.second_gradient_norm = report.second_gradient_norm;
-    total.first_hessian_condition = report.first_hessian_condition;
-    total.multiplier_updates = report.multiplier_updates + 1;
-    report = std::move(total);
+    accumulate(report, minimize(q));
+    ++report.multiplier_updates;
     if (!report.state_updated()) return;
     violation = P.constraint_violation(q);
   }
@@ -252,11 +278,11 @@ const char* StepSolver::non_finite_value(const StepReport& report, const State& 
     const int i = inertia_rotation_[t];
     if (i < 0) continue;
     const Matrix3& R = q.rotations[c.rotations[i].index];
-    // Body-frame rotation of the step: θ_b = log(Rₚᵀ R), and I_b/h² = ½ tr(J/h²) 1 − J/h²
+    // Body-frame rotation of the step: θ_b = log(Rₚᵀ R), and I_b/h² = tr(J/h²) 1 − J/h²
     // from J = ½ tr(I_b) 1 − I_b (lib/inertia.hpp).
     const Vector3 theta = so3::log(returned_.rotation(i).transpose() * R);
     const Matrix3& J = rotational[t].J_over_h2;
-    const Matrix3 I = 0.5 * J.trace() * Matrix3::Identity() - J;
+    const Matrix3 I = J.trace() * Matrix3::Identity() - J;
     kinetic += 0.5 * theta.dot(I * theta);
   }
   if (!std::isfinite(kinetic)) return "kinetic energy of the step";

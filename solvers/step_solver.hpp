@@ -1,5 +1,5 @@
 #pragma once
-// One backward-Euler time step of one component: minimise its incremental potential
+// One time step of one component: minimise its incremental potential
 // Ψ(q; q_{k−1}, Δq_{k−1}) (paper §4.2) over positions and rotations. Three back-ends behind
 // one interface, chosen by SolverOptions::backend (scene: "solver": {"backend": ...}):
 //   * newton — our Newton solver on the exact Lie Hessian (solvers/newton.hpp);
@@ -168,6 +168,10 @@ struct StepReport {
   // the first). Merged over components: the largest.
   double constraint_violation = 0.0;
   int multiplier_updates = 0;
+  // The trapezoidal integrator (StepSolver::solve): the solves after the first that moved the
+  // torque fields' references, and how far (rad) the last move was. Merged: the largest.
+  int history_updates = 0;
+  double history_moved = 0.0;
   // Why the step did not converge, when there is more to say than the status: the
   // back-end's own termination (Ceres, Ipopt), what stalled, what was not finite (else
   // empty).
@@ -242,6 +246,13 @@ class StepSolver {
   // one update or none. A step that is left with a violation above the tolerance (or whose
   // last solve did not converge) is not converged: status kMaxIterations, with a message.
   //
+  // The trapezoidal integrator's rotation history (lib/history.hpp) is a torque field exact at
+  // a reference rotation: after each solve (and its exact-joint loop) every reference moves to
+  // where the solve ended, and while one moved more than the tolerance (radians) the back-end
+  // solves again from there, at most kMaxHistoryUpdates times; a step left with a larger move
+  // is not converged (kMaxIterations, with a message). Each solve contracts the move by about
+  // ½ ω h (the step's rotation angle over two).
+  //
   // Every back-end's result passes one test here, so that no back-end can report a
   // non-finite outcome as a step: a step the back-end reports as done (state_updated()) is
   // turned into kNonFinite, with q restored and StepReport::message naming the value, when
@@ -263,6 +274,7 @@ class StepSolver {
   virtual void set_measure_condition(bool) {}
 
   static constexpr int kMaxMultiplierUpdates = 30;
+  static constexpr int kMaxHistoryUpdates = 30;
   static constexpr double kMaxPenaltyGrowth = 1e6;
 
  protected:
@@ -276,6 +288,9 @@ class StepSolver {
   const char* non_finite_value(const StepReport& report, const State& q) const;
   // The augmented Lagrangian loop above, after the first minimisation gave `report`.
   void enforce_exact_constraints(State& q, StepReport& report);
+  // Adds a further solve's `next` into the step's `report`: counts summed, final values and
+  // status from `next`, first-iteration diagnostics and loop counters kept.
+  static void accumulate(StepReport& report, StepReport next);
 
   double tolerance_;
   bool has_exact_constraints_ = false;
