@@ -32,6 +32,9 @@ Newton<System>::Newton(Component component, const SolverOptions& options)
       options_(options),
       system_(make_system<System>(component_, options)),
       delta_(component_.dofs),
+      delta0_(component_.dofs),
+      skew_(component_.dofs),
+      correction_(component_.dofs),
       saved_(component_),
       entry_(component_) {
   const std::size_t n = component_.rotations.size();
@@ -101,6 +104,20 @@ void Newton<System>::retract(State& q, double alpha) {
 
 
 template <class System>
+void Newton<System>::correct_for_history_skew() {
+  delta0_ = delta_;
+  for (int m = 0; m < kSkewCorrections; ++m) {
+    skew_.setZero();
+    for (const RotationHistory& t : component_.potential.terms<RotationHistory>()) {
+      const int o = t.offsets[0];
+      skew_.template segment<3>(o) = 0.5 * t.field.cross(delta_.template segment<3>(o));
+    }
+    system_.solve_linear(skew_, correction_);
+    delta_ = delta0_ - correction_;
+  }
+}
+
+template <class System>
 double Newton<System>::hessian_condition() const {
   Eigen::MatrixXd H;
   system_.dense_hessian(H);
@@ -149,7 +166,14 @@ StepReport Newton<System>::iterate(State& q, int max_iterations) {
   double lowest_gradient_norm = std::numeric_limits<double>::infinity();
   double lowest_step_norm = std::numeric_limits<double>::infinity();
   int updates_without_progress = 0;
+  // The trapezoidal integrator's torque fields are exact at their reference (lib/history.hpp):
+  // each iteration starts with them referenced to its iterate, so that the gradient it
+  // assembles is the step's equations' exact residual, and ‖δ‖∞ ≤ tolerance means they hold.
+  // Ψ then changes from one iteration to the next (not within the line search), which the
+  // stall test below tolerates: ‖g‖ and ‖δ‖ count as progress too.
+  const bool follow_history = component_.potential.has_rotation_history();
   for (;;) {
+    if (follow_history) component_.potential.rereference_history(q);
     using Clock = std::chrono::steady_clock;
     const auto t0 = options_.measure_time ? Clock::now() : Clock::time_point{};
     double roundoff = 0.0;
@@ -173,6 +197,9 @@ StepReport Newton<System>::iterate(State& q, int max_iterations) {
     bool regularized = false;
     if (!factorize(report, regularized)) return fail(StepStatus::kNonFinite);
     system_.solve(delta_);
+    if (follow_history && options_.rotation == RotationParameterization::kLie) {
+      correct_for_history_skew();
+    }
     if (options_.measure_time) {
       const auto t2 = Clock::now();
       report.assembly_seconds += std::chrono::duration<double>(t1 - t0).count();

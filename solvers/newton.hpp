@@ -93,6 +93,13 @@ class Newton final : public StepSolver {
   double hessian_condition() const;
   void restore(State& q);
   void retract(State& q, double alpha);
+  // The trapezoidal integrator (lib/history.hpp), Lie rotations: δ from (H + K) δ = −g
+  // instead of H δ = −g, K = ½ hat(c) on each rotation with a history field c — the skew part
+  // of the fields' derivative, which the symmetric H lacks — by kSkewCorrections fixed-point
+  // steps δ ← δ₀ − H⁻¹ K δ on H's factorisation. Each leaves an error ‖H⁻¹K‖ times the last;
+  // without them every Newton iteration would.
+  void correct_for_history_skew();
+  static constexpr int kSkewCorrections = 2;
 
   // Sets the rotation-vector or quaternion parameters from the rotations of q (and the
   // rotations from them, so that both agree exactly).
@@ -102,6 +109,7 @@ class Newton final : public StepSolver {
   SolverOptions options_;
   System system_;
   Vector delta_;
+  Vector delta0_, skew_, correction_;  // correct_for_history_skew's, sized at construction
   ComponentSnapshot saved_, entry_;  // line-search backtracking; restore on failure
   // Rotation vectors: the chart (current and saved r's and J_l(r)'s).
   RotationVectorChart chart_;
