@@ -24,8 +24,9 @@
 //   * a reference run that the sweep makes itself at the finest settings of the grid: time
 //     step = the smallest on the grid / `reference_refinement` (only if `time_step` is an axis),
 //     tolerance = the smallest on the grid / 100 (only if `solver.tolerance` is an axis), the
-//     largest `solver.max_iterations`, and Newton with `lie` whatever the back-end and rotation
-//     axes say. Static scenes: the most load steps (`frames`) on the grid. Every other axis
+//     largest `solver.max_iterations`, Newton with `lie` whatever the back-end and rotation
+//     axes say, and the trapezoidal integrator when `integrator` is an axis (second order: a
+//     better reference for either). Static scenes: the most load steps (`frames`) on the grid. Every other axis
 //     changes the physics (stiffness, mass, frames of a dynamic scene, …): each combination of
 //     their values gets its own reference. The reference's own error is not known: the errors
 //     of the finest runs are measured against something only `reference_refinement` times

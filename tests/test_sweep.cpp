@@ -348,6 +348,32 @@ TEST(SweepReference, OneReferencePerValueOfAModelAxis) {
   EXPECT_NE(r.runs[0].position_error, r.runs[1].position_error);
 }
 
+// The integrator is a method, not physics: one reference for both, the trapezoidal rule's at
+// h_min/4. Against it the trapezoidal errors fall 4× per halving of h (second order: e ∝ h² −
+// h_ref², ratio (0.02² − 0.0025²)/(0.01² − 0.0025²) = 4.2) and backward Euler's 2× (first
+// order against a reference ~1e3 times more accurate than itself, not its own 2.33 above),
+// each within 15 %; at every h the trapezoidal one is the smaller.
+TEST(SweepReference, IntegratorsShareTheSecondOrderReference) {
+  const SweepResult r = sweep(kPendulum, {"integrator=backward_euler,trapezoidal", "time_step=0.02,0.01"});
+  ASSERT_EQ(r.runs.size(), 4u);
+  ASSERT_EQ(r.references.size(), 1u);
+  const std::string label = "integrator=trapezoidal time_step=0.0025 frames=80 solver.backend=newton "
+                            "solver.rotation=lie";
+  EXPECT_EQ(r.references[0].settings.at(0), label);
+  for (const SweepRun& run : r.runs) {
+    expect_completed(run);
+    EXPECT_EQ(run.reference, label);
+    std::printf("pendulum %s h = %s: position error %.6g m\n", run.settings[0].c_str(),
+                run.settings[1].c_str(), run.position_error);
+  }
+  const double euler = r.runs[0].position_error / r.runs[1].position_error;
+  const double trapezoid = r.runs[2].position_error / r.runs[3].position_error;
+  EXPECT_NEAR(euler, 2.0, 0.3);
+  EXPECT_NEAR(trapezoid, (0.02 * 0.02 - 0.0025 * 0.0025) / (0.01 * 0.01 - 0.0025 * 0.0025), 0.63);
+  EXPECT_LT(r.runs[2].position_error, r.runs[0].position_error);
+  EXPECT_LT(r.runs[3].position_error, r.runs[1].position_error);
+}
+
 // An analytic scene: no reference runs; the position error is exactly backward Euler's on
 // the free fall, ½ |g| h T (tests/test_analytic.cpp), T = 0.2 s, to the solver tolerance.
 TEST(SweepReference, AnalyticSceneIsComparedWithItsSolution) {
