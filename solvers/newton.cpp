@@ -115,6 +115,12 @@ void Newton<System>::correct_for_history_skew() {
     system_.solve_linear(skew_, correction_);
     delta_ = delta0_ - correction_;
   }
+  // Where ‖H⁻¹K‖ is not small (large fields against a soft rotation: bodies stacked in contact)
+  // the series does not converge, and its δ need not descend on Ψ: keep H's own step then.
+  const Vector& g = system_.gradient();
+  if (!(correction_.norm() <= 0.5 * delta0_.norm() && g.dot(delta_) <= 0.5 * g.dot(delta0_))) {
+    delta_ = delta0_;
+  }
 }
 
 template <class System>
