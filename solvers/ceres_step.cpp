@@ -144,34 +144,22 @@ struct TermForm {
   }
 };
 
-// Translational inertia with the constant forces on its point (gravity, node forces) folded
-// in by completing the square (docs/design.md §9.3).
+// An inertia term with what folds into its residual passed along (its residual's last
+// argument): a translational inertia with the constant forces on its point (gravity, node
+// forces), by completing the square (docs/design.md §9.3); a rotational inertia with the
+// trapezoidal integrator's torque field on its rotation, R̃ + S in place of R̃
+// (RotationHistory::inertia_shift).
+template <class Inertia, class Folded>
 struct FoldedInertiaForm {
   static constexpr int kBlocks = 1;
-  static constexpr int kResiduals = TranslationalInertia::kResiduals;
-  using Residual = TranslationalInertia::Residual;
-  using Jacobian = TranslationalInertia::ResidualJacobian;
-  const TranslationalInertia* term;
-  const Vector3* load;
+  static constexpr int kResiduals = Inertia::kResiduals;
+  using Residual = typename Inertia::Residual;
+  using Jacobian = typename Inertia::ResidualJacobian;
+  const Inertia* term;
+  const Folded* folded;  // the load, or S
   const std::array<int, 1>& offsets() const { return term->offsets; }
   bool operator()(const State& q, Residual& r, Jacobian* J) const {
-    term->residual(q, r, J, *load);
-    return true;
-  }
-};
-
-// Rotational inertia with the trapezoidal integrator's torque field on its rotation folded in
-// (RotationHistory::inertia_shift): R̃ + S in place of R̃.
-struct FoldedRotationForm {
-  static constexpr int kBlocks = 1;
-  static constexpr int kResiduals = RotationalInertia::kResiduals;
-  using Residual = RotationalInertia::Residual;
-  using Jacobian = RotationalInertia::ResidualJacobian;
-  const RotationalInertia* term;
-  const Matrix3* shift;  // S
-  const std::array<int, 1>& offsets() const { return term->offsets; }
-  bool operator()(const State& q, Residual& r, Jacobian* J) const {
-    term->residual(q, r, J, *shift);
+    term->residual(q, r, J, *folded);
     return true;
   }
 };
@@ -567,7 +555,7 @@ class CeresStepSolver final : public StepSolver {
       using T = typename std::decay_t<decltype(terms)>::value_type;
       if constexpr (std::is_same_v<T, TranslationalInertia>) {
         for (std::size_t t = 0; t < terms.size(); ++t) {
-          add(FoldedInertiaForm{&terms[t], &loads_[t]}, T::kName);
+          add(FoldedInertiaForm<T, Vector3>{&terms[t], &loads_[t]}, T::kName);
         }
       } else if constexpr (std::is_same_v<T, RotationalInertia>) {
         for (std::size_t t = 0; t < terms.size(); ++t) {
@@ -580,7 +568,8 @@ class CeresStepSolver final : public StepSolver {
             refresh_.push_back([this, &h = history[t], J_inverse, t](const State&) {
               shifts_[t] = h.inertia_shift(J_inverse);
             });
-            add(FoldedRotationForm{&terms[t], &shifts_[t]}, "rotational_inertia (with history)");
+            add(FoldedInertiaForm<T, Matrix3>{&terms[t], &shifts_[t]},
+                "rotational_inertia (with history)");
           } else {
             add(TermForm<T>{&terms[t]}, T::kName);
           }
