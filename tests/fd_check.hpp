@@ -435,6 +435,22 @@ struct TermCheckOptions {
   FdOptions hessian_from_value = value_hessian_defaults();
 };
 
+// A world-torque potential −τ·vee(R R_refᵀ) (ConstantTorque, RotationHistory) of |τ| up to
+// `magnitude`: its derivatives of every order are bounded by |τ|, so the FD truncation is
+// ≲ ε²|τ|, an absolute floor that matters only near R = R_ref, where the Hessian vanishes
+// (V = −τ·θ + O(θ³) there) — and is not required to be non-zero within `near` of it.
+inline TermCheckOptions torque_potential_options(double magnitude, bool near_reference) {
+  TermCheckOptions o;
+  o.hessian.abs_floor = o.hessian.step * o.hessian.step * magnitude;
+  o.hessian_from_value.abs_floor =
+      o.hessian_from_value.step * o.hessian_from_value.step * magnitude;
+  if (near_reference) {
+    o.hessian.require_nonzero = NonZero::kNone;
+    o.hessian_from_value.require_nonzero = NonZero::kNone;
+  }
+  return o;
+}
+
 // Steps for a term checked where its smooth zone is only `zone` wide (friction's ε = ε_v h at
 // a tiny h): 1e-4·zone for first differences (truncation ~step²/(y·zone)), 1e-3·zone for
 // second differences of the value. Only some entry need be non-zero: at such scales the

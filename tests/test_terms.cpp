@@ -320,17 +320,9 @@ TEST(ConstantTorqueTerm, DerivativesMatchFiniteDifferencesOverAllAngles) {
         State q;
         q.rotations = {rotation_at(a, rng)};
 
-        // V(exp(δ)P) = −τ·vee(exp(δ)P) has derivatives of every order bounded by |τ|, so the
-        // FD truncation is ≲ ε²|τ|: an absolute floor that matters only near P = I, where
-        // the Hessian vanishes (V = −τ·θ + O(θ³) there). Round-off is fd's noise floor.
-        fd::TermCheckOptions opt;
-        opt.hessian.abs_floor = opt.hessian.step * opt.hessian.step * magnitude;
-        opt.hessian_from_value.abs_floor =
-            opt.hessian_from_value.step * opt.hessian_from_value.step * magnitude;
-        if (so3::distance(q.rotations[0], previous.rotations[0]) < 1e-3) {
-          opt.hessian.require_nonzero = fd::NonZero::kNone;
-          opt.hessian_from_value.require_nonzero = fd::NonZero::kNone;
-        }
+        // Round-off is fd's noise floor; the truncation floor: fd::torque_potential_options.
+        const fd::TermCheckOptions opt = fd::torque_potential_options(
+            magnitude, so3::distance(q.rotations[0], previous.rotations[0]) < 1e-3);
         EXPECT_TRUE(fd::check_term(term, q, {fd::rotation_dof(0)}, opt));
       }
     }

@@ -49,17 +49,9 @@ TEST(RotationHistoryTerm, DerivativesMatchFiniteDifferencesOverAllAngles) {
         term.reference = rotation_at(a_ref, rng);
         State q;
         q.rotations = {rotation_at(a, rng)};
-        // As for ConstantTorque (the same potential): derivatives of every order are bounded
-        // by |c|, so the FD truncation is ≲ ε²|c|, an absolute floor that matters only near
-        // R = R_ref, where the Hessian vanishes.
-        fd::TermCheckOptions opt;
-        opt.hessian.abs_floor = opt.hessian.step * opt.hessian.step * magnitude;
-        opt.hessian_from_value.abs_floor =
-            opt.hessian_from_value.step * opt.hessian_from_value.step * magnitude;
-        if (so3::distance(q.rotations[0], term.reference) < 1e-3) {
-          opt.hessian.require_nonzero = fd::NonZero::kNone;
-          opt.hessian_from_value.require_nonzero = fd::NonZero::kNone;
-        }
+        // ConstantTorque's potential, of the torque −c.
+        const fd::TermCheckOptions opt = fd::torque_potential_options(
+            magnitude, so3::distance(q.rotations[0], term.reference) < 1e-3);
         EXPECT_TRUE(fd::check_term(term, q, {fd::rotation_dof(0)}, opt));
       }
     }
