@@ -28,7 +28,9 @@ void IncrementalPotential::begin_step(const State& previous, const Step& previou
   weighted_terms_gradient(previous, gradient_previous_);
   if (!first) {
     older_ = previous;  // same sizes after the first step: no allocation
-    for (std::size_t i = 0; i < older_.points.size(); ++i) older_.points[i] -= previous_step.points[i];
+    for (std::size_t i = 0; i < older_.points.size(); ++i) {
+      older_.points[i] -= previous_step.points[i];
+    }
     for (std::size_t j = 0; j < older_.rotations.size(); ++j) {
       older_.rotations[j] = previous_step.rotations[j].transpose() * previous.rotations[j];
     }
@@ -44,9 +46,10 @@ void IncrementalPotential::begin_step(const State& previous, const Step& previou
   for (std::size_t t = 0; t < history.size(); ++t) {
     const Matrix3& R = previous.rotations[history[t].rotation];
     const Matrix3& dR = previous_step.rotations[history[t].rotation];
-    const Matrix3& J = inertia[t].J_over_h2;  // J/h²
-    // μ/h of the previous step (gradient units, ×h²/h² …): 2 vee(R_{k−1} J R_{k−2}ᵀ)/h² with
-    // R_{k−2}ᵀ = R_{k−1}ᵀ ΔR; at frame 1, π_0 h/h² = R_0 I_b R_0ᵀ log(ΔR_0)/h², I_b = tr(J) 1 − J.
+    const Matrix3& J = inertia[t].J_over_h2;  // Ĵ = J/h²
+    // The previous step's momentum over h, in gradient units: μ_{k−3/2}/h = 2 vee(R_{k−1} Ĵ
+    // R_{k−2}ᵀ) with R_{k−2}ᵀ = R_{k−1}ᵀ ΔR; at frame 1, π_0/h = R_0 (I_b/h²) R_0ᵀ log(ΔR_0)
+    // with I_b/h² = tr(Ĵ) 1 − Ĵ.
     const Vector3 momentum =
         first ? Vector3(R * (J.trace() * Matrix3::Identity() - J) * R.transpose() * so3::log(dR))
               : Vector3(2.0 * so3::vee(R * J * R.transpose() * dR));
@@ -92,7 +95,8 @@ void IncrementalPotential::weighted_terms_gradient(const State& q, Eigen::Vector
         if (weight(t) == 1.0) continue;  // an exact constraint
         t.evaluate(q, &g_local, nullptr);
         static_for<T::kBlocks>([&](auto i) {
-          if (t.offsets[i] >= 0) g.template segment<3>(t.offsets[i]) += g_local.template segment<3>(3 * i);
+          if (t.offsets[i] < 0) return;
+          g.template segment<3>(t.offsets[i]) += g_local.template segment<3>(3 * i);
         });
       }
     }
