@@ -26,8 +26,8 @@ void IncrementalPotential::begin_step(const State& previous, const Step& previou
   // velocities: the trapezoidal rule's first step, c = ¼ ∇V(q_0) − π_0/h.
   const bool first = frame <= 1;
   weighted_terms_gradient(previous, gradient_previous_);
+  older_ = previous;  // sized at the first step (which needs no q_{k−2}): no allocation after it
   if (!first) {
-    older_ = previous;  // same sizes after the first step: no allocation
     for (std::size_t i = 0; i < older_.points.size(); ++i) {
       older_.points[i] -= previous_step.points[i];
     }

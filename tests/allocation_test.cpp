@@ -448,6 +448,22 @@ TEST(Allocation, ClampedRodStepDoesNotAllocate) {
   }
 }
 
+// The trapezoidal integrator (lib/history.hpp): the history's gradient assemblies at the two
+// earlier states, the scratch state q_{k−2}, the torque fields re-referenced at every Newton
+// iteration and the skew corrections' solves — on the three kinds of linear system.
+TEST(Allocation, TrapezoidalStepsDoNotAllocate) {
+  Model bolt;
+  bolt.time_step = 0.01;
+  bolt.bodies.push_back(butterfly_bolt());
+  Model chain = spring_chain(8);
+  Model rod = clamped_rod();
+  for (Model* model : {&bolt, &chain, &rod}) {
+    model->integrator = liedyn::Integrator::kTrapezoidal;
+    Simulator sim(*model, SolverOptions{});
+    expect_no_allocation(run_counted(sim, kSteps), kSteps);
+  }
+}
+
 // Rotation vectors (chart, save/restore of its r's and J's) and quaternions, on the three
 // kinds of linear system.
 TEST(Allocation, RotationVectorAndQuaternionStepsDoNotAllocate) {
