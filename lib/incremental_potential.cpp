@@ -62,6 +62,8 @@ void IncrementalPotential::set_integrator(Integrator integrator, int dofs) {
   integrator_ = integrator;
   if (integrator != Integrator::kTrapezoidal) return;
   state_weight_ = 0.25;
+  // History term t belongs to inertia term t of its kind (same point or rotation, same
+  // offset): begin_step and the Ceres back-end pair them by index.
   gradient_previous_.setZero(dofs);
   gradient_older_.setZero(dofs);
   for (const TranslationalInertia& t : terms<TranslationalInertia>()) {

@@ -788,6 +788,18 @@ RodSpec parse_rod(const json& value, const std::string& path, const std::string&
   return rod;
 }
 
+// A string field naming one value of an enumeration: parsed by `parse`, else an error naming
+// `field` (the dotted path), the value and the `expected` names.
+template <class Enum>
+Enum named_value(ObjectReader& reader, const std::string& key, const std::string& field,
+                 const std::string& fallback, std::optional<Enum> (*parse)(std::string_view),
+                 const std::string& what, const std::string& expected) {
+  const std::string value = reader.string(key, fallback);
+  const std::optional<Enum> parsed = parse(value);
+  if (!parsed) reader.fail(field, "unknown " + what + " \"" + value + "\" (expected " + expected + ")");
+  return *parsed;
+}
+
 Scene parse(const json& root, const std::string& source) {
   Scene scene;
   scene.source = source;
@@ -805,33 +817,20 @@ Scene parse(const json& root, const std::string& source) {
     top.fail("mode", "must be \"dynamic\" or \"static\" (got \"" + mode + "\")");
   }
   scene.model.static_equilibrium = mode == "static";
-  const std::string integrator = top.string("integrator", "backward_euler");
-  if (const auto parsed = parse_integrator(integrator)) {
-    scene.model.integrator = *parsed;
-  } else {
-    top.fail("integrator", "unknown integrator \"" + integrator +
-                               "\" (expected \"backward_euler\" or \"trapezoidal\")");
-  }
+  scene.model.integrator = named_value(top, "integrator", "integrator", "backward_euler",
+                                       &parse_integrator, "integrator",
+                                       "\"backward_euler\" or \"trapezoidal\"");
   scene.model.load_steps = std::max(scene.frames, 1);
 
   if (top.has("solver")) {
     ObjectReader s(top.get("solver"), "solver", source,
                    {"backend", "rotation", "tolerance", "max_iterations", "armijo",
                     "min_step_length", "assembly_threads", "island_threads", "ceres", "ipopt"});
-    const std::string backend = s.string("backend", "newton");
-    if (const auto parsed = parse_backend(backend)) {
-      scene.solver.backend = *parsed;
-    } else {
-      s.fail("solver.backend", "unknown backend \"" + backend +
-                                   "\" (expected \"newton\", \"ceres\" or \"ipopt\")");
-    }
-    const std::string rotation = s.string("rotation", "lie");
-    if (const auto parsed = parse_rotation(rotation)) {
-      scene.solver.rotation = *parsed;
-    } else {
-      s.fail("solver.rotation", "unknown rotation parameterisation \"" + rotation +
-                                    "\" (expected \"lie\", \"rotvec\" or \"quat\")");
-    }
+    scene.solver.backend = named_value(s, "backend", "solver.backend", "newton", &parse_backend,
+                                       "backend", "\"newton\", \"ceres\" or \"ipopt\"");
+    scene.solver.rotation =
+        named_value(s, "rotation", "solver.rotation", "lie", &parse_rotation,
+                    "rotation parameterisation", "\"lie\", \"rotvec\" or \"quat\"");
     scene.solver.tolerance = s.number("tolerance", scene.solver.tolerance);
     if (s.has("max_iterations")) scene.solver.max_iterations = s.integer("max_iterations", 1);
     scene.solver.armijo = s.number("armijo", scene.solver.armijo);
