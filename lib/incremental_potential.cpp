@@ -750,7 +750,7 @@ std::vector<Component> build_components(const Model& model, const std::vector<bo
 
 Component build_rod_component(const Model& model, int r) {
   const RodSpec& rod = model.rods[r];
-  const RodDiscretization d = discretize(rod);
+  const RodDiscretization d = model.discretize_rod(r);
   const int n = rod.node_count();
   const int edges = rod.edge_count();
   Component c;
@@ -823,7 +823,7 @@ Component build_rod_component(const Model& model, int r) {
     bend.offsets = {edge_offset[i - 1], edge_offset[i]};
     bend.edge0 = model.rod_rotation(r, i - 1);
     bend.edge1 = model.rod_rotation(r, i);
-    bend.rest_length = d.voronoi_length[i - 1];
+    bend.rest_length = d.bending_length[i - 1];
     bend.stiffness = rod.bending_stiffness;
     bend.rest_darboux = d.rest_darboux[i - 1];
     if (!rod.rest_darboux_controls.empty()) bend.rest_control = rod.rest_darboux_controls[i - 1];

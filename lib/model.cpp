@@ -348,7 +348,7 @@ void Model::validate() const {
   for (std::size_t r = 0; r < rods.size(); ++r) {
     validate_rod(rods[r], index_field("rods", r, ""));
     if (static_equilibrium) continue;
-    const RodDiscretization d = discretize(rods[r]);
+    const RodDiscretization d = discretize(rods[r]);  // masses and inertias only
     for (std::size_t j = 0; j < d.edge_inertia.size(); ++j) {
       require_finite_over_h2(d.node_mass[j] + d.node_mass[j + 1], d.edge_inertia[j], inv_h2,
                              index_field("rods", r, ""));
@@ -792,6 +792,23 @@ int Model::rod_rotation(int rod, int edge) const {
   int index = static_cast<int>(bodies.size());
   for (int r = 0; r < rod; ++r) index += rods[r].edge_count();
   return index + edge;
+}
+
+RodDiscretization Model::discretize_rod(int rod) const {
+  RodEnds ends;
+  const int last_edge = rods[rod].edge_count() - 1;
+  for (const JointSpec& j : joints) {
+    if (j.type == JointSpec::Type::kSplice) {  // a's last node to b's first
+      if (j.a.object == rod) ends.last_spliced = true;
+      if (j.b.object == rod) ends.first_spliced = true;
+    }
+    // A weld to the world is a clamp (end b is the only one that can be the world).
+    if (j.type != JointSpec::Type::kWeld || j.b.kind != JointEnd::Kind::kWorld) continue;
+    if (j.a.kind != JointEnd::Kind::kRodEdge || j.a.object != rod) continue;
+    if (j.a.element == 0) ends.first_welded = true;
+    if (j.a.element == last_edge) ends.last_welded = true;
+  }
+  return discretize(rods[rod], ends);
 }
 
 State Model::initial_state() const {

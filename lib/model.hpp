@@ -220,6 +220,8 @@ struct Model {
   // Size of State::points: every body, then every rod's nodes.
   int point_count() const { return rod_point(static_cast<int>(rods.size()), 0); }
   int rod_rotation(int rod, int edge) const;
+  // A rod's discretisation (lib/rod.hpp) with its ends as the joints hold them (welds, splices).
+  RodDiscretization discretize_rod(int rod) const;
 
   // Throws ModelError naming the first offending field. Checks finiteness, positivity,
   // symmetric positive-definite inertia obeying the triangle inequality, orthonormal

@@ -340,7 +340,7 @@ Eigen::VectorXd ParameterSet::initial_values(const Model& model) const {
       case ParameterKind::kJointMotor: block.setConstant(model.joints[b.index].motor_effort); break;
       case ParameterKind::kRestDarboux:
       case ParameterKind::kRestDarbouxPerFrame: {
-        const std::vector<Vector3> rest = discretize(model.rods[b.index]).rest_darboux;
+        const std::vector<Vector3> rest = model.discretize_rod(b.index).rest_darboux;
         const int interior = static_cast<int>(rest.size());
         const int copies = b.kind == ParameterKind::kRestDarboux ? 1 : frames_;
         for (int k = 0; k < copies; ++k) {

@@ -1,5 +1,6 @@
 #include "rod.hpp"
 
+#include <algorithm>
 #include <cmath>
 
 #include "rod_terms.hpp"
@@ -34,7 +35,7 @@ std::vector<Matrix3> parallel_transport_frames(const std::vector<Vector3>& nodes
   return frames;
 }
 
-RodDiscretization discretize(const RodSpec& rod) {
+RodDiscretization discretize(const RodSpec& rod, RodEnds ends) {
   RodDiscretization d;
   const std::vector<Vector3>& rest = rod.rest_shape();
   const int n = rod.node_count();
@@ -57,9 +58,16 @@ RodDiscretization discretize(const RodSpec& rod) {
   d.frames = parallel_transport_frames(rod.nodes);
   const std::vector<Matrix3> rest_frames =
       rod.rest_nodes.empty() ? d.frames : parallel_transport_frames(rest);
+  const auto fixed = [&](int edge) {
+    return std::find(rod.fixed_edges.begin(), rod.fixed_edges.end(), edge) != rod.fixed_edges.end();
+  };
+  const bool first_clamped = (fixed(0) || ends.first_welded) && !ends.first_spliced;
+  const bool last_clamped = (fixed(edges - 1) || ends.last_welded) && !ends.last_spliced;
   for (int i = 1; i + 1 < n; ++i) {
-    const double l = 0.5 * (d.rest_length[i - 1] + d.rest_length[i]);
-    d.voronoi_length.push_back(l);
+    double l = 0.5 * (d.rest_length[i - 1] + d.rest_length[i]);
+    if (i == 1 && first_clamped) l += 0.5 * d.rest_length[0];
+    if (i == n - 2 && last_clamped) l += 0.5 * d.rest_length[edges - 1];
+    d.bending_length.push_back(l);
     d.rest_darboux.push_back(rod.rest_darboux.empty()
                                  ? darboux_vector(rest_frames[i - 1], rest_frames[i], l)
                                  : rod.rest_darboux[i - 1]);

@@ -96,7 +96,10 @@ struct RodDiscretization {
   std::vector<double> rest_length;         // per edge, m
   std::vector<Matrix3> edge_inertia;       // body-frame inertia tensor per edge
   std::vector<Matrix3> frames;             // initial edge rotations (parallel transport)
-  std::vector<double> voronoi_length;      // per interior node i = 1…n−2: ½(l_{i−1} + l_i)
+  // Per interior node i = 1…n−2, the length of rod its bend–twist hinge stands for: the
+  // Voronoi length ½(l_{i−1} + l_i), and at the node next to a clamped end also the clamped
+  // edge's other half (see discretize).
+  std::vector<double> bending_length;
   std::vector<Vector3> rest_darboux;       // per interior node, from the rest frames
 };
 
@@ -108,8 +111,28 @@ Matrix3 minimal_rotation(const Vector3& a, const Vector3& b);
 // e_z onto the first edge.
 std::vector<Matrix3> parallel_transport_frames(const std::vector<Vector3>& nodes);
 
+// What the model's joints do at a rod's ends (Model::discretize_rod finds it): a weld to the
+// world holds the end edge's frame as a clamp does; a splice continues the rod into another.
+// (A weld to a body is not a clamp: the body may turn with the edge.)
+struct RodEnds {
+  bool first_welded = false, last_welded = false;    // edge 0 / edge n − 2 welded to the world
+  bool first_spliced = false, last_spliced = false;  // node 0 / node n − 1 spliced
+};
+
 // Lumped masses, rest lengths, edge inertias, parallel-transported frames and rest Darboux
-// vectors of a validated rod.
-RodDiscretization discretize(const RodSpec& rod);
+// vectors of a validated rod. The bending lengths and rest Darboux vectors depend on `ends`:
+// take them from Model::discretize_rod.
+//
+// A clamped end: the rod's end edge clamped (fixed_edges) or welded to the world, and not
+// spliced. With
+// hinges at the interior nodes over their Voronoi lengths, the clamped edge's outer half
+// belongs to no hinge and stays straight: the rod would be held half an edge inside its end,
+// where the bending moment is largest, a first-order error in l (a cantilever of 40 edges at
+// F L²/EI = 2 misses the elastica's tip by 1.3 % of L). The hinge next to a clamped end takes
+// that half too, over l_end + ½ l_next, which holds the rod at its end node and makes the
+// error second order. The hinge's rest angle stays the rest shape's, so the rest shape is
+// still unstressed; free and spliced ends and interior nodes keep their Voronoi lengths
+// (docs/design.md §6.5).
+RodDiscretization discretize(const RodSpec& rod, RodEnds ends = {});
 
 }  // namespace liedyn

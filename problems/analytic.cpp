@@ -157,9 +157,11 @@ std::vector<ExactFrame> static_rod(const Scene& scene, const StraightRod& r, con
       frames[k].points.emplace_back(m.rod_point(0, i), rod.nodes[i] + lambda * u(r.s[i]));
     }
     for (int j = 0; j < rod.edge_count(); ++j) {
+      // A clamped edge keeps its frame: it holds the rod's tangent at the clamp.
+      const bool clamped = std::find(rod.fixed_edges.begin(), rod.fixed_edges.end(), j) != rod.fixed_edges.end();
       const double midpoint = 0.5 * (r.s[j] + r.s[j + 1]);
-      frames[k].rotations.emplace_back(m.rod_rotation(0, j),
-                                       so3::exp(lambda * theta(midpoint) * axis) * frames0[j]);
+      const double angle = clamped ? 0.0 : lambda * theta(midpoint);
+      frames[k].rotations.emplace_back(m.rod_rotation(0, j), so3::exp(angle * axis) * frames0[j]);
     }
   }
   return frames;

@@ -19,8 +19,9 @@
 //   node from node 0 and L that of the last node:
 //     w(s) = λ F s² (3L − s) / (6 EI),   slope w′(s) = λ F s (2L − s) / (2 EI),
 //   at load step λ = k/frames; each edge turns by w′ at its midpoint about d × F̂ (d: the
-//   rod's direction). The linear theory is itself off by O((F L²/EI)²) relative, and the
-//   discrete rod by O(l/L) (its clamp sits half an edge out, tests/test_rod_validation.cpp).
+//   rod's direction), but the clamped edge 0, which holds the tangent at the clamp, not at all.
+//   The linear theory is itself off by O((F L²/EI)²) relative, and the discrete rod by
+//   O((l/L)²) (tests/test_analytic.cpp, tests/test_rod_validation.cpp).
 //
 // axial_stretch — static mode; one straight rod with node 0 fixed (other nodes free; edges
 //   may be clamped), no gravity, one constant force F on the last node along the rod. Every

@@ -73,6 +73,14 @@ inline Tip elastica_tip(double p, double L) {
   return tip;
 }
 
+// The discrete rod's tip deflection under a small tip force, over Euler–Bernoulli's
+// F L³/(3 EI), for a uniform rod of n edges clamped at node 0 and edge 0 (bending only, no
+// shear compliance): hinges at nodes i = 1…n−1 of stiffness EI/w_i carrying F (L − i l), with
+// w_i = l and w_1 = 3l/2 next to the clamp (lib/rod.hpp), give
+//   Σ_i F (L − i l)² w_i/EI = F l³/EI (Σ_{j=1}^{n−1} j² + ½ (n − 1)²),
+// which is 1 − 5/(2n²) + 3/(2n³) of F L³/(3 EI): second order in 1/n.
+inline double clamped_rod_tip_fraction(double n) { return 1.0 - 2.5 / (n * n) + 1.5 / (n * n * n); }
+
 // Smallest root of cos β cosh β = −1 (clamped–free beam): β₁ = 1.8751040687…; the first
 // bending mode of a cantilever of mass m, length L, stiffness EI has ω₁ = β₁² √(EI/(m L³)).
 inline double cantilever_beta1() {

@@ -61,12 +61,14 @@ TEST(Backends, AgreeOnAFreeBody) { expect_backends_agree("free_body.json", 20); 
 TEST(Backends, AgreeOnAHeavyTop) { expect_backends_agree("heavy_top.json", 20); }
 // Ceres cannot meet 1e-9 here: near the equilibrium the cost decrease of a step falls below
 // the round-off of its cost (which includes the offset root of the tip load), and it stalls
-// with Newton steps of 1e-9–1e-7 (README, "Back-ends"). At 1e-7 all three converge, and the
-// bound 1e-6 still leaves a factor 5 over 2·tolerance (static steps do not accumulate).
+// with Newton steps of 1e-9–1.4e-7 (README, "Back-ends"). At 2e-7 all three converge, and the
+// bound 1e-6 still leaves a factor 2.5 over 2·tolerance (static steps do not accumulate).
 TEST(Backends, AgreeOnAStaticCantilever) {
-  expect_backends_agree("cantilever_static.json", 10, 1e-7);
+  expect_backends_agree("cantilever_static.json", 10, 2e-7);
 }
-TEST(Backends, AgreeOnAHelicalRod) { expect_backends_agree("helix_perversion.json", 3); }
+// Ceres stalls on the helix at Newton steps of 1e-9–1e-7 (README, "Back-ends"), 1.9e-9 in its
+// first frame: 1e-8 lets the first three frames converge under all three.
+TEST(Backends, AgreeOnAHelicalRod) { expect_backends_agree("helix_perversion.json", 3, 1e-8); }
 
 // Every rotation parameterisation Ceres supports reaches Newton's (Lie) trajectory.
 TEST(Backends, CeresUnderEveryParameterisation) {
