@@ -80,7 +80,11 @@ TEST(BundledScenes, PulledHelixUnwindsKeepingItsHandedness) {
   }
   const std::vector<Vector3> x(sim.state().points.begin(), sim.state().points.end());
   EXPECT_NEAR(x.back().z() - x.front().z(), 6.0, 1e-6);  // keyframe written to 6 decimals
-  for (int i = 1; i < nodes - 2; ++i) EXPECT_EQ(handedness(x, i), 1) << "node " << i;
+  // The coil's handedness, from every triple of free edges: the triples with a clamped edge
+  // (i = 1 and nodes − 3) measure how the rod turns away from the clamp's fixed direction,
+  // which depends on how the clamp is modelled (their sign flipped when the clamp moved from
+  // half an edge in to the end node), not the coil's.
+  for (int i = 2; i < nodes - 3; ++i) EXPECT_EQ(handedness(x, i), 1) << "node " << i;
   EXPECT_LT(mean_radius(), 0.35);
 }
 
