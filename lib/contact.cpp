@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "point_pair.hpp"
+#include "so3.hpp"
 
 namespace liedyn {
 
@@ -16,6 +17,32 @@ bool ContactMaterial::touches(const std::string& name) const {
 
 double ContactSample::penetration(const State& q) const {
   return radius - collider->evaluate(at.position(q), false).distance;
+}
+
+Matrix3 ContactSample::normal_jacobian(const Vector3& previous_position, const Vector3& normal,
+                                       SdfValue& lagged) const {
+  lagged = collider->evaluate(previous_position, true);
+  const double g_norm = lagged.gradient.norm();
+  if (!(g_norm > 0.0)) return Matrix3::Zero();
+  return (Matrix3::Identity() - normal * normal.transpose()) * lagged.hessian / g_norm;
+}
+
+Eigen::Matrix<double, 6, 6> ContactSample::previous_block(const State& q, const State& previous,
+                                                          const Matrix3& df_dprevious) const {
+  Eigen::Matrix<double, 3, 6> dp_previous;  // ∂p̂/∂(x̂, θ̂)
+  dp_previous << Matrix3::Identity(), -so3::hat(at.lever(previous));
+  Eigen::Matrix<double, 6, 6> out;
+  out.topRows<3>() = df_dprevious * dp_previous;
+  out.bottomRows<3>() = so3::hat(at.lever(q)) * out.topRows<3>();  // rows θ: r × f
+  return out;
+}
+
+void ContactSample::add_previous_adjoint(const State& q, const Eigen::Matrix<double, 6, 6>& block,
+                                         const LocalGradient<2>& z, Eigen::VectorXd& a_previous) const {
+  // Columns (x̂, θ̂) of the sample's frame: its point and, on a body, its rotation.
+  const Eigen::Matrix<double, 6, 1> w = block.transpose() * z;
+  if (at.point >= 0) a_previous.segment<3>(tangent_point(at.point)) += w.head<3>();
+  if (at.rotation >= 0) a_previous.segment<3>(tangent_rotation(q, at.rotation)) += w.tail<3>();
 }
 
 double Contact::evaluate(const State& q, LocalGradient<2>* g, LocalHessian<2>* H) const {

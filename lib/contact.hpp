@@ -40,6 +40,8 @@ struct ContactMaterial {
   double friction = 0.0;           // μ, ≥ 0 (0: frictionless)
   double friction_velocity = 1e-3; // ε_v, m/s, > 0: the smoothed Coulomb law's stick–slip
                                    // transition speed (friction.hpp); sticking creeps below it
+  double damping = 0.0;            // c, N·s/m, ≥ 0: dashpot on the normal approach velocity
+                                   // against colliders (contact_damping.hpp; 0: none)
   // What it touches, by name (bodies, colliders): everything by default, only those in
   // collides_with when it is given, never those in ignores (one of the two at most).
   std::vector<std::string> collides_with;
@@ -59,6 +61,19 @@ struct ContactSample {
 
   // ρ − φ(p): > 0 when the sample's sphere overlaps the collider.
   double penetration(const State& q) const;
+
+  // For the lagged terms (friction, damping) whose force f on the sample's point depends on its
+  // previous position p̂ = x̂ + R̂ p̄: the 6×6 block ∂C/∂(x̂, θ̂) of their local gradient
+  // C = (f, r × f) from ∂f/∂p̂ (∂p̂/∂(x̂, θ̂) = [I, −hat(r̂)]), and its transpose times z added
+  // to the adjoint of q_{k−1} at the sample's point and rotation.
+  // ∂n/∂p̂ = P ∇²φ(p̂)/‖∇φ(p̂)‖ of the lagged unit normal n = ∇φ(p̂)/‖∇φ(p̂)‖ (P = I − n nᵀ;
+  // 0 where ∇φ vanishes); `lagged` receives φ's value and derivatives at p̂.
+  Matrix3 normal_jacobian(const Vector3& previous_position, const Vector3& normal,
+                          SdfValue& lagged) const;
+  Eigen::Matrix<double, 6, 6> previous_block(const State& q, const State& previous,
+                                             const Matrix3& df_dprevious) const;
+  void add_previous_adjoint(const State& q, const Eigen::Matrix<double, 6, 6>& block,
+                            const LocalGradient<2>& z, Eigen::VectorXd& a_previous) const;
 };
 
 struct Contact : ContactSample {

@@ -63,36 +63,26 @@ void Friction::residual(const State& q, Residual& r, ResidualJacobian* J) const 
 
 Eigen::Matrix<double, 6, 6> Friction::previous_jacobian(const State& q,
                                                         const State& previous) const {
-  Eigen::Matrix<double, 6, 6> out = Eigen::Matrix<double, 6, 6>::Zero();
-  if (normal_force == 0.0) return out;
+  if (normal_force == 0.0) return Eigen::Matrix<double, 6, 6>::Zero();
   const Vector3 p = at.position(q);
   const SmoothedSlip s = slip(p);
-  const SdfValue lagged = collider->evaluate(previous_position, true);
-  const double g_norm = lagged.gradient.norm();
+  SdfValue lagged;
+  const Matrix3 dn = normal_jacobian(previous_position, normal, lagged);
   const Matrix3 P = Matrix3::Identity() - normal * normal.transpose();
   const Vector3 w = p - previous_position;
-  const Matrix3 dn = g_norm > 0.0 ? Matrix3(P * lagged.hessian / g_norm) : Matrix3::Zero();
   const Matrix3 du = -P - (normal * w.transpose() + normal.dot(w) * Matrix3::Identity()) * dn;
   const Matrix3 A = s.jacobian();  // ∂(φ₁ u)/∂u
   // λ = k(ρ − φ(p̂)) > 0 here, so ∂λ/∂p̂ = −k G.
   const Vector3 dlambda = -stiffness * lagged.gradient;
   const Matrix3 df = coefficient * (s.phi1 * s.u * dlambda.transpose() + normal_force * A * du);
-  Eigen::Matrix<double, 3, 6> dp_previous;  // ∂p̂/∂(x̂, θ̂)
-  dp_previous << Matrix3::Identity(), -so3::hat(at.lever(previous));
-  const Eigen::Matrix<double, 3, 6> df_previous = df * dp_previous;
-  out.topRows<3>() = df_previous;
-  out.bottomRows<3>() = so3::hat(at.lever(q)) * df_previous;  // rows θ: r × f
-  return out;
+  return previous_block(q, previous, df);
 }
 
 void Friction::add_step_adjoint(const State& q, const State& previous, const Step&,
                                 const LocalGradient<2>& z, Eigen::VectorXd& a_previous,
                                 Eigen::VectorXd&) const {
   if (normal_force == 0.0) return;
-  // Columns (x̂, θ̂) of the sample's frame: its point and, on a body, its rotation.
-  const Eigen::Matrix<double, 6, 1> w = previous_jacobian(q, previous).transpose() * z;
-  if (at.point >= 0) a_previous.segment<3>(tangent_point(at.point)) += w.head<3>();
-  if (at.rotation >= 0) a_previous.segment<3>(tangent_rotation(q, at.rotation)) += w.tail<3>();
+  add_previous_adjoint(q, previous_jacobian(q, previous), z, a_previous);
 }
 
 }  // namespace liedyn

@@ -245,8 +245,14 @@ void add_contact_terms(const Model& model,
   if (!material.enabled()) return;
   for (const auto& collider : colliders) {
     if (!material.touches(collider->name)) continue;
-    add_sample_terms<Contact, Friction>(
-        model, ContactSample{offsets, at, collider, material.stiffness, material.radius}, material, p);
+    const ContactSample sample{offsets, at, collider, material.stiffness, material.radius};
+    add_sample_terms<Contact, Friction>(model, sample, material, p);
+    if (material.damping > 0.0 && !model.static_equilibrium) {  // a dynamic term, as friction
+      ContactDamping damping{sample};
+      damping.damping = material.damping;
+      damping.time_step = model.time_step;
+      p.add(damping);
+    }
   }
 }
 

@@ -23,6 +23,7 @@
 #include "cable.hpp"
 #include "contact.hpp"
 #include "edge_contact.hpp"
+#include "contact_damping.hpp"
 #include "friction.hpp"
 #include "history.hpp"
 #include "inertia.hpp"
@@ -56,7 +57,7 @@ class IncrementalPotential {
                                ConstantTorque, RegionForce, Spring, RodStretch, RodShear,
                                RodBendTwist, CableSegment, JointPoint, JointLine, JointAlignment, JointWeld,
                                JointMotor, JointForceMotor, JointLimit<HingeAngle>,
-                               JointLimit<SliderPosition>, Contact, Friction, BodyContact,
+                               JointLimit<SliderPosition>, Contact, Friction, ContactDamping, BodyContact,
                                BodyFriction, EdgeContact, EdgeFriction, EdgeBodyContact,
                                EdgeBodyFriction>;
 

@@ -593,6 +593,7 @@ void Model::validate_contact(const ContactMaterial& contact, const std::string& 
   check(contact.radius, "radius", false);
   check(contact.friction, "friction", false);
   check(contact.friction_velocity, "friction_velocity", true);
+  check(contact.damping, "damping", false);
 }
 
 void Model::validate_rod(const RodSpec& rod, const std::string& path) {

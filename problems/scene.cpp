@@ -557,7 +557,7 @@ ContactMaterial parse_contact(ObjectReader& owner, double default_radius,
                               std::vector<Vector3>* points, std::shared_ptr<const Collider>* shape,
                               int& budget, RodSpec* rod = nullptr) {
   // A body's contact gives its samples and its shape; a rod's samples are its nodes.
-  ObjectReader::Keys keys = {"stiffness", "radius", "friction", "friction_velocity", "collides_with", "ignores"};
+  ObjectReader::Keys keys = {"stiffness", "radius", "friction", "friction_velocity", "damping", "collides_with", "ignores"};
   if (points != nullptr) keys.insert(keys.end(), {"points", "box", "shape", "sample_spacing"});
   if (rod != nullptr) keys.insert(keys.end(), {"self_contact", "self_contact_skip"});
   ObjectReader c(owner.get("contact"), owner.field("contact"), owner.source(), keys);
@@ -567,6 +567,7 @@ ContactMaterial parse_contact(ObjectReader& owner, double default_radius,
   m.radius = c.number("radius", default_radius);
   m.friction = c.number("friction", m.friction);
   m.friction_velocity = c.number("friction_velocity", m.friction_velocity);
+  m.damping = c.number("damping", m.damping);
   if (rod != nullptr) {
     rod->self_contact = c.boolean("self_contact", false);
     if (c.has("self_contact_skip")) rod->self_contact_skip = c.integer("self_contact_skip", 1, 1 << 20);

@@ -1,9 +1,10 @@
-// Contact and friction terms (lib/contact.hpp, lib/friction.hpp): value vs Lie gradient vs
+// Contact, friction and contact-damping terms (lib/contact.hpp, lib/friction.hpp,
+// lib/contact_damping.hpp): value vs Lie gradient vs
 // Lie Hessian by central differences in the tangent space (tests/fd_check.hpp) for samples
 // on rigid bodies (blocks x, θ) and rod nodes (x only), against planes, spheres and bowls,
 // at every rotation of fd::kAngles, over stiffnesses, penetrations and time steps from tiny
 // to huge; the residual forms; and the friction term's mixed block ∂C/∂q_{k−1} for the
-// adjoint, by differences of the lagged step.
+// adjoint (and the damping's), by differences of the lagged step.
 //
 // Geometry is O(1) (levers ~0.5 m, penetrations 1e-3…0.1 m) so that the fd_check defaults
 // (relative 1e-6 for first differences, 1e-5 for second differences of the value) apply as
@@ -23,6 +24,7 @@
 #include "contact_references.hpp"
 #include "fd_check.hpp"
 #include "lib/contact.hpp"
+#include "lib/contact_damping.hpp"
 #include "lib/friction.hpp"
 #include "lib/loads.hpp"
 #include "lib/sdf.hpp"
@@ -368,6 +370,143 @@ TEST(Friction, TinyAndHugeTimeStepsKeepDerivativesExactAndTheForceBounded) {
       c.term.evaluate(q, &g, &H);
       EXPECT_LE(g.head<3>().norm(), c.term.coefficient * c.term.normal_force * (1.0 + 1e-12));
       EXPECT_TRUE(H.allFinite());
+    }
+  }
+}
+
+// ----------------------------------------------------------------------------------------
+// Contact damping (lib/contact_damping.hpp): D = c s²/(2h), s = nᵀ(p − p̂), lagged n and zone.
+
+struct DampingCase {
+  ContactDamping term;
+  State previous, q;
+};
+
+// A damping term whose lagged state is a body sample `depth` inside `collider` (outside for
+// depth < 0), and whose current state has moved the sample by `normal_move` along the lagged
+// normal and `slide` across it, and turned the body.
+DampingCase damping_case(const std::shared_ptr<const Collider>& collider, double angle,
+                         double depth, double normal_move, double slide, double h,
+                         std::mt19937& rng) {
+  DampingCase c;
+  c.term.collider = collider;
+  c.term.radius = 0.1;
+  c.term.stiffness = 1e4;
+  c.term.damping = 30.0;
+  c.term.time_step = h;
+  const BodySample b = body_sample(place_sample(*collider, c.term.radius - depth, rng), angle, rng);
+  c.term.at = b.at;
+  c.term.offsets = {0, 3};
+  c.previous = b.q;
+  c.term.begin_step(c.previous, Step{});
+  const Vector3 n = c.term.normal;
+  const Matrix3 turn = so3::exp(0.2 * random_unit(rng));
+  const Vector3 p = b.at.position(b.q);
+  c.q.rotations = {turn * b.q.rotations[0]};
+  c.q.points = {p - c.q.rotations[0] * b.at.local + normal_move * n +
+                slide * fd::random_perpendicular(n, rng)};
+  return c;
+}
+
+TEST(ContactDamping, LieDerivativesMatchFiniteDifferences) {
+  std::mt19937 rng(21);
+  for (const auto& collider : colliders(rng)) {
+    for (double angle : kAngles) {
+      // Approaching, receding, and sliding along the surface.
+      for (double normal_move : {-0.01, 0.004}) {
+        SCOPED_TRACE(trace("angle move", angle, normal_move));
+        const DampingCase c = damping_case(collider, angle, 0.02, normal_move, 0.03, 1e-3, rng);
+        ASSERT_TRUE(c.term.active);
+        EXPECT_TRUE(fd::check_term(c.term, c.q, kBodyDofs));
+      }
+    }
+  }
+}
+
+TEST(ContactDamping, IsTheDashpotForceOnTheNormalVelocityAndNothingOutsideTheZone) {
+  const auto plane = make_collider(PlaneShape{}, Vector3::Zero(), Matrix3::Identity());
+  ContactDamping term;
+  term.collider = plane;
+  term.radius = 0.05;
+  term.stiffness = 1e3;
+  term.damping = 40.0;
+  term.time_step = 1e-3;
+  term.at = {0, -1, Vector3::Zero()};
+  term.offsets = {0, -1};
+  State previous;
+  previous.points = {Vector3(0, 0, 0.04)};  // 1 cm inside the zone
+  term.begin_step(previous, Step{});
+  ASSERT_TRUE(term.active);
+  State q;
+  q.points = {Vector3(0.3, -0.2, 0.038)};  // approaching at 2 m/s, sliding at 360 m/s
+  LocalGradient<2> g;
+  LocalHessian<2> H;
+  const double D = term.evaluate(q, &g, &H);
+  // −f = −c v_n n = −40 · (−2) e_z: the dashpot pushes back along the normal only.
+  EXPECT_TRUE((-g.head<3>()).isApprox(Vector3(0.0, 0.0, 80.0), 1e-12));
+  EXPECT_NEAR(D, 0.5 * 40.0 * 4.0 * 1e-3, 1e-15);  // h · ½ c v_n²
+  const Matrix3 K = Vector3(0.0, 0.0, 4e4).asDiagonal();  // (c/h) n nᵀ
+  const Matrix3 H_xx = H.topLeftCorner<3, 3>();
+  EXPECT_TRUE(H_xx.isApprox(K, 1e-12));
+  // The zone is the lagged one: outside it at q_{k−1}, nothing, wherever q is.
+  previous.points = {Vector3(0, 0, 0.06)};
+  term.begin_step(previous, Step{});
+  EXPECT_FALSE(term.active);
+  EXPECT_EQ(term.evaluate(q, &g, &H), 0.0);
+  EXPECT_TRUE(g.isZero(0.0));
+  EXPECT_TRUE(H.isZero(0.0));
+  fd::TermCheckOptions zero;  // everything vanishes here by construction
+  for (fd::FdOptions* o : {&zero.gradient, &zero.hessian, &zero.hessian_from_value}) {
+    o->require_nonzero = fd::NonZero::kNone;
+  }
+  EXPECT_TRUE(fd::check_term(term, q, kNodeDofs, zero));
+}
+
+TEST(ContactDamping, ResidualFormReproducesValueAndGradient) {
+  std::mt19937 rng(22);
+  for (const auto& collider : colliders(rng)) {
+    for (double normal_move : {-0.01, 0.0, 0.004}) {
+      const DampingCase c = damping_case(collider, 1.3, 0.02, normal_move, 0.02, 1e-3, rng);
+      LocalGradient<2> g;
+      const double D = c.term.evaluate(c.q, &g, nullptr);
+      ContactDamping::Residual r;
+      ContactDamping::ResidualJacobian J;
+      c.term.residual(c.q, r, &J);
+      EXPECT_NEAR(0.5 * r.squaredNorm(), D, 1e-13 * std::max(D, 1e-300));
+      EXPECT_TRUE((J.transpose() * r).isApprox(g, 1e-12) || g.isZero(0.0));
+      EXPECT_TRUE(fd::check_vector_jacobian(fd::residual_of(c.term), c.q, kBodyDofs, J));
+    }
+  }
+}
+
+TEST(ContactDamping, MixedBlockOfTheLaggedStepMatchesFiniteDifferences) {
+  // C(q; q_{k−1}) through p̂ and n (begin_step re-run on every perturbed q_{k−1}; the zone does
+  // not switch: the sample is 2 cm inside, far beyond the FD step).
+  std::mt19937 rng(23);
+  for (const auto& collider : colliders(rng)) {
+    for (double angle : kAngles) {
+      SCOPED_TRACE(trace("angle", angle));
+      const DampingCase c = damping_case(collider, angle, 0.02, -0.006, 0.01, 1e-3, rng);
+      const fd::VectorFunction C = fd::lagged_gradient(c.term, c.q);
+      const Eigen::MatrixXd J = c.term.previous_jacobian(c.q, c.previous);
+      EXPECT_TRUE(fd::check_vector_jacobian(C, c.previous, kBodyDofs, J));
+    }
+  }
+}
+
+TEST(ContactDamping, TinyAndHugeTimeStepsAndDampingsKeepDerivativesExact) {
+  // D = c s²/(2h) is quadratic in the state for any c/h: c/h from 1e-3 (c = 1e-3, h = 1 s) to
+  // 1e12 (c = 1e6, h = 1e-6 s); the derivatives scale with it and stay exact (relative).
+  std::mt19937 rng(24);
+  const auto plane = make_collider(PlaneShape{}, Vector3::Zero(), rotation_at(0.4, rng));
+  for (double h : {1e-6, 1e-3, 1.0}) {
+    for (double c : {1e-3, 1.0, 1e6}) {
+      SCOPED_TRACE(trace("h c", h, c));
+      DampingCase d = damping_case(plane, 2.0, 0.02, -0.005, 0.01, h, rng);
+      d.term.damping = c;
+      EXPECT_TRUE(fd::check_term(d.term, d.q, kBodyDofs));
+      EXPECT_TRUE(fd::check_vector_jacobian(fd::lagged_gradient(d.term, d.q), d.previous, kBodyDofs,
+                                            d.term.previous_jacobian(d.q, d.previous)));
     }
   }
 }

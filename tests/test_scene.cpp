@@ -1045,7 +1045,7 @@ const std::string kContactBody =
 
 TEST(SceneParse, CollidersAndContactGiveTheDescribedModel) {
   const Scene s = parse_scene(
-      scene(kBody + R"(, "contact": {"stiffness": 2e3, "friction": 0.5, "friction_velocity": 0.01,
+      scene(kBody + R"(, "contact": {"stiffness": 2e3, "friction": 0.5, "friction_velocity": 0.01, "damping": 4.5,
                                      "points": [[0, 0, -1]], "box": {"half_extents": [1, 2, 3], "per_edge": 1}})",
             R"("colliders": [
                  {"name": "floor", "type": "plane", "normal": [0, 1, 1]},
@@ -1070,6 +1070,7 @@ TEST(SceneParse, CollidersAndContactGiveTheDescribedModel) {
   EXPECT_EQ(b.contact.radius, 0.0);  // bodies: 0 by default
   EXPECT_EQ(b.contact.friction, 0.5);
   EXPECT_EQ(b.contact.friction_velocity, 0.01);
+  EXPECT_EQ(b.contact.damping, 4.5);
   // One explicit point, then the box: 8 corners, 12 edge midpoints, 6 face centres.
   ASSERT_EQ(b.contact_points.size(), 1u + 26u);
   int corners = 0;
@@ -1237,6 +1238,10 @@ TEST(SceneErrors, BadCollidersAndContact) {
                   "bodies[0].contact.friction_velocity", "positive");
   expect_rejected(with_contact(R"({"stiffness": 1, "radius": -1, "points": [[0, 0, 0]]})"),
                   "bodies[0].contact.radius", "≥ 0");
+  expect_rejected(with_contact(R"({"stiffness": 1, "damping": -2, "points": [[0, 0, 0]]})"),
+                  "bodies[0].contact.damping", "≥ 0");
+  expect_rejected(with_contact(R"({"stiffness": 1, "damping": 1e999, "points": [[0, 0, 0]]})"),
+                  "bodies[0].contact.damping", "finite");
   expect_rejected(with_contact(R"({"stiffness": 1, "points": [[0, 0, 1e999]]})"),
                   "bodies[0].contact.points[0][2]", "finite");
   expect_rejected(with_contact(R"({"stiffness": 1, "box": {"half_extents": [1, 1, 1], "per_edge": 1001}})"),
