@@ -836,6 +836,30 @@ Component build_rod_component(const Model& model, int r) {
     bend.stiffness_slot = rod.bending_stiffness_slot;
     p.add(bend);
   }
+  // Internal damping (rod_damping.hpp): dynamic terms, like friction. Where both ends of an
+  // edge or both edges of a node are clamped, their rate is 0 and there is no term.
+  if (!model.static_equilibrium) {
+    for (int j = 0; j < edges && rod.stretch_damping > 0.0; ++j) {
+      if (node_offset[j] < 0 && node_offset[j + 1] < 0) continue;
+      RodStretchDamping damping;
+      damping.offsets = {node_offset[j], node_offset[j + 1]};
+      damping.node0 = model.rod_point(r, j);
+      damping.node1 = model.rod_point(r, j + 1);
+      damping.rest_length = d.rest_length[j];
+      damping.damping = rod.stretch_damping;
+      damping.time_step = model.time_step;
+      p.add(damping);
+    }
+    for (int i = 1; i + 1 < n && rod.bending_damping != Vector3::Zero(); ++i) {
+      if (edge_offset[i - 1] < 0 && edge_offset[i] < 0) continue;
+      RodBendTwistDamping damping;
+      damping.offsets = {edge_offset[i - 1], edge_offset[i]};
+      damping.damping = rod.bending_damping;
+      damping.time_step = model.time_step;
+      damping.set(model.rod_rotation(r, i - 1), model.rod_rotation(r, i), d.bending_length[i - 1]);
+      p.add(damping);
+    }
+  }
   for (const CableSpec& cable : rod.cables) {
     for (std::size_t k = 0; k + 1 < cable.route.size(); ++k) {
       CableSegment segment;

@@ -24,6 +24,7 @@
 #include "contact.hpp"
 #include "edge_contact.hpp"
 #include "contact_damping.hpp"
+#include "rod_damping.hpp"
 #include "friction.hpp"
 #include "history.hpp"
 #include "inertia.hpp"
@@ -55,7 +56,8 @@ class IncrementalPotential {
   using TermTypes = std::tuple<TranslationalInertia, RotationalInertia, PointHistory,
                                RotationHistory, Gravity, ConstantForce,
                                ConstantTorque, RegionForce, Spring, RodStretch, RodShear,
-                               RodBendTwist, CableSegment, JointPoint, JointLine, JointAlignment, JointWeld,
+                               RodBendTwist, RodStretchDamping, RodBendTwistDamping,
+                               CableSegment, JointPoint, JointLine, JointAlignment, JointWeld,
                                JointMotor, JointForceMotor, JointLimit<HingeAngle>,
                                JointLimit<SliderPosition>, Contact, Friction, ContactDamping, BodyContact,
                                BodyFriction, EdgeContact, EdgeFriction, EdgeBodyContact,

@@ -59,6 +59,10 @@ struct RodSpec {
   double stretch_stiffness = 0.0;      // k_s, N: Ψ_s = ½ k_s l (1 − ‖e‖/l)² per edge
   double shear_stiffness = 0.0;        // k_x, N: Ψ_x = ½ k_x l (1 − dᵀ R e_z) per edge
   Vector3 bending_stiffness = Vector3::Zero();  // K_b = diag(bend, bend, twist), N·m²
+  // Internal damping (lib/rod_damping.hpp), dynamic mode: η_s [N·s] on the stretch rate,
+  // (η₁, η₂, η₃) [N·m²·s] on the bending and twist rates; 0: none.
+  double stretch_damping = 0.0;
+  Vector3 bending_damping = Vector3::Zero();
   std::vector<int> fixed_nodes;        // clamped positions
   std::vector<int> fixed_edges;        // clamped rotations
   std::vector<NodeForce> node_forces;  // constant world forces on nodes

@@ -1,0 +1,101 @@
+#include "rod_damping.hpp"
+
+#include <cmath>
+
+#include "spring.hpp"
+
+namespace liedyn {
+
+void RodStretchDamping::begin_step(const State& previous, const Step&) {
+  previous_length = (previous.points[node1] - previous.points[node0]).norm();
+}
+
+double RodStretchDamping::evaluate(const State& q, LocalGradient<2>* g, LocalHessian<2>* H) const {
+  const auto [value, f, K] = length_spring(q.points[node1] - q.points[node0], rate(), previous_length);
+  if (g != nullptr) {
+    g->segment<3>(0) = -f;
+    g->segment<3>(3) = f;
+  }
+  if (H != nullptr) {
+    H->block<3, 3>(0, 0) = K;
+    H->block<3, 3>(0, 3) = -K;
+    H->block<3, 3>(3, 0) = -K;
+    H->block<3, 3>(3, 3) = K;
+  }
+  return value;
+}
+
+void RodStretchDamping::residual(const State& q, Residual& r, ResidualJacobian* J) const {
+  const Vector3 e = q.points[node1] - q.points[node0];
+  const double L = e.norm();
+  const double root = std::sqrt(rate());
+  r(0) = root * (L - previous_length);
+  if (J == nullptr) return;
+  if (L > 0.0) {
+    const Vector3 n = e / L;
+    J->leftCols<3>() = -root * n.transpose();
+    J->rightCols<3>() = root * n.transpose();
+  } else {
+    J->setZero();  // as length_spring's gradient at e = 0
+  }
+}
+
+Eigen::Matrix<double, 6, 6> RodStretchDamping::previous_jacobian(const State& q,
+                                                                 const State& previous) const {
+  Eigen::Matrix<double, 6, 6> out = Eigen::Matrix<double, 6, 6>::Zero();
+  const Vector3 e = q.points[node1] - q.points[node0];
+  const Vector3 e_previous = previous.points[node1] - previous.points[node0];
+  const double L = e.norm(), L_previous = e_previous.norm();
+  if (!(L > 0.0) || !(L_previous > 0.0)) return out;
+  const Matrix3 df = -rate() * (e / L) * (e_previous / L_previous).transpose();  // ∂f/∂x̂_{i+1}
+  out.block<3, 3>(0, 0) = df;   // C_i = −f: −(∂f/∂x̂_i) = −(−df)
+  out.block<3, 3>(0, 3) = -df;
+  out.block<3, 3>(3, 0) = -df;
+  out.block<3, 3>(3, 3) = df;
+  return out;
+}
+
+void RodStretchDamping::add_step_adjoint(const State& q, const State& previous, const Step&,
+                                         const LocalGradient<2>& z, Eigen::VectorXd& a_previous,
+                                         Eigen::VectorXd&) const {
+  const Eigen::Matrix<double, 6, 1> w = previous_jacobian(q, previous).transpose() * z;
+  // Clamped nodes (offset −1) are not DOFs: nothing flows back into them.
+  if (offsets[0] >= 0) a_previous.segment<3>(tangent_point(node0)) += w.head<3>();
+  if (offsets[1] >= 0) a_previous.segment<3>(tangent_point(node1)) += w.tail<3>();
+}
+
+void RodBendTwistDamping::set(int edge0, int edge1, double bending_length) {
+  form.edge0 = edge0;
+  form.edge1 = edge1;
+  form.rest_length = bending_length;
+  form.stiffness = damping / time_step;
+}
+
+void RodBendTwistDamping::begin_step(const State& previous, const Step&) {
+  form.rest_darboux = darboux_vector(previous.rotations[form.edge0], previous.rotations[form.edge1],
+                                     form.rest_length);
+}
+
+Eigen::Matrix<double, 6, 6> RodBendTwistDamping::previous_jacobian(const State& q,
+                                                                   const State& previous) const {
+  Eigen::Matrix<double, 6, 3> d_rest;
+  form.parameter_jacobians(q, &d_rest, nullptr);  // ∂C/∂ω̂
+  const Matrix3& Ra = previous.rotations[form.edge0];
+  const Matrix3 C = previous.rotations[form.edge1] * Ra.transpose();
+  const Matrix3 dw = Ra.transpose() * (0.5 * (C.trace() * Matrix3::Identity() - C)) / form.rest_length;
+  Eigen::Matrix<double, 6, 6> out;
+  out.leftCols<3>() = -d_rest * dw;  // ∂ω̂/∂θ̂_a = −R̂_aᵀ Ĝ/w
+  out.rightCols<3>() = d_rest * dw;  // ∂ω̂/∂θ̂_b = R̂_aᵀ Ĝ/w
+  return out;
+}
+
+void RodBendTwistDamping::add_step_adjoint(const State& q, const State& previous, const Step&,
+                                           const LocalGradient<2>& z, Eigen::VectorXd& a_previous,
+                                           Eigen::VectorXd&) const {
+  const Eigen::Matrix<double, 6, 1> w = previous_jacobian(q, previous).transpose() * z;
+  // Clamped edges (offset −1) are not DOFs: nothing flows back into them.
+  if (offsets[0] >= 0) a_previous.segment<3>(tangent_rotation(q, form.edge0)) += w.head<3>();
+  if (offsets[1] >= 0) a_previous.segment<3>(tangent_rotation(q, form.edge1)) += w.tail<3>();
+}
+
+}  // namespace liedyn

@@ -1,0 +1,102 @@
+#pragma once
+// Internal (Kelvin–Voigt) damping of a Cosserat rod: dissipation potentials on the rates of
+// its stretch and of its bending and twist, as the step's terms (docs/design.md §6.6).
+//
+// A damping stress proportional to a strain rate has the dissipation potential
+// ½ η (strain rate)² per length; times h, with the rate taken over the step as
+// (strain_k − strain_{k−1})/h, it is the elastic term's own form with the stiffness η/h and
+// the rest strain replaced by the previous step's strain (frozen in begin_step):
+//
+//   Stretch, blocks (x_i, x_{i+1}); η_s [N·s] (stress η_s ε̇, ε = (L − l)/l):
+//     D = (η_s/(2 l h)) (L − L̂)²,   L = ‖x_{i+1} − x_i‖,  L̂ the same at q_{k−1}:
+//     a length spring of stiffness η_s/(l h) and rest length L̂ (length_spring, spring.hpp);
+//     its force along the edge is (η_s/l) L̇ = η_s ε̇.
+//   Bend and twist at interior node i, blocks (θ_{i−1}, θ_i); η = (η₁, η₂, η₃) [N·m²·s]:
+//     D = ½ w (ω − ω̂)ᵀ (η/h) (ω − ω̂),   ω = vee(R_aᵀ R_b)/w,  ω̂ the same at q_{k−1}:
+//     RodBendTwist (rod_terms.hpp) with stiffness η/h and rest Darboux vector ω̂; its moment
+//     is η ω̇. w is the node's bending length (lib/rod.hpp), as for the elastic term.
+//
+// For a rod whose damping is proportional to its stiffness, η = β K (a Rayleigh damping
+// C = β K on the bending modes), a mode of angular frequency ω_n has the damping ratio
+// ζ_n = β ω_n/2: slow modes ring, fast ones are damped (RodDamping.* tests the first
+// cantilever mode's decay). Both terms act at the step's end (EndOfStep, term.hpp): first
+// order in the damping, as friction.
+//
+// Least-squares forms: those of the elastic terms, r = √(η_s/(l h)) (L − L̂) and
+// r = √w (η/h)^½ (ω − ω̂).
+//
+// The adjoint (docs/design.md §8): L̂ and ω̂ are functions of q_{k−1}, so the gradient C has
+// the mixed blocks ∂C/∂q_{k−1} (previous_jacobian):
+//   stretch: with n = e/L, n̂ = ê/L̂ and k = η_s/(l h), C = (−f, f), f = k (L − L̂) n, so
+//     ∂f/∂(x̂_i, x̂_{i+1}) = −k n (−n̂ᵀ, n̂ᵀ)  (through L̂ only);
+//   bend: ∂C/∂ω̂ = (W K, −W K) (RodBendTwist::parameter_jacobians, K = η/h) and
+//     ∂ω̂/∂(θ̂_a, θ̂_b) = (−R̂_aᵀ Ĝ, R̂_aᵀ Ĝ)/w,  Ĝ = ½ (tr Ĉ I − Ĉ),  Ĉ = R̂_b R̂_aᵀ
+//     (rod_terms.hpp, first order of ω). Δq_{k−1} does not enter either.
+
+#include "rod_terms.hpp"
+#include "state.hpp"
+#include "term.hpp"
+
+namespace liedyn {
+
+struct RodStretchDamping {
+  static constexpr int kBlocks = 2;
+  static constexpr const char* kName = "rod_stretch_damping";
+  static constexpr bool kEndOfStep = true;  // term.hpp
+  std::array<int, kBlocks> offsets{-1, -1};  // x_i, x_{i+1}
+  int node0 = -1, node1 = -1;                // i, i+1 (State::points)
+  double rest_length = 0.0;                  // l   [m], > 0
+  double damping = 0.0;                      // η_s [N·s], > 0
+  double time_step = 0.0;                    // h   [s], > 0
+  double previous_length = 0.0;              // L̂   [m], lagged (begin_step)
+
+  void begin_step(const State& previous, const Step& previous_step);
+  double evaluate(const State& q, LocalGradient<2>* g, LocalHessian<2>* H) const;
+
+  static constexpr int kResiduals = 1;
+  using Residual = LocalResidual<kResiduals>;
+  using ResidualJacobian = LocalResidualJacobian<kResiduals, kBlocks>;
+  void residual(const State& q, Residual& r, ResidualJacobian* J) const;
+
+  // ∂C/∂(x̂_i, x̂_{i+1}) (formulas at the top); `previous` as given to begin_step.
+  Eigen::Matrix<double, 6, 6> previous_jacobian(const State& q, const State& previous) const;
+  // ReadsPreviousStep (term.hpp): adds (∂C/∂q_{k−1})ᵀ z.
+  void add_step_adjoint(const State& q, const State& previous, const Step& previous_step,
+                        const LocalGradient<kBlocks>& z, Eigen::VectorXd& a_previous,
+                        Eigen::VectorXd& da_previous) const;
+
+ private:
+  double rate() const { return damping / (rest_length * time_step); }  // η_s/(l h)
+};
+
+struct RodBendTwistDamping {
+  static constexpr int kBlocks = 2;
+  static constexpr const char* kName = "rod_bend_twist_damping";
+  static constexpr bool kEndOfStep = true;  // term.hpp
+  std::array<int, kBlocks> offsets{-1, -1};  // θ_{i−1}, θ_i
+  Vector3 damping = Vector3::Zero();          // (η₁, η₂, η₃) [N·m²·s]: bend, bend, twist
+  double time_step = 0.0;                     // h [s], > 0
+  // The elastic form it evaluates: edges, w, stiffness η/h, rest Darboux ω̂ (begin_step).
+  RodBendTwist form;
+
+  // Sets form's edges, bending length and η/h.
+  void set(int edge0, int edge1, double bending_length);
+  void begin_step(const State& previous, const Step& previous_step);
+  double evaluate(const State& q, LocalGradient<2>* g, LocalHessian<2>* H) const {
+    return form.evaluate(q, g, H);
+  }
+
+  static constexpr int kResiduals = 3;
+  using Residual = LocalResidual<kResiduals>;
+  using ResidualJacobian = LocalResidualJacobian<kResiduals, kBlocks>;
+  void residual(const State& q, Residual& r, ResidualJacobian* J) const { form.residual(q, r, J); }
+
+  // ∂C/∂(θ̂_{i−1}, θ̂_i) (formulas at the top); `previous` as given to begin_step.
+  Eigen::Matrix<double, 6, 6> previous_jacobian(const State& q, const State& previous) const;
+  // ReadsPreviousStep (term.hpp): adds (∂C/∂q_{k−1})ᵀ z.
+  void add_step_adjoint(const State& q, const State& previous, const Step& previous_step,
+                        const LocalGradient<kBlocks>& z, Eigen::VectorXd& a_previous,
+                        Eigen::VectorXd& da_previous) const;
+};
+
+}  // namespace liedyn

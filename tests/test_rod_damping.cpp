@@ -1,0 +1,337 @@
+// Internal damping of rods (lib/rod_damping.hpp): value vs Lie gradient vs Lie Hessian by
+// central differences in the tangent space (tests/fd_check.hpp) at every rotation of
+// fd::kAngles and relative angles from 0 to π − 1e-6, over tiny to huge time steps and
+// dampings; the residual forms; the mixed blocks ∂C/∂q_{k−1} of the lagged strains for the
+// adjoint; the dashpot laws (force η_s ε̇, moment η ω̇); and a cantilever's first mode
+// decaying at the damping ratio a Rayleigh damping gives it.
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <numbers>
+#include <random>
+#include <vector>
+
+#include "adjoint_check.hpp"
+#include "fd_check.hpp"
+#include "lib/rod_damping.hpp"
+#include "lib/so3.hpp"
+#include "problems/scene.hpp"
+#include "rod_models.hpp"
+#include "solvers/simulator.hpp"
+#include "trajectory_compare.hpp"
+
+namespace liedyn {
+namespace {
+
+using fd::kAngles;
+using fd::random_unit;
+using fd::rotation_at;
+using fd::trace;
+
+const fd::Dofs kNodes = {fd::point_dof(0), fd::point_dof(1)};
+const fd::Dofs kEdges = {fd::rotation_dof(0), fd::rotation_dof(1)};
+
+// ----------------------------------------------------------------------------------------
+// Stretch rate: D = (η_s/(2 l h)) (L − L̂)².
+
+struct StretchDampingCase {
+  RodStretchDamping term;
+  State previous, q;
+};
+
+// An edge of rest length 0.1 m, `L_previous` long at q_{k−1}, `L` long now and turned.
+StretchDampingCase stretch_case(double L_previous, double L, double eta, double h, std::mt19937& rng) {
+  StretchDampingCase c;
+  c.term.node0 = 0;
+  c.term.node1 = 1;
+  c.term.offsets = {0, 3};
+  c.term.rest_length = 0.1;
+  c.term.damping = eta;
+  c.term.time_step = h;
+  const Vector3 x0 = fd::random_vector(rng, 0.1), d = random_unit(rng);
+  c.previous.points = {x0, x0 + L_previous * d};
+  c.term.begin_step(c.previous, Step{});
+  const Vector3 y0 = x0 + fd::random_vector(rng, 0.02);
+  c.q.points = {y0, y0 + L * so3::exp(0.3 * random_unit(rng)) * d};
+  return c;
+}
+
+TEST(RodStretchDamping, DerivativesResidualAndMixedBlockMatchFiniteDifferences) {
+  std::mt19937 rng(41);
+  int checked = 0;
+  for (double h : {1e-6, 1e-3, 1.0}) {
+    for (double eta : {1e-3, 1.0, 1e6}) {
+      // Lengthening, shortening, and a rate far larger than the strain.
+      for (const auto& [L_previous, L] : {std::pair{0.1, 0.104}, {0.105, 0.098}, {0.01, 0.3}}) {
+        SCOPED_TRACE(trace("h eta", h, eta));
+        SCOPED_TRACE(trace("L_previous L", L_previous, L));
+        const StretchDampingCase c = stretch_case(L_previous, L, eta, h, rng);
+        EXPECT_TRUE(fd::check_term(c.term, c.q, kNodes));
+        RodStretchDamping::Residual r;
+        RodStretchDamping::ResidualJacobian J;
+        c.term.residual(c.q, r, &J);
+        LocalGradient<2> g;
+        const double D = c.term.evaluate(c.q, &g, nullptr);
+        EXPECT_NEAR(0.5 * r.squaredNorm(), D, 1e-13 * D);
+        EXPECT_TRUE((J.transpose() * r).isApprox(g, 1e-12));
+        EXPECT_TRUE(fd::check_vector_jacobian(fd::residual_of(c.term), c.q, kNodes, J));
+        EXPECT_TRUE(fd::check_vector_jacobian(fd::lagged_gradient(c.term, c.q), c.previous, kNodes,
+                                              c.term.previous_jacobian(c.q, c.previous)));
+        ++checked;
+      }
+    }
+  }
+  EXPECT_EQ(checked, 27);
+}
+
+TEST(RodStretchDamping, PullsWithEtaTimesTheStrainRate) {
+  // Along x, l = 0.1 m, stretching from 0.1 to 0.1002 m in h = 1 ms: the strain rate is
+  // (ΔL/l)/h = 2 1/s, so the force is η_s ε̇ = 1.5 · 2 = 3 N, resisting.
+  RodStretchDamping term;
+  term.node0 = 0;
+  term.node1 = 1;
+  term.rest_length = 0.1;
+  term.damping = 1.5;
+  term.time_step = 1e-3;
+  State previous;
+  previous.points = {Vector3::Zero(), Vector3(0.1, 0, 0)};
+  term.begin_step(previous, Step{});
+  State q;
+  q.points = {Vector3::Zero(), Vector3(0.1002, 0, 0)};
+  LocalGradient<2> g;
+  term.evaluate(q, &g, nullptr);
+  EXPECT_TRUE((-g.tail<3>()).isApprox(Vector3(-3.0, 0, 0), 1e-12));  // on node 1
+  EXPECT_TRUE((-g.head<3>()).isApprox(Vector3(3.0, 0, 0), 1e-12));
+}
+
+// ----------------------------------------------------------------------------------------
+// Bend and twist rate: D = ½ w (ω − ω̂)ᵀ (η/h) (ω − ω̂).
+
+struct BendDampingCase {
+  RodBendTwistDamping term;
+  State previous, q;
+};
+
+// Two edge frames at rotations of kAngles, `previous_angle` apart at q_{k−1}; now both turned
+// and `change` radians further apart about a random axis.
+BendDampingCase bend_case(double frame_angle, double previous_angle, double change, double eta_scale,
+                          double h, std::mt19937& rng) {
+  BendDampingCase c;
+  c.term.offsets = {0, 3};
+  c.term.damping = eta_scale * Vector3(1.0, 1.7, 0.6);  // bend, bend, twist: all distinct
+  c.term.time_step = h;
+  c.term.set(0, 1, 0.1);
+  const Matrix3 Ra = rotation_at(frame_angle, rng);
+  c.previous.rotations = {Ra, Ra * so3::exp(previous_angle * random_unit(rng))};
+  c.term.begin_step(c.previous, Step{});
+  const Matrix3 turn = so3::exp(0.2 * random_unit(rng));
+  c.q.rotations = {turn * c.previous.rotations[0],
+                   turn * c.previous.rotations[1] * so3::exp(change * random_unit(rng))};
+  return c;
+}
+
+TEST(RodBendTwistDamping, DerivativesResidualAndMixedBlockMatchFiniteDifferences) {
+  std::mt19937 rng(42);
+  int checked = 0;
+  for (double frame_angle : kAngles) {
+    for (double previous_angle : {0.0, 1e-9, 1e-4, 1.0, std::numbers::pi - 1e-6}) {
+      SCOPED_TRACE(trace("frame angle, previous relative angle", frame_angle, previous_angle));
+      const BendDampingCase c = bend_case(frame_angle, previous_angle, 0.3, 1.0, 1e-3, rng);
+      EXPECT_TRUE(fd::check_term(c.term, c.q, kEdges));
+      RodBendTwistDamping::Residual r;
+      RodBendTwistDamping::ResidualJacobian J;
+      c.term.residual(c.q, r, &J);
+      LocalGradient<2> g;
+      const double D = c.term.evaluate(c.q, &g, nullptr);
+      EXPECT_NEAR(0.5 * r.squaredNorm(), D, 1e-12 * D);
+      EXPECT_TRUE((J.transpose() * r).isApprox(g, 1e-11));
+      EXPECT_TRUE(fd::check_vector_jacobian(fd::residual_of(c.term), c.q, kEdges, J));
+      EXPECT_TRUE(fd::check_vector_jacobian(fd::lagged_gradient(c.term, c.q), c.previous, kEdges,
+                                            c.term.previous_jacobian(c.q, c.previous)));
+      ++checked;
+    }
+  }
+  // Tiny and huge steps and dampings: η/h from 1e-3 to 1e12 N·m², the same form.
+  for (double h : {1e-6, 1.0}) {
+    for (double eta : {1e-3, 1e6}) {
+      SCOPED_TRACE(trace("h eta", h, eta));
+      const BendDampingCase c = bend_case(1.0, 0.5, 0.3, eta, h, rng);
+      EXPECT_TRUE(fd::check_term(c.term, c.q, kEdges));
+      EXPECT_TRUE(fd::check_vector_jacobian(fd::lagged_gradient(c.term, c.q), c.previous, kEdges,
+                                            c.term.previous_jacobian(c.q, c.previous)));
+      ++checked;
+    }
+  }
+  EXPECT_EQ(checked, static_cast<int>(kAngles.size()) * 5 + 4);
+}
+
+TEST(RodBendTwistDamping, ResistsWithEtaTimesTheCurvatureRate) {
+  // A straight pair of edges along z bending about x by 1e-4 rad in h = 1 ms over w = 0.1 m:
+  // the curvature rate is (1e-4/0.1)/1e-3 = 1 1/(m·s), the moment η₁ · 1 = 2 N·m on edge 1
+  // (against the bend) and −2 N·m on edge 0; to first order in the small angle.
+  RodBendTwistDamping term;
+  term.damping = Vector3(2.0, 3.0, 4.0);
+  term.time_step = 1e-3;
+  term.set(0, 1, 0.1);
+  State previous;
+  previous.rotations = {Matrix3::Identity(), Matrix3::Identity()};
+  term.begin_step(previous, Step{});
+  State q;
+  q.rotations = {Matrix3::Identity(), so3::exp(Vector3(1e-4, 0, 0))};
+  LocalGradient<2> g;
+  term.evaluate(q, &g, nullptr);
+  EXPECT_TRUE((-g.tail<3>()).isApprox(Vector3(-2.0, 0, 0), 1e-7));
+  EXPECT_TRUE((-g.head<3>()).isApprox(Vector3(2.0, 0, 0), 1e-7));
+}
+
+// ----------------------------------------------------------------------------------------
+// A damped cantilever's first mode.
+
+// Mean |y| of the tip over the first and over the fifth period of the first mode of a
+// cantilever started bent (as Trapezoidal.ReleasedRodKeepsItsAmplitude), with bending damping
+// η = β EI: their ratio.
+double damped_amplitude_ratio(double beta, Integrator integrator, double* period) {
+  Model model;
+  model.time_step = 2e-3;
+  model.integrator = integrator;
+  const double EI = 0.5;
+  RodSpec rod = test_models::uniform_rod(20, 1.0, 0.1, 0.01, 1e4, 1e4, EI);
+  rod.fixed_nodes = {0, 1};
+  rod.fixed_edges = {0};
+  rod.bending_damping = beta * rod.bending_stiffness;
+  rod.rest_nodes = rod.nodes;
+  const double l = 1.0 / 20, curvature = 0.2;
+  double angle = 0.0;
+  for (std::size_t i = 1; i + 1 < rod.nodes.size(); ++i) {
+    angle += curvature * (i == 1 ? 1.5 * l : l);
+    rod.nodes[i + 1] = rod.nodes[i] + l * Vector3(std::cos(angle), std::sin(angle), 0.0);
+  }
+  model.rods.push_back(rod);
+  SolverOptions options;
+  options.tolerance = 1e-10;
+  Simulator sim(model, options);
+  const double omega = std::pow(test_models::cantilever_beta1(), 2) * std::sqrt(EI / 0.1);
+  *period = 2.0 * std::numbers::pi / omega;
+  const int steps = static_cast<int>(std::lround(*period / model.time_step));
+  const int tip = 20;
+  double first = 0.0, last = 0.0;
+  for (int k = 1; k <= 5 * steps; ++k) {
+    EXPECT_TRUE(sim.step().converged()) << k;
+    const double y = std::abs(sim.state().points[model.rod_point(0, tip)].y());
+    if (k <= steps) first += y;
+    if (k > 4 * steps) last += y;
+  }
+  return last / first;
+}
+
+TEST(RodDamping, ACantileversFirstModeDecaysAtTheRayleighDampingRatio) {
+  // η = β K gives mode n the damping ratio ζ_n = β ω_n/2 (lib/rod_damping.hpp): the first
+  // mode (ω₁ = 1.8751² √(EI/(m L³)) = 7.86 rad/s for this rod) with β = 2.5e-3 s has
+  // ζ₁ = 9.8e-3, and over four damped periods its amplitude falls by
+  // exp(−2π ζ₁/√(1 − ζ₁²) · 4) = 0.781. The faster modes the bent start also excites are damped
+  // far faster (ζ_n ∝ ω_n), so the tip's mean |y| per period follows the first mode's.
+  // Errors: the discrete rod's ω₁ is 0.1 % off the continuum's at 20 edges; the damping acts at
+  // the step's end, first order: ζ is off by O(ω₁h) = 1.6 %; the trapezoidal rule's own
+  // amplitude error over four periods is 0.9 % (Trapezoidal.ReleasedRodKeepsItsAmplitude).
+  // Together ≤ 3 % of the decay exponent 0.246: ±0.01 on the ratio.
+  const double beta = 2.5e-3;
+  double period = 0.0;
+  const double ratio = damped_amplitude_ratio(beta, Integrator::kTrapezoidal, &period);
+  const double omega = 2.0 * std::numbers::pi / period;
+  const double zeta = beta * omega / 2.0;
+  const double expected = std::exp(-2.0 * std::numbers::pi * zeta / std::sqrt(1.0 - zeta * zeta) * 4.0);
+  std::printf("damped cantilever: zeta_1 = %.4e, amplitude after four periods %.4f, expected %.4f\n",
+              zeta, ratio, expected);
+  EXPECT_NEAR(ratio, expected, 0.01);
+}
+
+TEST(RodDamping, TheAdjointGradientRunsBackThroughTheDampingTerms) {
+  // A damped rod thrown through the air (no contact): γ = its initial node velocities, the loss
+  // the distance of its final nodes to a target line; the gradient against central
+  // differences (adjoint_check.hpp). Damping ratios ζ = (η/K) ω/2: 0.1 for the free rod's first
+  // bending mode (ω ≈ 4.73² √(EI/(m L³)) ≈ 19 rad/s, η/K = 1e-2 s) and 0.3 for its first axial
+  // mode (ω ≈ (π/L) √(k_s L/m) ≈ 810 rad/s, η_s/k_s = 7.5e-4 s).
+  const std::string text = R"({
+    "time_step": 0.005, "frames": 60, "gravity": [0, 0, -9.81],
+    "solver": { "tolerance": 1e-12, "max_iterations": 100 },
+    "rods": [ { "name": "rod", "shape": { "type": "line", "start": [0, 0, 0.3], "end": [0.3, 0, 0.35], "edges": 6 },
+                "mass": 0.05, "radius": 0.005, "stretch_stiffness": 1e3, "shear_stiffness": 1e3,
+                "bending_stiffness": [1e-3, 1e-3, 1e-3], "stretch_damping": 0.75,
+                "bending_damping": [1e-5, 1e-5, 1e-5],
+                "node_velocities": [[0, 0, 1], [0, 0.2, 1], [0, 0.4, 1.5], [0, 0.2, 1], [0.1, 0, 1], [0, 0, 0.5], [0, -0.3, 1]] } ],
+    "optimization": {
+      "parameters": [ { "kind": "rod_node_velocities", "rod": "rod" } ],
+      "objective": [ { "term": "point_targets", "rod": "rod", "frame": -1,
+                       "polyline": [[0.1, 0.1, 0], [0.4, 0.1, 0]] } ] } })";
+  EXPECT_TRUE(test::gradient_agrees(parse_scene(text, "damped_rod")));
+}
+
+TEST(RodDamping, TheThreeBackEndsAgreeOnADampedRod) {
+  // Ceres takes the damping terms as their residuals, Ipopt as objective terms: a damped rod
+  // swinging under gravity from a clamp, under both integrators, 40 frames within 1e-6 (m, rad)
+  // of Newton's at the tolerance 1e-8 (Ceres stalls on rods at Newton steps of 1e-9 and above:
+  // README, "Back-ends").
+  Model model;
+  model.time_step = 0.01;
+  model.gravity = Vector3(0, 0, -9.81);
+  RodSpec rod = test_models::uniform_rod(8, 0.5, 0.05, 0.005, 1e3, 1e3, 2e-3);
+  rod.fixed_nodes = {0};
+  rod.fixed_edges = {0};
+  rod.stretch_damping = 0.2;
+  rod.bending_damping = Vector3(1e-4, 2e-4, 1e-4);
+  model.rods.push_back(rod);
+  for (const Integrator integrator : {Integrator::kBackwardEuler, Integrator::kTrapezoidal}) {
+    SCOPED_TRACE(to_string(integrator));
+    model.integrator = integrator;
+    SolverOptions options;
+    options.tolerance = 1e-8;
+    const test::Trajectory newton = test::run_frames(model, options, 40, "newton");
+    for (const Backend b : {Backend::kCeres, Backend::kIpopt}) {
+      SCOPED_TRACE(to_string(b));
+      SolverOptions other = options;
+      other.backend = b;
+      const auto [dx, dR] = test::deviation(newton, test::run_frames(model, other, 40, to_string(b)));
+      EXPECT_LE(dx, 1e-6);
+      EXPECT_LE(dR, 1e-6);
+    }
+  }
+}
+
+// ----------------------------------------------------------------------------------------
+// Scenes.
+
+TEST(RodDamping, SceneKeysAreReadAndCheckedAndStaticModeHasNoTerms) {
+  const std::string rod = R"("rods": [ { "name": "r", "shape": { "type": "line", "start": [0, 0, 0], "end": [1, 0, 0], "edges": 4 },
+      "mass": 0.1, "radius": 0.01, "stretch_stiffness": 100, "shear_stiffness": 100, "bending_stiffness": [1, 1, 1],
+      "fixed_nodes": [0], "fixed_edges": [0], )";
+  const auto text = [&](const std::string& mode, const std::string& damping) {
+    return R"({ "mode": ")" + mode + R"(", "time_step": 0.01, "frames": 2, )" + rod + damping + " } ] }";
+  };
+  const Scene s = parse_scene(text("dynamic", R"("stretch_damping": 0.5, "bending_damping": [1e-3, 2e-3, 3e-3])"), "d.json");
+  EXPECT_EQ(s.model.rods[0].stretch_damping, 0.5);
+  EXPECT_EQ(s.model.rods[0].bending_damping, Vector3(1e-3, 2e-3, 3e-3));
+  const std::vector<Component> dynamic = build_components(s.model);
+  ASSERT_EQ(dynamic.size(), 1u);
+  EXPECT_EQ(dynamic[0].potential.terms<RodStretchDamping>().size(), 4u);  // every edge: node 1 moves
+  EXPECT_EQ(dynamic[0].potential.terms<RodBendTwistDamping>().size(), 3u);
+  const Scene st = parse_scene(text("static", R"("stretch_damping": 0.5, "bending_damping": [1e-3, 2e-3, 3e-3])"), "s.json");
+  const std::vector<Component> statics = build_components(st.model);
+  EXPECT_TRUE(statics[0].potential.terms<RodStretchDamping>().empty());
+  EXPECT_TRUE(statics[0].potential.terms<RodBendTwistDamping>().empty());
+  for (const auto& [damping, field] :
+       {std::pair{std::string(R"("stretch_damping": -1)"), "rods[0].stretch_damping"},
+        std::pair{std::string(R"("bending_damping": [0, -1, 0])"), "rods[0].bending_damping[1]"}}) {
+    try {
+      parse_scene(text("dynamic", damping), "bad.json");
+      ADD_FAILURE() << "accepted " << damping;
+    } catch (const SceneError& e) {
+      EXPECT_NE(std::string(e.what()).find(field), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find("≥ 0"), std::string::npos) << e.what();
+    }
+  }
+}
+
+}  // namespace
+}  // namespace liedyn
