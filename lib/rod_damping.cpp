@@ -12,16 +12,7 @@ void RodStretchDamping::begin_step(const State& previous, const Step&) {
 
 double RodStretchDamping::evaluate(const State& q, LocalGradient<2>* g, LocalHessian<2>* H) const {
   const auto [value, f, K] = length_spring(q.points[node1] - q.points[node0], rate(), previous_length);
-  if (g != nullptr) {
-    g->segment<3>(0) = -f;
-    g->segment<3>(3) = f;
-  }
-  if (H != nullptr) {
-    H->block<3, 3>(0, 0) = K;
-    H->block<3, 3>(0, 3) = -K;
-    H->block<3, 3>(3, 0) = -K;
-    H->block<3, 3>(3, 3) = K;
-  }
+  edge_derivatives(f, K, g, H);
   return value;
 }
 

@@ -35,16 +35,7 @@ double RodStretch::evaluate(const State& q, LocalGradient<2>* g, LocalHessian<2>
     return 0.5 * k_over_l * stretch * stretch;
   }
   const auto [value, f, K] = length_spring(e, k_over_l, rest_length);  // ∂Ψ/∂e, ∂²Ψ/∂e²
-  if (g != nullptr) {
-    g->segment<3>(0) = -f;
-    g->segment<3>(3) = f;
-  }
-  if (H != nullptr) {
-    H->block<3, 3>(0, 0) = K;
-    H->block<3, 3>(0, 3) = -K;
-    H->block<3, 3>(3, 0) = -K;
-    H->block<3, 3>(3, 3) = K;
-  }
+  edge_derivatives(f, K, g, H);
   return value;
 }
 

@@ -80,6 +80,22 @@ namespace liedyn {
 //   ω = vee(R_aᵀ R_b)/l  ( = vee_exact(Q − Qᵀ)/(2l) ).  Used for the rest curvature ω̄.
 Vector3 darboux_vector(const Matrix3& Ra, const Matrix3& Rb, double rest_length);
 
+// The derivatives of an edge's potential Ψ(e), e = x_{i+1} − x_i, on the blocks (x_i, x_{i+1})
+// from f = ∂Ψ/∂e and K = ∂²Ψ/∂e²: g = (−f, f), H = [K, −K; −K, K].
+inline void edge_derivatives(const Vector3& f, const Matrix3& K, LocalGradient<2>* g,
+                             LocalHessian<2>* H) {
+  if (g != nullptr) {
+    g->segment<3>(0) = -f;
+    g->segment<3>(3) = f;
+  }
+  if (H != nullptr) {
+    H->block<3, 3>(0, 0) = K;
+    H->block<3, 3>(0, 3) = -K;
+    H->block<3, 3>(3, 0) = -K;
+    H->block<3, 3>(3, 3) = K;
+  }
+}
+
 struct RodStretch {
   static constexpr int kBlocks = 2;
   static constexpr const char* kName = "rod_stretch";

@@ -81,6 +81,27 @@ inline Tip elastica_tip(double p, double L) {
 // which is 1 − 5/(2n²) + 3/(2n³) of F L³/(3 EI): second order in 1/n.
 inline double clamped_rod_tip_fraction(double n) { return 1.0 - 2.5 / (n * n) + 1.5 / (n * n * n); }
 
+// A uniform cantilever of `edges` edges along x (length 1 m, 0.1 kg, radius 1 cm, k_s = k_x =
+// 1e4 N, stiffness EI in bending and twist), nodes 0 and 1 and edge 0 clamped, straight at
+// rest and started bent in the x–y plane to the uniform `curvature`: each hinge turns by the
+// curvature times its cell, 3l/2 at node 1 next to the clamped edge 0 and l elsewhere
+// (lib/rod.hpp), so that the bending moment is the same along the rod. Edge lengths stay the
+// rest lengths, so that only bending is excited (a bent start that also stretched the rod
+// would ring its stiff stretch modes, which the trapezoidal rule keeps undamped: ω h ≫ 1).
+inline RodSpec bent_cantilever(int edges, double EI, double curvature) {
+  RodSpec rod = uniform_rod(edges, 1.0, 0.1, 0.01, 1e4, 1e4, EI);
+  rod.fixed_nodes = {0, 1};
+  rod.fixed_edges = {0};
+  rod.rest_nodes = rod.nodes;
+  const double l = 1.0 / edges;
+  double angle = 0.0;
+  for (std::size_t i = 1; i + 1 < rod.nodes.size(); ++i) {
+    angle += curvature * (i == 1 ? 1.5 * l : l);
+    rod.nodes[i + 1] = rod.nodes[i] + l * Vector3(std::cos(angle), std::sin(angle), 0.0);
+  }
+  return rod;
+}
+
 // Smallest root of cos β cosh β = −1 (clamped–free beam): β₁ = 1.8751040687…; the first
 // bending mode of a cantilever of mass m, length L, stiffness EI has ω₁ = β₁² √(EI/(m L³)).
 inline double cantilever_beta1() {

@@ -418,22 +418,8 @@ TEST(Trapezoidal, EveryBackEndAndParameterisationTakesTheSameSteps) {
 double tip_amplitude_ratio(Integrator integrator) {
   Model model;
   model.time_step = 2e-3;
-  RodSpec rod = test_models::uniform_rod(20, 1.0, 0.1, 0.01, 1e4, 1e4, 0.5);
-  rod.fixed_nodes = {0, 1};
-  rod.fixed_edges = {0};
-  // Straight at rest, started bent to a curvature of 0.2 /m (tip deflection 0.1 m): edge
-  // lengths and frames as at rest but for the bend, so that only bending is excited (a bent
-  // start that also stretched the rod would ring its stiff stretch modes, which the
-  // trapezoidal rule keeps undamped: ω h ≫ 1). Each hinge turns by the curvature times its
-  // cell, 3l/2 at node 1 next to the clamped edge 0 and l elsewhere (lib/rod.hpp), so that the
-  // bending moment is the same along the rod.
-  rod.rest_nodes = rod.nodes;
-  const double l = 1.0 / 20, curvature = 0.2;
-  double angle = 0.0;
-  for (std::size_t i = 1; i + 1 < rod.nodes.size(); ++i) {
-    angle += curvature * (i == 1 ? 1.5 * l : l);
-    rod.nodes[i + 1] = rod.nodes[i] + l * Vector3(std::cos(angle), std::sin(angle), 0.0);
-  }
+  // Straight at rest, started bent to a curvature of 0.2 /m (tip deflection 0.1 m).
+  const RodSpec rod = test_models::bent_cantilever(20, 0.5, 0.2);
   model.rods.push_back(rod);
   model.integrator = integrator;
   SolverOptions options;
