@@ -837,7 +837,7 @@ Component build_rod_component(const Model& model, int r) {
     p.add(bend);
   }
   // Internal damping (rod_damping.hpp): dynamic terms, like friction. Where both ends of an
-  // edge or both edges of a node are clamped, their rate is 0 and there is no term.
+  // edge or both edges of a node are clamped, the term would have no DOF: none is added.
   if (!model.static_equilibrium) {
     for (int j = 0; j < edges && rod.stretch_damping > 0.0; ++j) {
       if (node_offset[j] < 0 && node_offset[j + 1] < 0) continue;

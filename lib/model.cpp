@@ -805,8 +805,10 @@ RodDiscretization Model::discretize_rod(int rod) const {
       if (j.a.object == rod) ends.last_spliced = true;
       if (j.b.object == rod) ends.first_spliced = true;
     }
-    // A weld to the world is a clamp (end b is the only one that can be the world).
-    if (j.type != JointSpec::Type::kWeld || j.b.kind != JointEnd::Kind::kWorld) continue;
+    // A weld to the world that holds for the whole run is a clamp (end b is the only one that
+    // can be the world); one that lets go or catches later leaves a free end part of the run.
+    const bool whole_run = j.first_frame == 1 && j.last_frame == std::numeric_limits<int>::max();
+    if (j.type != JointSpec::Type::kWeld || j.b.kind != JointEnd::Kind::kWorld || !whole_run) continue;
     if (j.a.kind != JointEnd::Kind::kRodEdge || j.a.object != rod) continue;
     if (j.a.element == 0) ends.first_welded = true;
     if (j.a.element == last_edge) ends.last_welded = true;

@@ -116,8 +116,9 @@ Matrix3 minimal_rotation(const Vector3& a, const Vector3& b);
 std::vector<Matrix3> parallel_transport_frames(const std::vector<Vector3>& nodes);
 
 // What the model's joints do at a rod's ends (Model::discretize_rod finds it): a weld to the
-// world holds the end edge's frame as a clamp does; a splice continues the rod into another.
-// (A weld to a body is not a clamp: the body may turn with the edge.)
+// world for the whole run holds the end edge's frame as a clamp does; a splice continues the
+// rod into another. Welds to bodies (kinematic or not) and welds that hold for some steps only
+// keep the Voronoi cell: not built yet (docs/design.md §6.5).
 struct RodEnds {
   bool first_welded = false, last_welded = false;    // edge 0 / edge n − 2 welded to the world
   bool first_spliced = false, last_spliced = false;  // node 0 / node n − 1 spliced

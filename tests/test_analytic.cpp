@@ -3,9 +3,9 @@
 //   * free_body: the formula checked on its own (Rᵀ Ṙ = hat(I_b⁻¹ Rᵀ L) by central differences
 //     in time, L constant, x(t) a parabola), then a backward-Euler simulation converging to it
 //     at first order in h;
-//   * cantilever: the discrete rod against w(s), off by the first-order "clamp shift" of
-//     tests/test_rod_validation.cpp (predicted node by node by the hinge-chain model), the
-//     error halving with doubled edges;
+//   * cantilever: the discrete rod against w(s), off by second-order terms (predicted node by
+//     node by the hinge-chain model of tests/test_rod_validation.cpp), the error quartering
+//     with doubled edges;
 //   * axial_stretch: exact for the discrete rod, to the solver's tolerance;
 //   * check_analytic: every assumption it enforces, one scene breaking each, rejected by
 //     parse_scene as a SceneError at field "analytic" whose reason names the assumption.
@@ -234,7 +234,7 @@ double hinge_chain_deflection(int n, int i, double F) {
 // discretisation's, which the hinge chain predicts node by node; the largest is at the tip,
 // w_L (5/(2n²) − 3/(2n³)) (test_models::clamped_rod_tip_fraction).
 // F = 1e-3 (F L²/EI = 1e-3): the linear theory and the hinge chain are then both good to
-// ~1e-6 of w_L = 3.3e-4 m, while the errors are ≥ 0.6 % of it (≥ 2.6 % with 10 edges); so the
+// ~1e-6 of w_L = 3.3e-4 m, while the errors are ≥ 0.6 % of it (≥ 2.35 % with 10 edges); so the
 // measured error must match the predicted one to 1e-3 relative (5e-3 at 20 edges, where the
 // 1e-6 is 1.7e-4 of the tip error and the shear's 2e-9 m 1e-3 of it; Newton's tolerance
 // 1e-12 m is 5e-7 of the errors). Doubling the edges from 10 to 20 divides it by

@@ -219,13 +219,14 @@ double damped_amplitude_ratio(double beta, Integrator integrator, double* period
 TEST(RodDamping, ACantileversFirstModeDecaysAtTheRayleighDampingRatio) {
   // η = β K gives mode n the damping ratio ζ_n = β ω_n/2 (lib/rod_damping.hpp): the first
   // mode (ω₁ = 1.8751² √(EI/(m L³)) = 7.86 rad/s for this rod) with β = 2.5e-3 s has
-  // ζ₁ = 9.8e-3, and over four damped periods its amplitude falls by
+  // ζ₁ = 9.83e-3, and over four damped periods its amplitude falls by
   // exp(−2π ζ₁/√(1 − ζ₁²) · 4) = 0.781. The faster modes the bent start also excites are damped
   // far faster (ζ_n ∝ ω_n), so the tip's mean |y| per period follows the first mode's.
-  // Errors: the discrete rod's ω₁ is 0.1 % off the continuum's at 20 edges; the damping acts at
-  // the step's end, first order: ζ is off by O(ω₁h) = 1.6 %; the trapezoidal rule's own
-  // amplitude error over four periods is 0.9 % (Trapezoidal.ReleasedRodKeepsItsAmplitude).
-  // Together ≤ 3 % of the decay exponent 0.246: ±0.01 on the ratio.
+  // Errors: the discrete rod's ω₁ is 0.4 % off the continuum's at 20 edges (0.8 % of ζ₁ω₁);
+  // the damping acts at the step's end, first order: ζ is off by O(ω₁h) = 1.6 %; the
+  // trapezoidal rule's own amplitude error over four periods is 0.9 %
+  // (Trapezoidal.ReleasedRodKeepsItsAmplitude). Together ≤ 4 % of the decay exponent 0.247:
+  // ±0.01 on the ratio.
   const double beta = 2.5e-3;
   double period = 0.0;
   const double ratio = damped_amplitude_ratio(beta, Integrator::kTrapezoidal, &period);
@@ -306,6 +307,15 @@ TEST(RodDamping, SceneKeysAreReadAndCheckedAndStaticModeHasNoTerms) {
   ASSERT_EQ(dynamic.size(), 1u);
   EXPECT_EQ(dynamic[0].potential.terms<RodStretchDamping>().size(), 4u);  // every edge: node 1 moves
   EXPECT_EQ(dynamic[0].potential.terms<RodBendTwistDamping>().size(), 3u);
+  // Both ends of edge 0 clamped (nodes 0, 1) and edges 0 and 1 clamped: no stretch term for
+  // edge 0 and no bend term at node 1, whose rates are prescribed, not DOFs.
+  const std::string clamped_rod = R"("rods": [ { "name": "r", "shape": { "type": "line", "start": [0, 0, 0], "end": [1, 0, 0], "edges": 4 },
+      "mass": 0.1, "radius": 0.01, "stretch_stiffness": 100, "shear_stiffness": 100, "bending_stiffness": [1, 1, 1],
+      "fixed_nodes": [0, 1], "fixed_edges": [0, 1], "stretch_damping": 0.5, "bending_damping": [1e-3, 2e-3, 3e-3] } ] })";
+  const Scene held = parse_scene(R"({ "time_step": 0.01, "frames": 2, )" + clamped_rod, "h.json");
+  const std::vector<Component> held_components = build_components(held.model);
+  EXPECT_EQ(held_components[0].potential.terms<RodStretchDamping>().size(), 3u);
+  EXPECT_EQ(held_components[0].potential.terms<RodBendTwistDamping>().size(), 2u);
   const Scene st = parse_scene(text("static", R"("stretch_damping": 0.5, "bending_damping": [1e-3, 2e-3, 3e-3])"), "s.json");
   const std::vector<Component> statics = build_components(st.model);
   EXPECT_TRUE(statics[0].potential.terms<RodStretchDamping>().empty());

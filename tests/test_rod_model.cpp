@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <numbers>
 
 #include "lib/incremental_potential.hpp"
@@ -92,6 +93,60 @@ TEST(RodModel, ValidationNamesTheField) {
   } catch (const ModelError& e) {
     EXPECT_EQ(e.field(), "rods[0].nodes[2]");
   }
+}
+
+// The bending lengths (lib/rod.hpp, discretize): Voronoi cells, and next to a clamped end edge
+// (fixed, or welded to the world for the whole run, and not spliced) that edge's outer half too.
+TEST(RodModel, BendingLengthsCoverTheClampedEndEdges) {
+  const auto lengths = [](const Model& m, int r) { return m.discretize_rod(r).bending_length; };
+  const auto expect = [](const std::vector<double>& got, const std::vector<double>& want) {
+    ASSERT_EQ(got.size(), want.size());
+    for (std::size_t i = 0; i < got.size(); ++i) EXPECT_NEAR(got[i], want[i], 1e-15) << "node " << i + 1;
+  };
+  Model m;
+  m.rods = {straight_rod(6, 0.6)};  // l = 0.1 m
+  expect(lengths(m, 0), {0.1, 0.1, 0.1, 0.1, 0.1});  // free ends
+  m.rods[0].fixed_edges = {0};
+  expect(lengths(m, 0), {0.15, 0.1, 0.1, 0.1, 0.1});
+  m.rods[0].fixed_edges = {5};
+  expect(lengths(m, 0), {0.1, 0.1, 0.1, 0.1, 0.15});
+  m.rods[0].fixed_edges = {0, 1};  // two clamped edges: straight up to the middle of edge 1
+  expect(lengths(m, 0), {0.15, 0.1, 0.1, 0.1, 0.1});
+  m.rods[0].fixed_edges = {2};  // an interior clamp
+  expect(lengths(m, 0), {0.1, 0.1, 0.1, 0.1, 0.1});
+  // Welds of the last edge: to the world for the whole run, for some steps only, to a body.
+  m.rods[0].fixed_edges = {};
+  JointSpec weld;
+  weld.type = JointSpec::Type::kWeld;
+  weld.a = JointEnd::rod_edge(0, 5, Vector3::Zero());
+  weld.b = JointEnd::world(Vector3(0.5, 0, 0));
+  m.joints = {weld};
+  expect(lengths(m, 0), {0.1, 0.1, 0.1, 0.1, 0.15});
+  m.joints[0].last_frame = 10;
+  expect(lengths(m, 0), {0.1, 0.1, 0.1, 0.1, 0.1});
+  m.joints[0].last_frame = std::numeric_limits<int>::max();
+  RigidBody body;
+  body.name = "b";
+  m.bodies = {body};
+  m.joints[0].b = JointEnd::body(0, Vector3::Zero());
+  expect(lengths(m, 0), {0.1, 0.1, 0.1, 0.1, 0.1});
+  // A clamped first edge spliced to another rod's last node: the junction covers it.
+  Model spliced;
+  spliced.rods = {straight_rod(6, 0.6), straight_rod(6, 0.6)};
+  spliced.rods[1].fixed_edges = {0};
+  JointSpec splice;
+  splice.type = JointSpec::Type::kSplice;
+  splice.a = JointEnd::rod_node(0, 6);
+  splice.b = JointEnd::rod_node(1, 0);
+  spliced.joints = {splice};
+  expect(lengths(spliced, 1), {0.1, 0.1, 0.1, 0.1, 0.1});
+  spliced.joints.clear();
+  expect(lengths(spliced, 1), {0.15, 0.1, 0.1, 0.1, 0.1});
+  // Two edges clamped at both ends: the one hinge covers the whole rod.
+  Model two;
+  two.rods = {straight_rod(2, 0.2)};
+  two.rods[0].fixed_edges = {0, 1};
+  expect(lengths(two, 0), {0.2});
 }
 
 TEST(RodModel, ClampedDofsAreNotInTheComponent) {
