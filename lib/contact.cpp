@@ -19,6 +19,13 @@ double ContactSample::penetration(const State& q) const {
   return radius - collider->evaluate(at.position(q), false).distance;
 }
 
+ContactSample::Lagged ContactSample::lag(const State& previous) const {
+  const Vector3 p = at.position(previous);
+  const SdfValue s = collider->evaluate(p, false);
+  const double length = s.gradient.norm();
+  return {p, radius - s.distance, length > 0.0 ? Vector3(s.gradient / length) : Vector3::UnitZ()};
+}
+
 Matrix3 ContactSample::normal_jacobian(const Vector3& previous_position, const Vector3& normal,
                                        SdfValue& lagged) const {
   lagged = collider->evaluate(previous_position, true);

@@ -66,6 +66,15 @@ struct ContactSample {
   // previous position p̂ = x̂ + R̂ p̄: the 6×6 block ∂C/∂(x̂, θ̂) of their local gradient
   // C = (f, r × f) from ∂f/∂p̂ (∂p̂/∂(x̂, θ̂) = [I, −hat(r̂)]), and its transpose times z added
   // to the adjoint of q_{k−1} at the sample's point and rotation.
+  // What the lagged terms (friction, damping) freeze at the start of a step: the sample's
+  // previous position p̂, its penetration ρ − φ(p̂) and the unit normal ∇φ(p̂)/‖∇φ(p̂)‖ (e_z
+  // where ∇φ vanishes).
+  struct Lagged {
+    Vector3 position;
+    double penetration;
+    Vector3 normal;
+  };
+  Lagged lag(const State& previous) const;
   // ∂n/∂p̂ = P ∇²φ(p̂)/‖∇φ(p̂)‖ of the lagged unit normal n = ∇φ(p̂)/‖∇φ(p̂)‖ (P = I − n nᵀ;
   // 0 where ∇φ vanishes); `lagged` receives φ's value and derivatives at p̂.
   Matrix3 normal_jacobian(const Vector3& previous_position, const Vector3& normal,

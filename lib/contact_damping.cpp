@@ -7,11 +7,10 @@
 namespace liedyn {
 
 void ContactDamping::begin_step(const State& previous, const Step&) {
-  previous_position = at.position(previous);
-  const SdfValue s = collider->evaluate(previous_position, false);
-  active = radius - s.distance > 0.0;
-  const double length = s.gradient.norm();
-  normal = length > 0.0 ? Vector3(s.gradient / length) : Vector3::UnitZ();
+  const Lagged lagged = lag(previous);
+  previous_position = lagged.position;
+  active = lagged.penetration > 0.0;
+  normal = lagged.normal;
 }
 
 double ContactDamping::evaluate(const State& q, LocalGradient<2>* g, LocalHessian<2>* H) const {

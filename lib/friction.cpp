@@ -8,11 +8,10 @@
 namespace liedyn {
 
 void Friction::begin_step(const State& previous, const Step&) {
-  previous_position = at.position(previous);
-  const SdfValue s = collider->evaluate(previous_position, false);
-  normal_force = stiffness * std::max(0.0, radius - s.distance);  // k max(0, penetration)
-  const double length = s.gradient.norm();
-  normal = length > 0.0 ? Vector3(s.gradient / length) : Vector3::UnitZ();
+  const Lagged lagged = lag(previous);
+  previous_position = lagged.position;
+  normal_force = stiffness * std::max(0.0, lagged.penetration);  // k max(0, penetration)
+  normal = lagged.normal;
 }
 
 SmoothedSlip::SmoothedSlip(const Vector3& tangential, double epsilon)
