@@ -94,7 +94,7 @@ void IncrementalPotential::weighted_terms_gradient(const State& q, Eigen::Vector
     if constexpr (!EndOfStep<T>) {
       LocalGradient<T::kBlocks> g_local;
       for (const T& t : terms) {
-        if (weight(t) == 1.0) continue;  // an exact constraint
+        if (!in_history(t)) continue;  // an exact constraint
         t.evaluate(q, &g_local, nullptr);
         static_for<T::kBlocks>([&](auto i) {
           if (t.offsets[i] < 0) return;

@@ -177,8 +177,30 @@ class IncrementalPotential {
                         Eigen::VectorXd& da_previous) const;
   //   dgamma += (∂C/∂γ)ᵀ z  for the parameters of step k, over the terms with parameters
   //   (HasParameters, term.hpp).
+  // Both apply each term's weight().
   void add_parameter_adjoint(const State& q, int frame, const Eigen::VectorXd& z,
                              Eigen::VectorXd& dgamma) const;
+  // Trapezoidal integrator (lib/history.hpp, docs/design.md §14.1). The step's equations
+  // C + c = 0 have the Jacobian H + K in q_k: H the assembled Lie Hessian (with every
+  // history reference moved to q_k, rereference_history), K = ½ hat(c) on each rotation
+  // block, from the history field c being constant in the world. history_skew: out = K v.
+  template <class In, class Out>
+  void history_skew(const In& v, Out& out) const {
+    out = Out::Zero(v.size());
+    for (const RotationHistory& t : terms<RotationHistory>()) {
+      const int o = t.offsets[0];
+      out.template segment<3>(o) = 0.5 * t.field.cross(Vector3(v.template segment<3>(o)));
+    }
+  }
+  // The mixed blocks of the history field c (14.4), which reads q_{k−1} and Δq_{k−1} (the
+  // weighted terms' gradients at q_{k−1} and at q_{k−2} = q_{k−1} ⊖ Δq_{k−1}, the previous
+  // step's momentum) and γ (the weighted terms' parameters there):
+  //   a_previous += (∂c/∂q_{k−1})ᵀ z,  da_previous += (∂c/∂Δq_{k−1})ᵀ z,  dgamma += (∂c/∂γ)ᵀ z,
+  // for the step set up by begin_step(previous, previous_step, frame). Nothing under backward
+  // Euler.
+  void add_history_adjoint(const State& previous, const Step& previous_step, int frame,
+                           const Eigen::VectorXd& z, Eigen::VectorXd& a_previous,
+                           Eigen::VectorXd& da_previous, Eigen::VectorXd& dgamma) const;
 
   // Potential energy: the sum of the terms that are energies of the state (EnergyOfState,
   // term.hpp: gravity, constant forces, springs, rod elasticity, contact penalties, elastic
@@ -234,9 +256,27 @@ class IncrementalPotential {
       }
     });
   }
-  // Σ ∇Ψ_t over the weighted terms (weight() ≠ 1 under the trapezoidal integrator), unweighted,
-  // at q, in the component's tangent layout (g sized by the caller).
+  // Whether term t is one of the weighted terms (weight() ≠ 1), the ones the history holds.
+  template <class T>
+  bool in_history(const T& t) const {
+    if constexpr (EndOfStep<T>) {
+      return false;
+    } else {
+      return weight(t) != 1.0;
+    }
+  }
+  // Σ ∇Ψ_t over the weighted terms, unweighted, at q, in the component's tangent layout
+  // (g sized by the caller).
   void weighted_terms_gradient(const State& q, Eigen::VectorXd& g) const;
+  // add_history_adjoint's part of w ∇V at s (s = q_{k−1} or q_{k−2}, G = ∇V(s) from
+  // weighted_terms_gradient): u += w (H_V(s) z + ½ G × z on rotations), the derivative of the
+  // Lie gradient field ∇V transposed (design §1.4), component layout; and the weighted terms'
+  // own reads of q_{k−1} (their reference, ReadsPreviousStep) and of γ at s.
+  void add_weighted_terms_adjoint(const State& s, const Eigen::VectorXd& G, double w, int frame,
+                                  const State& previous, const Step& previous_step,
+                                  const Eigen::VectorXd& z, Eigen::VectorXd& u,
+                                  Eigen::VectorXd& a_previous, Eigen::VectorXd& da_previous,
+                                  Eigen::VectorXd& dgamma) const;
 
   Integrator integrator_ = Integrator::kBackwardEuler;
   double state_weight_ = 1.0;  // weight() of the terms of the state

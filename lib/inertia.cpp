@@ -116,11 +116,12 @@ void RotationalInertia::step_jacobians(const State& q, const Matrix3& R_previous
                                        const Matrix3& dR_previous, Matrix3& dC_dR_previous,
                                        Matrix3& dC_ddR_previous) const {
   const Matrix3 B = q.rotations[rotation] * J_over_h2 * R_previous.transpose();
-  const Matrix3 X = 2.0 * Matrix3::Identity() - dR_previous;
+  const Matrix3 X =
+      variational ? Matrix3::Identity() : Matrix3(2.0 * Matrix3::Identity() - dR_previous);
   for (int j = 0; j < 3; ++j) {
     const Matrix3 B_hat = B * so3::hat(Vector3::Unit(j));
     dC_dR_previous.col(j) = -2.0 * so3::vee(B_hat * X);
-    dC_ddR_previous.col(j) = -2.0 * so3::vee(B_hat * dR_previous);
+    dC_ddR_previous.col(j) = variational ? Vector3::Zero() : Vector3(-2.0 * so3::vee(B_hat * dR_previous));
   }
 }
 

@@ -98,7 +98,8 @@ struct RotationalInertia {
   // paper are checked by finite differences instead of trusted). With B = R J R_pᵀ/h²:
   //   R̃ → R̃ + (2I − ΔRᵀ) hat(φ) R_p,   M → M − B hat(φ) (2I − ΔR),
   //   R̃ → R̃ + ΔRᵀ hat(ψ) R_p,          M → M − B hat(ψ) ΔR,
-  // so column j of each Jacobian is −2 vee(B hat(e_j) X), X = 2I − ΔR or ΔR.
+  // so column j of each Jacobian is −2 vee(B hat(e_j) X), X = 2I − ΔR or ΔR. Variational
+  // (R̃ = R_p): X = I for φ, and C does not read ΔR.
   void step_jacobians(const State& q, const Matrix3& R_previous, const Matrix3& dR_previous,
                       Matrix3& dC_dR_previous, Matrix3& dC_ddR_previous) const;
   // ReadsPreviousStep (term.hpp): adds (∂C/∂q_{k−1})ᵀ z and (∂C/∂Δq_{k−1})ᵀ z.

@@ -21,6 +21,8 @@
 //   liedyn optimize SCENE.json --out DIR [--optimizer nlopt-lbfgs|ceres-lbfgs|ipopt-lbfgs]
 //                  [--max-iterations N] [--resume]   (exit 0 target reached, 3 stopped
 //                  short of it, 4 failed)
+// simulate, bench, compare, gradcheck and optimize take [--set PATH=VALUE …]: values over the
+// scene file's (problems/scene_settings.hpp), e.g. --set integrator=trapezoidal.
 // Exit status: 0 success; 2 bad input (scene or options), nothing written; 3 some steps ended
 // at max_iterations (outputs written; --allow-unconverged makes this 0); 4 a step failed
 // (outputs written up to it; compare: a row failed, all rows printed); 1
@@ -38,6 +40,7 @@
 #include "optimization.hpp"
 #include "output.hpp"
 #include "memory_budget.hpp"
+#include "scene_settings.hpp"
 #include "run.hpp"
 #include "scene_checks.hpp"
 #include "sweep.hpp"
@@ -244,6 +247,12 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   sweep->add_flag("--quiet", quiet, "No progress on stderr");
 
+  std::vector<std::string> settings;
+  for (CLI::App* command : {simulate, bench, compare, gradcheck, optimize}) {
+    command->add_option("--set", settings,
+                        "PATH=VALUE: a value over the scene file's (dotted path into its JSON, "
+                        "e.g. integrator=trapezoidal or solver.tolerance=1e-12); repeatable");
+  }
   std::string memory_limit_text;
   for (CLI::App* command : {simulate, bench, compare, gradcheck, optimize, sweep}) {
     command->add_option("--memory-limit", memory_limit_text,
@@ -298,7 +307,7 @@ int main(int argc, char** argv) {
       return run_sweep_command(scene_file, set_texts, backend_names, rotation_names, out_dir,
                                quiet, sweep_options);
     }
-    liedyn::Scene scene = liedyn::load_scene(scene_file);
+    liedyn::Scene scene = liedyn::load_scene(scene_file, settings);
     scene.solver.ipopt.output_file = ipopt_log;
     print_warnings(scene);
     // Trajectories kept whole: the adjoint's (gradcheck, optimize), compare's two.

@@ -15,6 +15,7 @@
 #include "optimization.hpp"
 #include "output.hpp"
 #include "plot.hpp"
+#include "scene_settings.hpp"
 
 namespace liedyn {
 namespace {
@@ -63,53 +64,6 @@ std::vector<std::string> split_values(const std::string& text) {
   return values;
 }
 
-// A value as JSON if it is JSON ("1e-4", "[1, 1, 2]", "\"lie\""), else as a bare string ("lie").
-json parse_value(const std::string& text) {
-  try {
-    return json::parse(text);
-  } catch (const json::exception&) {
-    return json(text);
-  }
-}
-
-// root[path] = value, creating missing object keys; array indices must exist.
-void set_path(json& root, const std::string& path, const json& value, const std::string& source) {
-  const std::string field = "--set " + path;
-  json* node = &root;
-  std::size_t begin = 0;
-  std::string walked;
-  while (true) {
-    const std::size_t end = path.find('.', begin);
-    const std::string key = path.substr(begin, end == std::string::npos ? end : end - begin);
-    if (key.empty()) throw SceneError(source, field, "empty segment in the dotted path");
-    const bool last = end == std::string::npos;
-    if (node->is_array()) {
-      if (key.find_first_not_of("0123456789") != std::string::npos || key.size() > 9) {
-        throw SceneError(source, field,
-                         "\"" + walked + "\" is an array: \"" + key + "\" must be an index");
-      }
-      const std::size_t index = std::stoul(key);
-      if (index >= node->size()) {
-        throw SceneError(source, field,
-                         "index " + key + " is out of range (\"" + walked + "\" has " +
-                             std::to_string(node->size()) + " items)");
-      }
-      node = &(*node)[index];
-    } else if (node->is_object()) {
-      if (!last && !node->contains(key)) (*node)[key] = json::object();
-      node = &(*node)[key];
-    } else {
-      throw SceneError(
-          source, field,
-          "\"" + walked + "\" is a " + node->type_name() + ", not an object or an array");
-    }
-    walked += (walked.empty() ? "" : ".") + key;
-    if (last) break;
-    begin = end + 1;
-  }
-  *node = value;
-}
-
 std::string describe(const std::vector<std::string>& names,
                      const std::vector<std::string>& values) {
   std::string text;
@@ -131,7 +85,7 @@ GridScene make_scene(const json& base, const std::string& source,
                      const std::vector<std::string>& values) {
   json root = base;
   for (std::size_t i = 0; i < paths.size(); ++i) {
-    set_path(root, paths[i], parse_value(values[i]), source);
+    set_scene_path(root, paths[i], parse_setting_value(values[i]), source);
   }
   GridScene g;
   g.settings = values;
@@ -387,11 +341,9 @@ std::vector<std::pair<std::string, std::string>> reference_overrides(
 }  // namespace
 
 SweepAxis parse_sweep_axis(const std::string& text) {
-  const std::size_t equals = text.find('=');
-  if (equals == std::string::npos || equals == 0 || equals + 1 == text.size()) {
-    throw std::invalid_argument("--set " + text + ": expected PATH=VALUE[,VALUE…]");
-  }
-  SweepAxis axis{text.substr(0, equals), split_values(text.substr(equals + 1))};
+  const auto split = split_setting(text);
+  if (!split) throw std::invalid_argument("--set " + text + ": expected PATH=VALUE[,VALUE…]");
+  SweepAxis axis{split->first, split_values(split->second)};
   for (const std::string& v : axis.values) {
     if (v.empty()) throw std::invalid_argument("--set " + text + ": empty value");
   }
@@ -444,7 +396,7 @@ SweepResult run_sweep(const std::string& scene_text, const std::string& source,
     for (std::size_t a = 0; a < options.axes.size(); ++a)
       values.push_back(options.axes[a].values[at[a]]);
     if (rescale) {
-      const json h = parse_value(values[time_step_index]);
+      const json h = parse_setting_value(values[time_step_index]);
       const double frames =
           h.is_number() && h.get<double>() > 0.0
               ? std::round(base_scene.frames * base_scene.model.time_step / h.get<double>())

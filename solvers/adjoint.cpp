@@ -2,6 +2,7 @@
 
 #include <Eigen/QR>
 #include <chrono>
+#include <cmath>
 #include <memory>
 
 #include "linear_system.hpp"
@@ -12,6 +13,11 @@ namespace liedyn {
 namespace {
 
 using Clock = std::chrono::steady_clock;
+
+// The trapezoidal adjoint's fixed point (backward): relative change at which it stops, and
+// the rounds it may take (each one solve with H's factorisation).
+constexpr double kSkewTolerance = 1e-13;
+constexpr int kMaxSkewIterations = 200;
 
 // H_k of one component, factorised, and solves with it (the linear system the forward Newton
 // solver would pick for the component's size).
@@ -61,11 +67,6 @@ DifferentiableSimulation::DifferentiableSimulation(Model base, ParameterSet para
       objective_(std::move(objective)),
       options_(options) {
   options_.validate();
-  if (!base_.static_equilibrium && base_.integrator != Integrator::kBackwardEuler) {
-    throw ModelError("integrator", std::string("the adjoint supports backward_euler only: ") +
-                                       to_string(base_.integrator) +
-                                       " has no adjoint yet (run it forward with liedyn run)");
-  }
   parameters_.apply(base_, initial_parameters()).validate();
 }
 
@@ -142,7 +143,8 @@ void DifferentiableSimulation::backward(const Model& model, const Eigen::VectorX
     return islands;
   };
   Eigen::MatrixXd J, Y;
-  Eigen::VectorXd column;
+  Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd> JY;
+  Eigen::VectorXd column, z0, kz, dz;
 
   const int n = trajectory.frames();
   const int size = tangent_size(trajectory.states[0]);
@@ -181,26 +183,20 @@ void DifferentiableSimulation::backward(const Model& model, const Eigen::VectorX
     for (std::size_t c = 0; c < components.size(); ++c) {
       IncrementalPotential& potential = components[c].potential;
       potential.begin_step(previous, previous_step, k);
+      // Trapezoidal: the history's Hessian vanishes at its reference (lib/history.hpp).
+      potential.rereference_history(q);
       if (!dynamic) potential.set_load_scale(load_scale);
       const int exact = exact_terms[c];
       if (exact > 0) {
         potential.set_adjoint_multipliers(trajectory.multipliers[k].data() + first_exact[c]);
       }
-      if (!solves[c]->factorize(potential, q)) {
+      HessianSolve& solve = *solves[c];
+      if (!solve.factorize(potential, q)) {
         throw SimulationFailed(k, "the Hessian of the converged step is not positive definite "
                                   "(not a strict minimum): the adjoint is not defined");
       }
-      b.resize(components[c].dofs);
-      for (const DofBlock& p : components[c].points) {
-        b.segment<3>(p.offset) = rhs.segment<3>(tangent_point(p.index));
-      }
-      for (const DofBlock& r : components[c].rotations) {
-        b.segment<3>(r.offset) = rhs.segment<3>(tangent_rotation(q, r.index));
-      }
-      solves[c]->solve(b, z);
-      z = -z;  // H z = −(a + Δa)
       if (exact > 0) {
-        // Exact joints: [M Jᵀ; J 0] [z; μ] = [−(a + Δa); 0] with M = K + ρJᵀJ the assembled
+        // Exact joints: [M Jᵀ; J 0] [z; μ] = [b; 0] with M = K + ρJᵀJ the assembled
         // Lagrangian Hessian (docs/design.md §8.6): z = z₀ − Y μ, Y = M⁻¹Jᵀ, (J Y) μ = J z₀.
         // J Y is singular for a hinge (its 3 rows hold 2 constraints): the least-squares μ
         // of a consistent system.
@@ -208,15 +204,49 @@ void DifferentiableSimulation::backward(const Model& model, const Eigen::VectorX
         potential.constraint_jacobian(q, J);
         Y.resize(components[c].dofs, 3 * exact);
         for (int i = 0; i < 3 * exact; ++i) {
-          solves[c]->solve(J.row(i).transpose(), column);
+          solve.solve(J.row(i).transpose(), column);
           Y.col(i) = column;
         }
-        const Eigen::VectorXd mu =
-            (J * Y).completeOrthogonalDecomposition().solve(Eigen::VectorXd(J * z));
-        z -= Y * mu;
+        JY.compute(J * Y);
+      }
+      // x = M⁻¹ b on the constraints' tangent space (the bordered solve above, or H⁻¹ b).
+      const auto solve_step = [&](const Eigen::VectorXd& rhs_c, Eigen::VectorXd& x) {
+        solve.solve(rhs_c, x);
+        if (exact > 0) x -= Y * JY.solve(Eigen::VectorXd(J * x));
+      };
+      b.resize(components[c].dofs);
+      for (const DofBlock& p : components[c].points) {
+        b.segment<3>(p.offset) = -rhs.segment<3>(tangent_point(p.index));
+      }
+      for (const DofBlock& r : components[c].rotations) {
+        b.segment<3>(r.offset) = -rhs.segment<3>(tangent_rotation(q, r.index));
+      }
+      solve_step(b, z);  // H z = −(a + Δa)
+      if (potential.has_rotation_history()) {
+        // Trapezoidal: the step's Jacobian is H + K with K = ½ hat(c) skew
+        // (IncrementalPotential::history_skew), so the adjoint solves (H − K) z = b, by the
+        // fixed point z ← z₀ + H⁻¹ K z on H's factorisation. It contracts by ‖H⁻¹K‖, as the
+        // forward step's re-solves did (design §14.1).
+        z0 = z;
+        double change = 0.0;
+        for (int i = 0;; ++i) {
+          potential.history_skew(z, kz);
+          solve_step(kz, dz);
+          change = (z0 + dz - z).lpNorm<Eigen::Infinity>();
+          z = z0 + dz;
+          if (change <= kSkewTolerance * z.lpNorm<Eigen::Infinity>()) break;
+          if (i == kMaxSkewIterations || !std::isfinite(change)) {
+            throw SimulationFailed(
+                k, "the adjoint's fixed point on the history's skew part did not converge in " +
+                       std::to_string(kMaxSkewIterations) + " rounds (last change " +
+                       std::to_string(change) + "): ‖H⁻¹K‖ is not small at this step");
+          }
+        }
       }
       potential.add_parameter_adjoint(q, k, z, gradient);
       potential.add_step_adjoint(q, previous, previous_step, z, a_previous, da_previous);
+      potential.add_history_adjoint(previous, previous_step, k, z, a_previous, da_previous,
+                                    gradient);
     }
     a.swap(a_previous);
     da.swap(da_previous);

@@ -15,6 +15,11 @@
 // ∂f/∂R_{k−1} = −ΔR_k (appendix C; in static mode there is no step and Δa is not propagated).
 // Each component is solved on its own (H_k is block diagonal over components).
 //
+// Under the trapezoidal integrator (docs/design.md §14.1) the step's Jacobian is H_k + K, K the
+// skew part of the rotations' history: z_k solves (H_k − K) z_k = −(a_k + Δa_k) by a fixed point
+// on H_k's factorisation, and the history field adds its mixed blocks through q_{k−1}, Δq_{k−1}
+// and γ (IncrementalPotential::add_history_adjoint).
+//
 // Exactness: H_k is the derivative of C_k only where C_k = 0 (the Lie Hessian differs from the
 // derivative of the Lie gradient field by ½ hat(C_k)), so the gradient is exact at converged
 // forward steps and its error grows with the Newton tolerance (measured in tests and the

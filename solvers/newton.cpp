@@ -107,11 +107,7 @@ template <class System>
 void Newton<System>::correct_for_history_skew() {
   delta0_ = delta_;
   for (int m = 0; m < kSkewCorrections; ++m) {
-    skew_.setZero();
-    for (const RotationHistory& t : component_.potential.terms<RotationHistory>()) {
-      const int o = t.offsets[0];
-      skew_.template segment<3>(o) = 0.5 * t.field.cross(delta_.template segment<3>(o));
-    }
+    component_.potential.history_skew(delta_, skew_);
     system_.solve_linear(skew_, correction_);
     delta_ = delta0_ - correction_;
   }

@@ -14,11 +14,14 @@
 
 namespace liedyn::test {
 
-// At γ, or at the scene's own parameters when γ is empty.
-inline ::testing::AssertionResult gradient_agrees(const Scene& scene, const Eigen::VectorXd& gamma = {}) {
+// At γ, or at the scene's own parameters when γ is empty; `step` and `tolerance` as in
+// GradientCheckOptions.
+inline ::testing::AssertionResult gradient_agrees(const Scene& scene, const Eigen::VectorXd& gamma = {},
+                                                  double step = 1e-5, double tolerance = 1e-5) {
   const DifferentiableSimulation sim = make_differentiable_simulation(scene);
   GradientCheckOptions options;
-  options.step = 1e-5;
+  options.step = step;
+  options.tolerance = tolerance;
   const GradientCheckResult r = check_gradient(sim, gamma.size() > 0 ? gamma : sim.initial_parameters(), options);
   if (r.passed()) return ::testing::AssertionSuccess();
   return ::testing::AssertionFailure() << "max relative error " << r.max_relative_error << " at parameter " << r.worst;

@@ -1,7 +1,9 @@
 // End-to-end checks of the adjoint gradient (solvers/adjoint.hpp) against central finite
 // differences of the loss, for every parameter kind (lib/parameters.hpp) and objective term
-// (lib/objective.hpp), under the three rotation parameterisations and a loose and a tight
-// forward tolerance; and the measured dependence of the gradient error on the tolerance.
+// (lib/objective.hpp), under the three rotation parameterisations, a loose and a tight
+// forward tolerance and both time integrators (the trapezoidal rule's history blocks and skew
+// solve, docs/design.md §14.1); and the measured dependence of the gradient error on the
+// tolerance.
 
 #include <gtest/gtest.h>
 
@@ -67,6 +69,7 @@ SolverOptions options_for(RotationParameterization rotation, double tolerance) {
 struct Case {
   RotationParameterization rotation;
   double tolerance;
+  Integrator integrator = Integrator::kBackwardEuler;
 };
 
 // The adjoint gradient at the forward tolerance under test against central differences of
@@ -100,9 +103,14 @@ double adjoint_error(const DifferentiableSimulation& adjoint,
   return worst;
 }
 
+void PrintTo(const Case& c, std::ostream* os) {
+  *os << to_string(c.rotation) << ", tolerance " << c.tolerance << ", " << to_string(c.integrator);
+}
+
 class AdjointGradient : public ::testing::TestWithParam<Case> {
  protected:
-  void expect_matches(const Model& m, const ParameterSet& p, const Objective& g) {
+  void expect_matches(Model m, const ParameterSet& p, const Objective& g) {
+    m.integrator = GetParam().integrator;
     const DifferentiableSimulation sim(m, p, g, options());
     const DifferentiableSimulation reference(
         m, p, g, options_for(RotationParameterization::kLie, 1e-12));
@@ -218,10 +226,17 @@ INSTANTIATE_TEST_SUITE_P(
     ::testing::Values(Case{RotationParameterization::kLie, 1e-12},
                       Case{RotationParameterization::kLie, 1e-6},
                       Case{RotationParameterization::kRotationVector, 1e-12},
-                      Case{RotationParameterization::kQuaternion, 1e-12}),
+                      Case{RotationParameterization::kQuaternion, 1e-12},
+                      Case{RotationParameterization::kLie, 1e-12, Integrator::kTrapezoidal},
+                      Case{RotationParameterization::kLie, 1e-6, Integrator::kTrapezoidal},
+                      Case{RotationParameterization::kRotationVector, 1e-12,
+                           Integrator::kTrapezoidal},
+                      Case{RotationParameterization::kQuaternion, 1e-12,
+                           Integrator::kTrapezoidal}),
     [](const auto& info) {
       return std::string(to_string(info.param.rotation)) +
-             (info.param.tolerance <= 1e-10 ? "_tight" : "_loose");
+             (info.param.tolerance <= 1e-10 ? "_tight" : "_loose") +
+             (info.param.integrator == Integrator::kTrapezoidal ? "_trapezoidal" : "");
     });
 
 }  // namespace
