@@ -16,12 +16,23 @@ import sys
 SWEEPS = [
     ("butterfly_bolt", "Butterfly bolt (rigid body, Dzhanibekov flip)",
      "orientation_error"),
+    ("free_body", "Free asymmetric body (torque-free, 20 s)",
+     "orientation_error"),
     ("helix_pull", "Helical rod pulled apart (969 DOF, prescribed motion)",
      "position_error"),
     ("die_throw", "Die throw optimisation (adjoint gradient)",
      "gradient_error"),
     ("tube_insertion", "Rod pushed through a tube (963 DOF, contact and friction)",
      "position_error"),
+]
+# The integrators at equal accuracy: per sweep, the error that measures the motion and a budget
+# of 1 % of the scene's scale.
+BUDGETS = [
+    ("butterfly_bolt", "orientation_error", 1e-2, "1e-2 rad"),
+    ("free_body", "orientation_error", 1e-2, "1e-2 rad"),
+    ("helix_pull", "position_error", 5e-3, "5e-3 m, 1 % of the coil radius"),
+    ("die_throw", "orientation_error", 1e-2, "1e-2 rad"),
+    ("tube_insertion", "position_error", 2.5e-4, "2.5e-4 m, 1 % of the tube radius"),
 ]
 AXES_END = "frames_requested"  # the first column after the axes
 
@@ -78,6 +89,48 @@ def findings(rows, axes, metric):
     return out
 
 
+def cheapest(rows, metric, budget, integrator):
+    """The fastest run of `integrator` whose `metric` is within `budget`, or None."""
+    ok = [r for r in rows if r["failed"] != "1" and r.get("integrator") == integrator
+          and number(r[metric]) <= budget]
+    return min(ok, key=lambda r: number(r["wall_seconds"]), default=None)
+
+
+def integrator_section(sweep_dir):
+    lines = ["## The integrators at equal accuracy", "",
+             "For each scene, the cheapest run of each integrator on its grid whose error is "
+             "within the budget (1 % of the scene's scale), and backward Euler's wall time over "
+             "the trapezoidal rule's. \"not met\": no run of that integrator on the grid is that "
+             "accurate.", "",
+             "| scene | error, budget | backward Euler: setting, seconds | trapezoidal: setting, "
+             "seconds | backward Euler / trapezoidal |", "|---|---|---|---|---|"]
+    for name, metric, budget, text in BUDGETS:
+        with open(os.path.join(sweep_dir, name, "sweep.csv"), newline="") as f:
+            rows = list(csv.DictReader(f))
+        header = list(rows[0].keys())
+        axes = [a for a in header[: header.index(AXES_END)] if a != "integrator"]
+        cells = []
+        best = {}
+        for integrator in ("backward_euler", "trapezoidal"):
+            r = cheapest(rows, metric, budget, integrator)
+            best[integrator] = r
+            if r is None:
+                cells.append("not met")
+            else:
+                setting = ", ".join(f"{a}={r[a]}" for a in axes)
+                cells.append(f"{setting}: {fmt(number(r[metric]))}, {fmt(number(r['wall_seconds']))} s")
+        euler, trap = best["backward_euler"], best["trapezoidal"]
+        if euler is not None and trap is not None:
+            ratio = f"{fmt(number(euler['wall_seconds']) / number(trap['wall_seconds']), 2)}×"
+        elif trap is not None:
+            ratio = "backward Euler does not reach it on the grid"
+        else:
+            ratio = "–"
+        lines.append(f"| `{name}` | `{metric}` ≤ {text} | {cells[0]} | {cells[1]} | {ratio} |")
+    lines.append("")
+    return lines
+
+
 def machine():
     model = platform.processor() or "unknown CPU"
     try:
@@ -99,9 +152,9 @@ def main(sweep_dir, report):
         f"{datetime.date.today().isoformat()}, {machine()}, Release build. Wall times are the "
         "time steps only, medians of 3 runs; compare them within one table (same machine, same "
         "load), not across machines. Errors are measured by `liedyn sweep` against a reference "
-        "run at the grid's smallest time step / 4 and smallest tolerance / 100 (Newton, `lie`); "
-        "see `problems/sweep.hpp` for every definition. The finest runs' errors therefore read "
-        "low (first order in h: by about a quarter).",
+        "run at the grid's smallest time step / 4 and smallest tolerance / 100 (Newton, `lie`, "
+        "the trapezoidal rule); see `problems/sweep.hpp` for every definition. The finest runs' errors "
+        "therefore read low (by about 1/16 for the trapezoidal rule, 1/4 for backward Euler).",
         "",
         "How to read the tables: `front` marks the runs on the Pareto front (no other run is both "
         "faster and more accurate). The budget tables list the front once more, cheapest first, "
@@ -109,6 +162,7 @@ def main(sweep_dir, report):
         "the first row with an error ≤ E is the cheapest setting of the grid that meets it.",
         "",
     ]
+    lines += integrator_section(sweep_dir)
     for name, title, metric in SWEEPS:
         path = os.path.join(sweep_dir, name, "sweep.csv")
         with open(path, newline="") as f:

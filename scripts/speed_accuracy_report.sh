@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Regenerates docs/speed-accuracy.md and its plots: `liedyn sweep` on the butterfly bolt, the
-# helical rod, the die-throw optimisation and the rod pushed through a tube (contact), then a report of what each setting costs and
-# buys, with the cheapest setting per error budget.
+# free body, the helical rod, the die throw and the rod pushed through a tube (contact), each
+# under both time integrators, then a report of what each setting costs and buys, the cheapest
+# setting per error budget, and the integrators side by side at equal accuracy.
 #   bash scripts/speed_accuracy_report.sh [LIEDYN_BINARY]   (default: a Release build in build/)
 set -euo pipefail
 root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
@@ -16,17 +17,21 @@ mkdir -p "$out"
 cd "$root"  # relative scene paths in the outputs
 scenes=problems/scenes
 # Each sweep: its name, the scene, the axes. Timings are medians of 3 runs.
+integrators=backward_euler,trapezoidal
 "$liedyn" sweep "$scenes/butterfly_bolt.json" --out "$out/butterfly_bolt" --repeat 3 --quiet \
-  --set time_step=0.01,0.005,0.0025,0.00125 --set solver.tolerance=1e-4,1e-6,1e-9 \
-  --rotations lie,rotvec,quat > "$out/butterfly_bolt.txt"
+  --set integrator=$integrators --set time_step=0.02,0.01,0.005,0.0025,0.00125 \
+  --set solver.tolerance=1e-6,1e-9 --rotations lie,rotvec,quat > "$out/butterfly_bolt.txt"
+"$liedyn" sweep "$scenes/free_body.json" --out "$out/free_body" --repeat 3 --quiet \
+  --set integrator=$integrators --set time_step=0.02,0.01,0.005,0.0025,0.00125 \
+  --set solver.tolerance=1e-9 > "$out/free_body.txt"
 "$liedyn" sweep "$scenes/helix_pull.json" --out "$out/helix_pull" --repeat 3 --quiet \
-  --set time_step=0.02,0.01,0.005 --set solver.tolerance=1e-4,1e-6,1e-9 \
-  > "$out/helix_pull.txt"
+  --set integrator=$integrators --set time_step=0.02,0.01,0.005 \
+  --set solver.tolerance=1e-4,1e-6,1e-9 > "$out/helix_pull.txt"
 "$liedyn" sweep "$scenes/optimization/die_throw.json" --out "$out/die_throw" --repeat 3 --quiet \
-  --set time_step=0.005,0.0025,0.00125,0.000625 --set solver.tolerance=1e-4,1e-7,1e-10 \
-  > "$out/die_throw.txt"
-"$liedyn" sweep "$scenes/contact/tube_insertion.json" --out "$out/tube_insertion" --repeat 3 --quiet \
-  --set time_step=0.002,0.001,0.0005 --set solver.tolerance=1e-5,1e-7,1e-9 \
-  > "$out/tube_insertion.txt"
+  --set integrator=$integrators --set time_step=0.005,0.0025,0.00125,0.000625 \
+  --set solver.tolerance=1e-4,1e-7,1e-10 > "$out/die_throw.txt"
+"$liedyn" sweep "$scenes/contact/tube_insertion.json" --out "$out/tube_insertion" --repeat 3 \
+  --quiet --set integrator=$integrators --set time_step=0.002,0.001,0.0005 \
+  --set solver.tolerance=1e-5,1e-7,1e-9 > "$out/tube_insertion.txt"
 python3 "$root/scripts/speed_accuracy_report.py" "$out" "$root/docs/speed-accuracy.md"
 echo "wrote $root/docs/speed-accuracy.md"
