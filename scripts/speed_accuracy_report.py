@@ -25,14 +25,15 @@ SWEEPS = [
     ("tube_insertion", "Rod pushed through a tube (963 DOF, contact and friction)",
      "position_error"),
 ]
-# The integrators at equal accuracy: per sweep, the error that measures the motion and a budget
-# of 1 % of the scene's scale.
+# The integrators at equal accuracy: per sweep, the errors that measure the motion and their
+# budgets, 1 % of the scene's scale (a run meets them when every one holds).
 BUDGETS = [
-    ("butterfly_bolt", "orientation_error", 1e-2, "1e-2 rad"),
-    ("free_body", "orientation_error", 1e-2, "1e-2 rad"),
-    ("helix_pull", "position_error", 5e-3, "5e-3 m, 1 % of the coil radius"),
-    ("die_throw", "orientation_error", 1e-2, "1e-2 rad"),
-    ("tube_insertion", "position_error", 2.5e-4, "2.5e-4 m, 1 % of the tube radius"),
+    ("butterfly_bolt", [("orientation_error", 1e-2)], "1e-2 rad"),
+    ("free_body", [("orientation_error", 1e-2)], "1e-2 rad"),
+    ("helix_pull", [("position_error", 2.9e-2)], "2.9e-2 m, 1 % of the 2.86 m pull"),
+    ("die_throw", [("position_error", 3e-3), ("orientation_error", 1e-2)],
+     "3e-3 m, 1 % of its 0.3 m start height, and 1e-2 rad"),
+    ("tube_insertion", [("position_error", 1.6e-2)], "1.6e-2 m, 1 % of the 1.6 m rod"),
 ]
 AXES_END = "frames_requested"  # the first column after the axes
 
@@ -89,44 +90,54 @@ def findings(rows, axes, metric):
     return out
 
 
-def cheapest(rows, metric, budget, integrator):
-    """The fastest run of `integrator` whose `metric` is within `budget`, or None."""
-    ok = [r for r in rows if r["failed"] != "1" and r.get("integrator") == integrator
-          and number(r[metric]) <= budget]
-    return min(ok, key=lambda r: number(r["wall_seconds"]), default=None)
+def worst_ratio(run, budgets):
+    """The largest error/budget of a run (≤ 1: it meets every budget)."""
+    return max(number(run[metric]) / budget for metric, budget in budgets)
 
 
 def integrator_section(sweep_dir):
     lines = ["## The integrators at equal accuracy", "",
-             "For each scene, the cheapest run of each integrator on its grid whose error is "
-             "within the budget (1 % of the scene's scale), and backward Euler's wall time over "
-             "the trapezoidal rule's. \"not met\": no run of that integrator on the grid is that "
-             "accurate.", "",
-             "| scene | error, budget | backward Euler: setting, seconds | trapezoidal: setting, "
-             "seconds | backward Euler / trapezoidal |", "|---|---|---|---|---|"]
-    for name, metric, budget, text in BUDGETS:
+             "For each scene, the cheapest run of each integrator on its grid whose errors are "
+             "within the budgets (1 % of the scene's scale), and backward Euler's wall time over "
+             "the trapezoidal rule's. Where no run of an integrator meets them, its most accurate "
+             "run is shown instead, with how far over the budget it stays.", "",
+             "| scene | budget | backward Euler: setting, errors, seconds | trapezoidal: setting, "
+             "errors, seconds | backward Euler / trapezoidal |", "|---|---|---|---|---|"]
+    for name, budgets, text in BUDGETS:
         with open(os.path.join(sweep_dir, name, "sweep.csv"), newline="") as f:
             rows = list(csv.DictReader(f))
         header = list(rows[0].keys())
         axes = [a for a in header[: header.index(AXES_END)] if a != "integrator"]
-        cells = []
-        best = {}
+        cells, met, shown = [], {}, {}
         for integrator in ("backward_euler", "trapezoidal"):
-            r = cheapest(rows, metric, budget, integrator)
-            best[integrator] = r
-            if r is None:
-                cells.append("not met")
+            runs = [r for r in rows if r["failed"] != "1" and r["integrator"] == integrator
+                    and not math.isnan(worst_ratio(r, budgets))]
+            meeting = [r for r in runs if worst_ratio(r, budgets) <= 1.0]
+            if meeting:
+                r = min(meeting, key=lambda r: number(r["wall_seconds"]))
+                met[integrator] = r
             else:
-                setting = ", ".join(f"{a}={r[a]}" for a in axes)
-                cells.append(f"{setting}: {fmt(number(r[metric]))}, {fmt(number(r['wall_seconds']))} s")
-        euler, trap = best["backward_euler"], best["trapezoidal"]
-        if euler is not None and trap is not None:
-            ratio = f"{fmt(number(euler['wall_seconds']) / number(trap['wall_seconds']), 2)}×"
-        elif trap is not None:
-            ratio = "backward Euler does not reach it on the grid"
+                # Ties (a lost orientation reads π at every setting): the costliest of them.
+                r = min(runs, key=lambda r: (float(f"{worst_ratio(r, budgets):.3g}"),
+                                             -number(r["wall_seconds"])))
+            shown[integrator] = number(r["wall_seconds"])
+            setting = ", ".join(f"{a}={r[a]}" for a in axes)
+            errors = ", ".join(fmt(number(r[m])) for m, _ in budgets)
+            cells.append(f"{setting}: {errors}, {fmt(number(r['wall_seconds']))} s"
+                         + ("" if meeting else f" (not met: {fmt(worst_ratio(r, budgets), 2)}× the budget)"))
+        if len(met) == 2:
+            seconds = {i: number(met[i]["wall_seconds"]) for i in met}
+            ratio = f"{fmt(seconds['backward_euler'] / seconds['trapezoidal'], 2)}×"
+        elif "trapezoidal" in met:
+            ratio = (f"backward Euler does not meet it; its most accurate run costs "
+                     f"{fmt(shown['backward_euler'] / shown['trapezoidal'], 2)}× the trapezoidal one")
+        elif "backward_euler" in met:
+            ratio = (f"the trapezoidal rule does not meet it; its most accurate run costs "
+                     f"{fmt(shown['trapezoidal'] / shown['backward_euler'], 2)}× the backward Euler one")
         else:
-            ratio = "–"
-        lines.append(f"| `{name}` | `{metric}` ≤ {text} | {cells[0]} | {cells[1]} | {ratio} |")
+            ratio = "neither meets it"
+        metrics = " and ".join(f"`{m}`" for m, _ in budgets)
+        lines.append(f"| `{name}` | {metrics} ≤ {text} | {cells[0]} | {cells[1]} | {ratio} |")
     lines.append("")
     return lines
 
@@ -171,13 +182,14 @@ def main(sweep_dir, report):
         axes = header[: header.index(AXES_END)]
         lines += [f"## {title}", "", f"`{name}`: {len(rows)} runs over "
                   + ", ".join(f"`{a}`" for a in axes) + ".", ""]
-        cols = axes + ["seconds", "iterations", "position error [m]", "orientation error [rad]",
+        cols = axes + ["seconds", "iterations", "unconverged steps", "position error [m]",
+                       "orientation error [rad]",
                        "energy drift [J]", "gradient error", "front"]
         lines.append("| " + " | ".join(cols) + " |")
         lines.append("|" + "---|" * len(cols))
         for r in rows:
             cells = [r[a] for a in axes] + [
-                fmt(number(r["wall_seconds"])), r["newton_iterations"],
+                fmt(number(r["wall_seconds"])), r["newton_iterations"], r["unconverged_steps"],
                 fmt(number(r["position_error"])), fmt(number(r["orientation_error"])),
                 fmt(number(r["energy_drift"])), fmt(number(r["gradient_error"])),
                 "FAILED" if r["failed"] == "1" else ("*" if r["pareto"] == "1" else "")]

@@ -1176,6 +1176,13 @@ TEST_F(OptimizationCli, SetOverridesTheSceneAndRejectsWhatItCannotApply) {
   const Result nowhere = run({"gradcheck", die(), "--set", "bodies.5.mass=1"});
   EXPECT_EQ(nowhere.exit_code, 2);
   EXPECT_NE(nowhere.err.find("index 5 is out of range"), std::string::npos) << nowhere.err;
+  // A run's manifest names its settings with the scene; the value took effect (2 frames).
+  const Result sim = run({"simulate", die(), "--set", "frames=2", "--out", "sim", "--quiet"});
+  ASSERT_EQ(sim.exit_code, 0) << sim.err;
+  EXPECT_NE(liedyn::test::read_file(dir_ / "sim/run.json").find("die_throw.json [frames=2]"),
+            std::string::npos);
+  // frames.csv: a header and frames 0, 1, 2.
+  EXPECT_EQ(split(liedyn::test::read_file(dir_ / "sim/frames.csv"), '\n').size(), 4u);
 }
 
 // gradcheck --parameters: the gradient at the γ an optimisation ended at (parameters.csv),
