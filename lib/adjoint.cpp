@@ -70,7 +70,7 @@ void IncrementalPotential::add_weighted_terms_adjoint(
     using T = typename std::decay_t<decltype(terms)>::value_type;
     LocalHessian<T::kBlocks> H;
     for (const T& t : terms) {
-      if (!in_history(t) || !has_dofs(t)) continue;
+      if (!state_term(t) || !has_dofs(t)) continue;
       const LocalGradient<T::kBlocks> wz = w * gather(t, z);
       t.evaluate(s, nullptr, &H);
       const LocalGradient<T::kBlocks> Hz = H * wz;  // H symmetric

@@ -1,9 +1,11 @@
 #include "incremental_potential.hpp"
 
+#include <Eigen/Cholesky>
 #include <Eigen/Geometry>
 #include <memory>
 #include <numeric>
 #include <optional>
+#include <stdexcept>
 
 #include "rod_terms.hpp"
 #include "so3.hpp"
@@ -11,7 +13,7 @@
 namespace liedyn {
 
 void IncrementalPotential::begin_step(const State& previous, const Step& previous_step,
-                                      int frame) {
+                                      int frame, const Step* step_before) {
   for_each_term_vector([&](auto& terms) {
     using T = typename std::decay_t<decltype(terms)>::value_type;
     if constexpr (BeginsStep<T>) {
@@ -21,11 +23,16 @@ void IncrementalPotential::begin_step(const State& previous, const Step& previou
       for (T& t : terms) t.begin_frame(frame);
     }
   });
+  if (integrator_ == Integrator::kBdf2) {
+    if (step_before == nullptr) throw std::logic_error("begin_step: BDF2 needs the step before");
+    begin_bdf2_step(previous, previous_step, *step_before, frame);
+    return;
+  }
   if (integrator_ != Integrator::kTrapezoidal) return;
   // The history terms' fields (lib/history.hpp). At frame 1 the history is the initial
   // velocities: the trapezoidal rule's first step, c = ¼ ∇V(q_0) − π_0/h.
   const bool first = frame <= 1;
-  weighted_terms_gradient(previous, gradient_previous_);
+  state_terms_gradient(previous, gradient_previous_);
   older_ = previous;  // sized at the first step (which needs no q_{k−2}): no allocation after it
   if (!first) {
     for (std::size_t i = 0; i < older_.points.size(); ++i) {
@@ -34,7 +41,7 @@ void IncrementalPotential::begin_step(const State& previous, const Step& previou
     for (std::size_t j = 0; j < older_.rotations.size(); ++j) {
       older_.rotations[j] = previous_step.rotations[j].transpose() * previous.rotations[j];
     }
-    weighted_terms_gradient(older_, gradient_older_);
+    state_terms_gradient(older_, gradient_older_);
   }
   const auto lagged = [&](int offset) -> Vector3 {
     if (first) return 0.25 * gradient_previous_.segment<3>(offset);
@@ -58,8 +65,70 @@ void IncrementalPotential::begin_step(const State& previous, const Step& previou
   }
 }
 
+void IncrementalPotential::begin_bdf2_step(const State& previous, const Step& previous_step,
+                                           const Step& step_before, int frame) {
+  if (frame <= 1) {
+    older_ = previous;  // sized at the first step: no allocation after it
+    corrected_step_ = step_before;
+  }
+  const Step* before = &step_before;
+  if (frame == 2) {
+    // Δq_0 = (h v_0, exp(h ω_0)) makes x_{−1} = x_0 − h v_0, an O(h²) start that the two-step
+    // history would carry into every later step as an O(h) error. With the initial
+    // acceleration, x_{−1} = x_0 − h v_0 + ½ h² a_0 and R_{−1} = exp(−h ω_0 + ½ h² α_0) R_0 are
+    // O(h³): Δx_0' = Δx_0 + ∇V(q_0)/(2m/h²), ΔR_0' = exp(φ + A⁻¹(∇V(q_0) + ½ φ × A φ)) with
+    // φ = h ω_0 and A = 2 I_w/h² (docs/design.md §15). At frame 1 x̃ does not depend on a_0.
+    for (std::size_t i = 0; i < older_.points.size(); ++i) {
+      older_.points[i] = previous.points[i] - previous_step.points[i];
+    }
+    for (std::size_t j = 0; j < older_.rotations.size(); ++j) {
+      older_.rotations[j] = previous_step.rotations[j].transpose() * previous.rotations[j];
+    }
+    state_terms_gradient(older_, gradient_older_);  // q_0
+    for (const TranslationalInertia& t : terms<TranslationalInertia>()) {
+      corrected_step_.points[t.point] =
+          step_before.points[t.point] + gradient_older_.segment<3>(t.offsets[0]) / t.mass_over_h2;
+    }
+    for (const RotationalInertia& t : terms<RotationalInertia>()) {
+      const Matrix3& R0 = older_.rotations[t.rotation];
+      const Vector3 phi = so3::log(step_before.rotations[t.rotation]);
+      const Matrix3 A =
+          R0 * (t.J_over_h2.trace() * Matrix3::Identity() - t.J_over_h2) * R0.transpose();
+      const Vector3 g = gradient_older_.segment<3>(t.offsets[0]);
+      corrected_step_.rotations[t.rotation] =
+          so3::exp(phi + A.ldlt().solve(Vector3(g + 0.5 * phi.cross(A * phi))));
+    }
+    before = &corrected_step_;
+  }
+  // x̃ = (5x_{k−1} − 4x_{k−2} + x_{k−3})/2, x_{k−2} = x_{k−1} − Δx_{k−1}, x_{k−3} = x_{k−2} − Δx_{k−2};
+  // R̃ likewise with R_{k−2} = ΔR_{k−1}ᵀ R_{k−1}, R_{k−3} = ΔR_{k−2}ᵀ R_{k−2} (a matrix, not a
+  // rotation, as backward Euler's R̃).
+  for (TranslationalInertia& t : terms<TranslationalInertia>()) {
+    const Vector3& x1 = previous.points[t.point];
+    const Vector3 x2 = x1 - previous_step.points[t.point];
+    const Vector3 x3 = x2 - before->points[t.point];
+    t.x_tilde = 0.5 * (5.0 * x1 - 4.0 * x2 + x3);
+  }
+  for (RotationalInertia& t : terms<RotationalInertia>()) {
+    const Matrix3& R1 = previous.rotations[t.rotation];
+    const Matrix3 R2 = previous_step.rotations[t.rotation].transpose() * R1;
+    const Matrix3 R3 = before->rotations[t.rotation].transpose() * R2;
+    t.R_tilde = 0.5 * (5.0 * R1 - 4.0 * R2 + R3);
+  }
+}
+
 void IncrementalPotential::set_integrator(Integrator integrator, int dofs) {
   integrator_ = integrator;
+  if (integrator == Integrator::kBdf2) {
+    // (2x_k − 5x_{k−1} + 4x_{k−2} − x_{k−3})/h² = 2(x_k − x̃)/h²: twice the inertia.
+    for (TranslationalInertia& t : terms<TranslationalInertia>()) t.mass_over_h2 *= 2.0;
+    for (RotationalInertia& t : terms<RotationalInertia>()) {
+      t.J_over_h2 *= 2.0;
+      t.sqrt_J_over_h *= std::sqrt(2.0);
+    }
+    gradient_older_.setZero(dofs);
+    return;
+  }
   if (integrator != Integrator::kTrapezoidal) return;
   state_weight_ = 0.25;
   // History term t belongs to inertia term t of its kind (same point or rotation, same
@@ -87,14 +156,14 @@ double IncrementalPotential::rereference_history(const State& q) {
   return moved;
 }
 
-void IncrementalPotential::weighted_terms_gradient(const State& q, Eigen::VectorXd& g) const {
+void IncrementalPotential::state_terms_gradient(const State& q, Eigen::VectorXd& g) const {
   g.setZero();
   for_each_term_vector([&](const auto& terms) {
     using T = typename std::decay_t<decltype(terms)>::value_type;
     if constexpr (!EndOfStep<T>) {
       LocalGradient<T::kBlocks> g_local;
       for (const T& t : terms) {
-        if (!in_history(t)) continue;  // an exact constraint
+        if (!state_term(t)) continue;  // an exact constraint
         t.evaluate(q, &g_local, nullptr);
         static_for<T::kBlocks>([&](auto i) {
           if (t.offsets[i] < 0) return;

@@ -92,11 +92,15 @@ class IncrementalPotential {
   // step `frame` = k ≥ 1, the step that produces q_k. Under the trapezoidal integrator also
   // the history terms' fields (lib/history.hpp): two gradient assemblies of the weighted
   // terms, at q_{k−1} and q_{k−2} (one at frame 1, whose history is the initial velocities).
-  void begin_step(const State& previous, const Step& previous_step, int frame = 1);
+  // Under BDF2 the inertia terms' extrapolation from three states, which needs Δq_{k−2} as
+  // `step_before` too (at frame 1 the initial step again; docs/design.md §15).
+  void begin_step(const State& previous, const Step& previous_step, int frame = 1,
+                  const Step* step_before = nullptr);
 
   // The time integrator (Model::Integrator) of a dynamic step, once, after the terms are
   // added: the trapezoidal one adds a history term beside each inertia term and weights the
-  // other terms (weight()). `dofs` is the component's tangent size.
+  // other terms (weight()); BDF2 doubles the inertia terms' m/h² and J/h². `dofs` is the
+  // component's tangent size.
   void set_integrator(Integrator integrator, int dofs);
   Integrator integrator() const { return integrator_; }
   // The factor of term t in Ψ: 1, or ¼ under the trapezoidal integrator for a term that is
@@ -105,12 +109,18 @@ class IncrementalPotential {
   // Hessian or residual applies it (assembly, value(), the Ceres forms).
   template <class T>
   double weight(const T& t) const {
+    return state_term(t) ? state_weight_ : 1.0;
+  }
+  // Whether term t is a potential of the state: neither EndOfStep (term.hpp) nor an exact
+  // Constraint. The trapezoidal history holds these (weight() ¼).
+  template <class T>
+  static bool state_term(const T& t) {
     if constexpr (EndOfStep<T>) {
-      return 1.0;
+      return false;
     } else if constexpr (Constraint<T>) {
-      return t.exact ? 1.0 : state_weight_;
+      return !t.exact;
     } else {
-      return state_weight_;
+      return true;
     }
   }
   // Trapezoidal: moves every rotation history's reference to q (RotationHistory::rereference)
@@ -256,18 +266,12 @@ class IncrementalPotential {
       }
     });
   }
-  // Whether term t is one of the weighted terms (weight() ≠ 1), the ones the history holds.
-  template <class T>
-  bool in_history(const T& t) const {
-    if constexpr (EndOfStep<T>) {
-      return false;
-    } else {
-      return weight(t) != 1.0;
-    }
-  }
-  // Σ ∇Ψ_t over the weighted terms, unweighted, at q, in the component's tangent layout
-  // (g sized by the caller).
-  void weighted_terms_gradient(const State& q, Eigen::VectorXd& g) const;
+  // Σ ∇Ψ_t over the state terms, unweighted, at q, in the component's tangent layout (g sized
+  // by the caller): ∇V(q) of (14.4), and of the initial acceleration under BDF2.
+  void state_terms_gradient(const State& q, Eigen::VectorXd& g) const;
+  // BDF2's extrapolations x̃ and R̃ of the inertia terms (begin_step; docs/design.md §15).
+  void begin_bdf2_step(const State& previous, const Step& previous_step, const Step& step_before,
+                       int frame);
   // add_history_adjoint's part of w ∇V at s (s = q_{k−1} or q_{k−2}, G = ∇V(s) from
   // weighted_terms_gradient): u += w (H_V(s) z + ½ G × z on rotations), the derivative of the
   // Lie gradient field ∇V transposed (design §1.4), component layout; and the weighted terms'
@@ -280,10 +284,12 @@ class IncrementalPotential {
 
   Integrator integrator_ = Integrator::kBackwardEuler;
   double state_weight_ = 1.0;  // weight() of the terms of the state
-  // Trapezoidal scratch, sized by set_integrator: the weighted terms' gradients at q_{k−1}
-  // and q_{k−2}, and the whole state q_{k−2}.
+  // Scratch, sized by set_integrator and at the first step: the state terms' gradients at
+  // q_{k−1} and q_{k−2}, and the whole state q_{k−2} (trapezoidal; BDF2: q_0 and its gradient
+  // at frame 2), and BDF2's initial step corrected by the initial acceleration.
   Eigen::VectorXd gradient_previous_, gradient_older_;
   State older_;
+  Step corrected_step_;
 
   template <class Tuple>
   struct VectorsOf;

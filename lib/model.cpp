@@ -143,12 +143,13 @@ const char* to_string(Integrator integrator) {
   switch (integrator) {
     case Integrator::kBackwardEuler: return "backward_euler";
     case Integrator::kTrapezoidal: return "trapezoidal";
+    case Integrator::kBdf2: return "bdf2";
   }
   return "unknown";
 }
 
 std::optional<Integrator> parse_integrator(std::string_view name) {
-  for (const auto i : {Integrator::kBackwardEuler, Integrator::kTrapezoidal}) {
+  for (const auto i : {Integrator::kBackwardEuler, Integrator::kTrapezoidal, Integrator::kBdf2}) {
     if (name == to_string(i)) return i;
   }
   return std::nullopt;

@@ -156,8 +156,14 @@ struct TorqueSpec {
 //     discretisation of rotational inertia (discrete momentum 2 vee(R_k J R_{k−1}ᵀ)/h), solved
 //     as a minimisation (lib/history.hpp). Friction, motors and exact joints act at the
 //     step's end, as under backward Euler.
-enum class Integrator { kBackwardEuler, kTrapezoidal };
-// The scene file's names ("backward_euler", "trapezoidal") and back (nullopt for another).
+//   * bdf2 — second order and L-stable: the backward difference of the second derivative,
+//     M (2x_k − 5x_{k−1} + 4x_{k−2} − x_{k−3})/h² = f_k, as backward Euler's incremental
+//     potential with twice the inertia about an extrapolation from three states (docs/design.md
+//     §15). It damps what h does not resolve, as backward Euler, but resolved motion only at
+//     O((ωh)⁴) per step.
+enum class Integrator { kBackwardEuler, kTrapezoidal, kBdf2 };
+// The scene file's names ("backward_euler", "trapezoidal", "bdf2") and back (nullopt for
+// another).
 const char* to_string(Integrator integrator);
 std::optional<Integrator> parse_integrator(std::string_view name);
 

@@ -823,7 +823,7 @@ Scene parse(const json& root, const std::string& source) {
   scene.model.static_equilibrium = mode == "static";
   scene.model.integrator = named_value(top, "integrator", "integrator", "backward_euler",
                                        &parse_integrator, "integrator",
-                                       "\"backward_euler\" or \"trapezoidal\"");
+                                       "\"backward_euler\", \"trapezoidal\" or \"bdf2\"");
   scene.model.load_steps = std::max(scene.frames, 1);
 
   if (top.has("solver")) {

@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Regenerates docs/speed-accuracy.md and its plots: `liedyn sweep` on the butterfly bolt, the
 # free body, the helical rod, the die throw and the rod pushed through a tube (contact), each
-# under both time integrators, then a report of what each setting costs and buys, the cheapest
+# under the three time integrators, then a report of what each setting costs and buys, the cheapest
 # setting per error budget, and the integrators side by side at equal accuracy.
 #   bash scripts/speed_accuracy_report.sh [LIEDYN_BINARY]   (default: a Release build in build/)
 set -euo pipefail
@@ -17,7 +17,7 @@ mkdir -p "$out"
 cd "$root"  # relative scene paths in the outputs
 scenes=problems/scenes
 # Each sweep: its name, the scene, the axes. Timings are medians of 3 runs.
-integrators=backward_euler,trapezoidal
+integrators=backward_euler,trapezoidal,bdf2
 "$liedyn" sweep "$scenes/butterfly_bolt.json" --out "$out/butterfly_bolt" --repeat 3 --quiet \
   --set integrator=$integrators --set time_step=0.02,0.01,0.005,0.0025,0.00125 \
   --set solver.tolerance=1e-6,1e-9 --rotations lie,rotvec,quat > "$out/butterfly_bolt.txt"

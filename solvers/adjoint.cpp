@@ -67,6 +67,10 @@ DifferentiableSimulation::DifferentiableSimulation(Model base, ParameterSet para
       objective_(std::move(objective)),
       options_(options) {
   options_.validate();
+  if (!base_.static_equilibrium && base_.integrator == Integrator::kBdf2) {
+    throw ModelError("integrator", "bdf2 has no adjoint yet: optimise under backward_euler or "
+                                   "trapezoidal (run bdf2 forward with liedyn simulate)");
+  }
   parameters_.apply(base_, initial_parameters()).validate();
 }
 

@@ -23,6 +23,7 @@ Simulator::Simulator(Model model, const SolverOptions& options)
   }
   previous_ = state_;
   previous_step_ = step_;
+  step_before_ = step_;
   search_ = ContactSearch(model_);
   touching_.assign(search_.size(), false);
   search_.find(state_, Step{}, touching_);  // nothing has moved yet: no margins
@@ -83,7 +84,7 @@ StepReport Simulator::step() {
     // The islands write disjoint entries of state_ and read previous_ and the model only.
     const auto solve_island = [&](int i) {
       IncrementalPotential& potential = now.solvers[i]->component().potential;
-      potential.begin_step(previous_, previous_step_, frame_ + 1);
+      potential.begin_step(previous_, previous_step_, frame_ + 1, &step_before_);
       if (!dynamic) potential.set_load_scale(load_scale);
       now.reports[i] = now.solvers[i]->solve(state_);
     };
@@ -112,6 +113,7 @@ StepReport Simulator::step() {
     return report;
   }
   // The step; a static sequence of equilibria has none (zero velocities and kinetic energy).
+  step_before_ = previous_step_;  // Δq_{k−1}, the step before the next one's previous step
   for (std::size_t i = 0; i < state_.points.size(); ++i) {
     step_.points[i] = dynamic ? Vector3(state_.points[i] - previous_.points[i]) : Vector3::Zero();
   }

@@ -93,6 +93,7 @@ class Simulator {
   SolverOptions options_;
   State state_, previous_;
   Step step_, previous_step_;
+  Step step_before_;  // Δq_{k−2} for BDF2's step k (the initial step at k = 1 and 2)
   int frame_ = 0;
   // The step solvers of one set of islands (one per island) and their threads.
   struct StepIslands {

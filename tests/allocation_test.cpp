@@ -448,19 +448,23 @@ TEST(Allocation, ClampedRodStepDoesNotAllocate) {
   }
 }
 
-// The trapezoidal integrator (lib/history.hpp): the history's gradient assemblies at the two
-// earlier states, the scratch state q_{k−2}, the torque fields re-referenced at every Newton
-// iteration and the skew corrections' solves — on the three kinds of linear system.
-TEST(Allocation, TrapezoidalStepsDoNotAllocate) {
+// The second-order integrators. Trapezoidal (lib/history.hpp): the history's gradient
+// assemblies at the two earlier states, the scratch state q_{k−2}, the torque fields
+// re-referenced at every Newton iteration and the skew corrections' solves. BDF2: the step
+// before kept by the simulator, the initial acceleration's gradient and corrected step at the
+// second step. On the three kinds of linear system.
+TEST(Allocation, SecondOrderStepsDoNotAllocate) {
   Model bolt;
   bolt.time_step = 0.01;
   bolt.bodies.push_back(butterfly_bolt());
   Model chain = spring_chain(8);
   Model rod = clamped_rod();
-  for (Model* model : {&bolt, &chain, &rod}) {
-    model->integrator = liedyn::Integrator::kTrapezoidal;
-    Simulator sim(*model, SolverOptions{});
-    expect_no_allocation(run_counted(sim, kSteps), kSteps);
+  for (const auto integrator : {liedyn::Integrator::kTrapezoidal, liedyn::Integrator::kBdf2}) {
+    for (Model* model : {&bolt, &chain, &rod}) {
+      model->integrator = integrator;
+      Simulator sim(*model, SolverOptions{});
+      expect_no_allocation(run_counted(sim, kSteps), kSteps);
+    }
   }
 }
 

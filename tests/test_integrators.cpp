@@ -1,7 +1,9 @@
-// The trapezoidal integrator (Model::Integrator; lib/history.hpp, docs/design.md §14): its
-// history terms' derivatives, the discrete equations its steps satisfy (checked against
-// forces from finite differences of the potential energy, not against its own assembly), its
-// order, its conservation laws, and the same steps under every back-end and parameterisation.
+// The second-order integrators (Model::Integrator). Trapezoidal (lib/history.hpp,
+// docs/design.md §14): its history terms' derivatives and their adjoint blocks, the discrete
+// equations its steps satisfy (checked against forces from finite differences of the
+// potential energy, not against its own assembly), its order, its conservation laws. BDF2
+// (docs/design.md §15): its discrete equations and start, its order, its damping of what the
+// step does not resolve. Both: the same steps under every back-end and parameterisation.
 
 #include <gtest/gtest.h>
 
@@ -225,23 +227,28 @@ TEST(Trapezoidal, StepsSatisfyTheDiscreteEquations) {
 }
 
 // Under a constant force the trapezoidal rule is exact: x(t) = x₀ + v₀t + ½gt², every frame.
-TEST(Trapezoidal, FreeFallIsExact) {
+// Under BDF2 too: its start (the initial acceleration in the step before the second step,
+// docs/design.md §15) is exact for a parabola, and so is its difference formula.
+TEST(SecondOrder, FreeFallIsExact) {
   Model model;
   model.time_step = 0.01;
   model.gravity = Vector3(0.0, 0.0, -9.81);
-  model.integrator = Integrator::kTrapezoidal;
   RigidBody b;
   b.linear_velocity = Vector3(1.0, -2.0, 3.0);
   b.position = Vector3(0.5, 0.0, 1.0);
   model.bodies.push_back(b);
   SolverOptions options;
   options.tolerance = 1e-12;
-  Simulator sim(model, options);
-  for (int k = 1; k <= 300; ++k) {
-    ASSERT_TRUE(sim.step().converged());
-    const double t = k * model.time_step;
-    const Vector3 exact = b.position + t * b.linear_velocity + 0.5 * t * t * model.gravity;
-    ASSERT_LE((sim.state().points[0] - exact).norm(), 1e-11 * (1.0 + exact.norm())) << k;
+  for (const Integrator integrator : {Integrator::kTrapezoidal, Integrator::kBdf2}) {
+    SCOPED_TRACE(to_string(integrator));
+    model.integrator = integrator;
+    Simulator sim(model, options);
+    for (int k = 1; k <= 300; ++k) {
+      ASSERT_TRUE(sim.step().converged());
+      const double t = k * model.time_step;
+      const Vector3 exact = b.position + t * b.linear_velocity + 0.5 * t * t * model.gravity;
+      ASSERT_LE((sim.state().points[0] - exact).norm(), 1e-11 * (1.0 + exact.norm())) << k;
+    }
   }
   // Backward Euler is not: its fall lags by ½ g t h.
   model.integrator = Integrator::kBackwardEuler;
@@ -336,17 +343,22 @@ double orientation_error(const Model& model, double h, const Matrix3& reference,
   return so3::distance(final_rotation(model, h, duration), reference);
 }
 
-TEST(Trapezoidal, FreeBodyOrientationIsSecondOrder) {
+// (From 20 ms down: at 40 ms BDF2 is not yet in its asymptotic range, 1.3e-2 against 2.5e-3 at
+// 20 ms, a ratio of 5.3.)
+TEST(SecondOrder, FreeBodyOrientationIsSecondOrder) {
   const double duration = 2.0;
-  for (const Integrator integrator : {Integrator::kTrapezoidal, Integrator::kBackwardEuler}) {
+  for (const Integrator integrator :
+       {Integrator::kTrapezoidal, Integrator::kBdf2, Integrator::kBackwardEuler}) {
     SCOPED_TRACE(to_string(integrator));
     Model model = free_body();
     model.integrator = integrator;
-    const Matrix3 reference = final_rotation(model, 0.01 / 16, duration);
-    const double e1 = orientation_error(model, 0.04, reference, duration);
-    const double e2 = orientation_error(model, 0.02, reference, duration);
-    const double e3 = orientation_error(model, 0.01, reference, duration);
-    const double expected = integrator == Integrator::kTrapezoidal ? 4.0 : 2.0;
+    const Matrix3 reference = final_rotation(model, 0.005 / 16, duration);
+    const double e1 = orientation_error(model, 0.02, reference, duration);
+    const double e2 = orientation_error(model, 0.01, reference, duration);
+    const double e3 = orientation_error(model, 0.005, reference, duration);
+    const double expected = integrator == Integrator::kBackwardEuler ? 2.0 : 4.0;
+    std::printf("%s: orientation errors %.3e %.3e %.3e at h = 20, 10, 5 ms\n",
+                to_string(integrator), e1, e2, e3);
     EXPECT_NEAR(e1 / e2, expected, 0.15 * expected) << e1 << " " << e2 << " " << e3;
     EXPECT_NEAR(e2 / e3, expected, 0.15 * expected) << e1 << " " << e2 << " " << e3;
   }
@@ -374,8 +386,11 @@ TEST(Trapezoidal, TheBoltFlipsWithOneNewtonIterationPerStep) {
 
 // The same steps whichever back-end and parameterisation solves them (test_backends.cpp's
 // bound and reasoning: all stop on the shared test, here also on the history's reference).
-TEST(Trapezoidal, EveryBackEndAndParameterisationTakesTheSameSteps) {
-  const Model model = trapezoidal(test_models::spring_chain(2));
+TEST(SecondOrder, EveryBackEndAndParameterisationTakesTheSameSteps) {
+  for (const Integrator integrator : {Integrator::kTrapezoidal, Integrator::kBdf2}) {
+  SCOPED_TRACE(to_string(integrator));
+  Model model = test_models::spring_chain(2);
+  model.integrator = integrator;
   SolverOptions base;
   base.tolerance = 1e-9;
   const test::Trajectory reference = test::run_frames(model, base, 20, "newton/lie");
@@ -405,6 +420,7 @@ TEST(Trapezoidal, EveryBackEndAndParameterisationTakesTheSameSteps) {
     const auto [dx, dR] = test::deviation(reference, test::run_frames(model, options, 20, label));
     EXPECT_LE(dx, 1e-6);
     EXPECT_LE(dR, 1e-6);
+  }
   }
 }
 
@@ -515,22 +531,27 @@ double cantilever_period(Integrator integrator, double h) {
 // (ωh)²/12, backward Euler's (its phase per step atan(ωh)) (ωh)²/3 — four times more, beside
 // its first-order loss of amplitude (ReleasedRodKeepsItsAmplitude). Measured (Release): 3.40e-4,
 // 8.14e-5, 2.02e-5 of the period at h = 8, 4, 2 ms (trapezoidal), 1.36e-3, 3.39e-4, 8.36e-5.
-TEST(Trapezoidal, CantileverPeriodErrorIsSecondOrder) {
+// BDF2's is second order too, 0.45 (ωh)² for the oscillator (the phase of its principal
+// root), about 5.4 times the trapezoidal rule's.
+TEST(SecondOrder, CantileverPeriodErrorIsSecondOrder) {
   const double reference = cantilever_period(Integrator::kTrapezoidal, 2.5e-4);
   ASSERT_NEAR(reference, 0.8, 0.08);  // 1.25 Hz for the continuum (tip_amplitude_ratio)
   const double omega = 2.0 * std::numbers::pi / reference;
-  std::vector<double> trapezoid, euler;
+  std::vector<double> trapezoid, euler, bdf2;
   for (const double h : {8e-3, 4e-3, 2e-3}) {
     trapezoid.push_back(std::abs(cantilever_period(Integrator::kTrapezoidal, h) - reference) / reference);
     euler.push_back(std::abs(cantilever_period(Integrator::kBackwardEuler, h) - reference) / reference);
-    std::printf("h = %g s: relative period error trapezoidal %.3e, backward Euler %.3e; (ωh)²/12 = %.3e\n",
-                h, trapezoid.back(), euler.back(), std::pow(omega * h, 2) / 12.0);
+    bdf2.push_back(std::abs(cantilever_period(Integrator::kBdf2, h) - reference) / reference);
+    std::printf("h = %g s: relative period error trapezoidal %.3e, backward Euler %.3e, bdf2 "
+                "%.3e; (ωh)²/12 = %.3e\n",
+                h, trapezoid.back(), euler.back(), bdf2.back(), std::pow(omega * h, 2) / 12.0);
     EXPECT_NEAR(trapezoid.back(), std::pow(omega * h, 2) / 12.0, 0.1 * trapezoid.back()) << h;
     EXPECT_NEAR(euler.back() / trapezoid.back(), 4.0, 0.4) << h;
   }
   for (std::size_t i = 1; i < trapezoid.size(); ++i) {
     EXPECT_NEAR(trapezoid[i - 1] / trapezoid[i], 4.0, 0.4) << i;
     EXPECT_NEAR(euler[i - 1] / euler[i], 4.0, 0.4) << i;
+    EXPECT_NEAR(bdf2[i - 1] / bdf2[i], 4.0, 0.4) << i;
   }
 }
 
@@ -541,6 +562,7 @@ TEST(Trapezoidal, SceneKeyIsParsedAndAnUnknownOneNamed) {
   EXPECT_EQ(load_scene(kScenes / "free_body.json").model.integrator, Integrator::kBackwardEuler);
   const std::string base = R"({"time_step": 0.01, "frames": 1, "bodies": [{"name": "b", "mass": 1, "inertia": [1, 1, 1]}], "integrator": )";
   EXPECT_EQ(parse_scene(base + "\"trapezoidal\"}", "inline").model.integrator, Integrator::kTrapezoidal);
+  EXPECT_EQ(parse_scene(base + "\"bdf2\"}", "inline").model.integrator, Integrator::kBdf2);
   try {
     parse_scene(base + "\"midpoint\"}", "inline");
     FAIL() << "accepted";
@@ -639,14 +661,160 @@ TEST(HistoryAdjoint, BlocksMatchFiniteDifferencesOverAllAngles) {
 }
 
 // Static equilibria have no time: the integrator changes nothing.
-TEST(Trapezoidal, StaticModeIsUnaffected) {
+TEST(SecondOrder, StaticModeIsUnaffected) {
   const Scene scene = load_scene(kScenes / "cantilever_static.json");
   const test::Trajectory euler = test::run_frames(scene.model, scene.solver, 5, "backward_euler");
-  const test::Trajectory trapezoid =
-      test::run_frames(trapezoidal(scene.model), scene.solver, 5, "trapezoidal");
-  const auto [dx, dR] = test::deviation(euler, trapezoid);
-  EXPECT_EQ(dx, 0.0);
-  EXPECT_EQ(dR, 0.0);
+  for (const Integrator integrator : {Integrator::kTrapezoidal, Integrator::kBdf2}) {
+    Model model = scene.model;
+    model.integrator = integrator;
+    const test::Trajectory other = test::run_frames(model, scene.solver, 5, to_string(integrator));
+    const auto [dx, dR] = test::deviation(euler, other);
+    EXPECT_EQ(dx, 0.0) << to_string(integrator);
+    EXPECT_EQ(dR, 0.0) << to_string(integrator);
+  }
+}
+
+// ---------------------------------------------------------------------------------------
+// BDF2.
+
+// Each step of a spring chain under gravity satisfies
+//   r_k = m (2x_k − 5x_{k−1} + 4x_{k−2} − x_{k−3})/h² + ∇V_k            (points)
+//   r_k = 2 vee(R_k J (5R_{k−1} − 4R_{k−2} + R_{k−3})ᵀ)/h² + ∇V_k      (rotations)
+// with the forces from finite differences of the potential energy; the states before q_0 are
+// those of the start (docs/design.md §15): at the first step x_{−j} = x_0 − j h v_0 and
+// R_{−j} = exp(−j φ) R_0 (φ = h ω_0: the initial step), at the second x_{−1} = x_0 − h v_0 +
+// ½ h² a_0 and R_{−1} = exp(−φ + ½ h² α_0) R_0, a_0 and α_0 = I_w⁻¹(τ_0 − ω_0 × I_w ω_0) from
+// the forces at q_0.
+TEST(Bdf2, StepsSatisfyTheDiscreteEquations) {
+  Model model = test_models::spring_chain(3);
+  model.integrator = Integrator::kBdf2;
+  SolverOptions options;
+  options.tolerance = 1e-12;
+  Simulator sim(model, options);
+  const std::vector<Component> components = build_components(model);
+  ASSERT_EQ(components.size(), 1u);
+  const IncrementalPotential& P = components[0].potential;
+  const double h = model.time_step;
+  const Step initial = sim.last_step();
+  std::vector<State> q = {sim.state()};
+  for (int k = 1; k <= 40; ++k) {
+    const StepReport r = sim.step();
+    ASSERT_TRUE(r.converged()) << k << " " << r.message;
+    q.push_back(sim.state());
+  }
+  const Eigen::VectorXd g_0 = energy_gradient(P, q[0]);
+  // The states before q_0, for the step k that needs them: x_{−1} and x_{−2} at k = 1,
+  // x_{−1} at k = 2.
+  const auto before = [&](int i, int j, int k) -> Vector3 {
+    const RigidBody& b = model.bodies[i];
+    const Vector3 a_0 = -g_0.segment<3>(tangent_point(i)) / b.mass;
+    const double c = k == 1 ? 0.0 : 1.0;
+    return q[0].points[i] - j * h * b.linear_velocity + c * 0.5 * j * j * h * h * a_0;
+  };
+  const auto rotation_before = [&](int i, int j, int k) -> Matrix3 {
+    const Matrix3& R0 = q[0].rotations[i];
+    const Vector3 phi = so3::log(initial.rotations[i]);
+    const Matrix3 I_w = R0 * model.bodies[i].inertia * R0.transpose();
+    const Vector3 omega = phi / h;
+    const Vector3 alpha =
+        I_w.ldlt().solve(Vector3(-g_0.segment<3>(tangent_rotation(q[0], i)) - omega.cross(I_w * omega)));
+    const double c = k == 1 ? 0.0 : 1.0;
+    return so3::exp(-j * phi + c * 0.5 * j * j * h * h * alpha) * R0;
+  };
+  double largest = 0.0;
+  double worst = 0.0;
+  for (int k = 1; k < static_cast<int>(q.size()); ++k) {
+    const Eigen::VectorXd g_k = energy_gradient(P, q[k]);
+    largest = std::max(largest, g_k.cwiseAbs().maxCoeff());
+    for (std::size_t i = 0; i < model.bodies.size(); ++i) {
+      const RigidBody& b = model.bodies[i];
+      const int ip = static_cast<int>(i);
+      const auto x = [&](int m) { return m >= 0 ? q[m].points[i] : before(ip, -m, k); };
+      const auto R = [&](int m) { return m >= 0 ? q[m].rotations[i] : rotation_before(ip, -m, k); };
+      const Vector3 r_x = b.mass * (2 * x(k) - 5 * x(k - 1) + 4 * x(k - 2) - x(k - 3)) / (h * h) +
+                          g_k.segment<3>(tangent_point(ip));
+      const Matrix3 J = rotational_mass(b.inertia);
+      const Vector3 r_R =
+          2.0 * so3::vee(R(k) * J * (5 * R(k - 1) - 4 * R(k - 2) + R(k - 3)).transpose()) / (h * h) +
+          g_k.segment<3>(tangent_rotation(q[k], ip));
+      worst = std::max({worst, r_x.cwiseAbs().maxCoeff(), r_R.cwiseAbs().maxCoeff()});
+    }
+  }
+  ASSERT_GT(largest, 1.0);
+  EXPECT_LE(worst, 1e-6 * largest) << "largest force " << largest;
+}
+
+// L-stable: a mode the step does not resolve (ω h = 10: a body on a stiff spring) dies within
+// a few steps, as under backward Euler, where the trapezoidal rule keeps it; one it resolves
+// (ω h = 0.1) keeps its amplitude to O((ωh)⁴) per step, where backward Euler loses ½(ωh)².
+// Per step, for the oscillator: |ζ| = 0.2425 at ωh = 10 and 1 − 4.808e-5 at 0.1 (the roots of
+// (2 + (ωh)²) ζ³ − 5ζ² + 4ζ − 1), backward Euler 1/√(1 + (ωh)²).
+struct Swing {
+  double first = 0.0;  // largest |x − x_rest| over the first period, over the 0.1 m start
+  double last = 0.0;   // the same over the last period of the run
+};
+Swing spring_swing(Integrator integrator, double omega_h, int steps) {
+  Model model;
+  model.integrator = integrator;
+  // A steady pull of 1000 N stretches the 10.1 m spring by 0.1 m at rest (x = −0.1): it stays
+  // taut over the whole swing (a slack spring would buckle sideways), and no extrapolation a
+  // step starts from reaches its anchor, 10.3 m away.
+  RigidBody b;
+  b.mass = 1.0;
+  b.inertia = Matrix3::Identity();
+  model.bodies.push_back(b);
+  model.gravity = Vector3(1e3, 0.0, 0.0);
+  SpringSpec spring;
+  spring.a = BodyPoint{-1, Vector3(-10.3, 0.0, 0.0)};
+  spring.b = BodyPoint{0, Vector3::Zero()};
+  spring.stiffness = 1e4;  // ω = 100 rad/s; the body starts 0.1 m out
+  spring.rest_length = 10.1;
+  model.springs.push_back(spring);
+  model.time_step = omega_h / 100.0;
+  SolverOptions options;
+  options.tolerance = 1e-12;
+  Simulator sim(model, options);
+  Swing swing;
+  // A period's steps, at least 10 (ωh = 10: 0.6 steps per period, sampled at 157° apart).
+  const int window = std::max(10, static_cast<int>(std::lround(2.0 * std::numbers::pi / omega_h)));
+  for (int k = 1; k <= steps; ++k) {
+    const StepReport r = sim.step();
+    EXPECT_TRUE(r.converged()) << k << " " << r.message;
+    const double x = std::abs(sim.state().points[0].x() + 0.1) / 0.1;
+    if (k <= window) swing.first = std::max(swing.first, x);
+    if (k > steps - window) swing.last = std::max(swing.last, x);
+  }
+  return swing;
+}
+
+TEST(Bdf2, DampsWhatTheStepDoesNotResolveAndKeepsWhatItDoes) {
+  const double bdf2_stiff = spring_swing(Integrator::kBdf2, 10.0, 30).last;
+  const double trapezoid_stiff = spring_swing(Integrator::kTrapezoidal, 10.0, 30).last;
+  // 100 periods of 63 steps; the windows' largest samples miss the peaks by up to 1.2e-3.
+  const Swing bdf2 = spring_swing(Integrator::kBdf2, 0.1, 6300);
+  const Swing euler = spring_swing(Integrator::kBackwardEuler, 0.1, 6300);
+  const double decay = std::pow(1.0 - 4.808e-5, 6300 - 63);  // 0.741
+  std::printf("ωh = 10, steps 21–30: bdf2 %.3e, trapezoidal %.4f of the start; ωh = 0.1, last of "
+              "100 periods over the first: bdf2 %.5f (the root: %.5f), backward Euler %.3e\n",
+              bdf2_stiff, trapezoid_stiff, bdf2.last / bdf2.first, decay, euler.last / euler.first);
+  EXPECT_LE(bdf2_stiff, 1e-9);      // measured 1.1e-6 over steps 11–20 (0.2425¹⁰ = 7e-7)
+  EXPECT_GE(trapezoid_stiff, 0.9);  // undamped
+  EXPECT_NEAR(bdf2.last / bdf2.first, decay, 0.01);
+  EXPECT_LE(euler.last / euler.first, 1e-6);  // (1 + (ωh)²)^(−6237/2) = 3e-14
+}
+
+TEST(Bdf2, TheAdjointRefusesIt) {
+  Scene scene = load_scene(kScenes / "letters/letter_S.json");
+  ASSERT_TRUE(scene.optimization.has_value());
+  scene.model.integrator = Integrator::kBdf2;
+  try {
+    DifferentiableSimulation sim(scene.model, scene.optimization->parameters,
+                                 scene.optimization->objective, scene.solver);
+    FAIL() << "accepted";
+  } catch (const ModelError& e) {
+    EXPECT_EQ(e.field(), "integrator");
+    EXPECT_NE(std::string(e.what()).find("bdf2"), std::string::npos) << e.what();
+  }
 }
 
 }  // namespace

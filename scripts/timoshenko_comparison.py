@@ -1,0 +1,143 @@
+#!/usr/bin/python3
+"""liedyn against PyElastica on PyElastica's Timoshenko beam (problems/scenes/timoshenko_beam.json):
+a thick, shearable rod of 100 elements, clamped, a 15 N step load at its tip, no damping, 10 s.
+
+PyElastica's example (examples/TimoshenkoBeamCase) ramps its load over 250 s and damps; both are
+left out here on both sides, so that the two codes integrate the same undamped step response.
+PyElastica is not a Debian package: give a checkout of its source (it needs Debian's
+python3-numba, python3-numpy, python3-scipy, python3-tqdm, python3-typing-extensions):
+
+  git clone --depth 1 https://github.com/GazzolaLab/PyElastica /tmp/pyelastica
+  /usr/bin/python3 scripts/timoshenko_comparison.py --pyelastica /tmp/pyelastica [--liedyn build/liedyn]
+
+Reports, for PyElastica (position Verlet at its example's dt = 0.07 L/100, at dt/4 and dt/16)
+and liedyn (each integrator at several h), the tip at t = 10 s, its distance from each code's
+finest run, the largest tip distance from liedyn's finest run over the whole 10 s (liedyn),
+and wall times: PyElastica's loop alone (after numba's compilation), liedyn's `bench` (its
+time steps alone, no outputs).
+"""
+import argparse
+import csv
+import json
+import math
+import os
+import subprocess
+import sys
+import tempfile
+import time
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+SCENE = os.path.join(ROOT, "problems", "scenes", "timoshenko_beam.json")
+FINAL_TIME = 10.0
+# The example's parameters (examples/TimoshenkoBeamCase/run_timoshenko.py).
+N_ELEM, LENGTH, RADIUS, DENSITY, E, G = 100, 3.0, 0.25, 5000.0, 1e6, 1e4
+EXAMPLE_DT = 0.07 * LENGTH / N_ELEM
+
+
+def pyelastica_tip(dt):
+    """PyElastica's tip at FINAL_TIME (in liedyn's axes: rod along x, load along −z) and the
+    loop's wall time. Its rod lies along +z with the load along −x: x and z swap."""
+    import numpy as np
+    import elastica as ea
+
+    class Sim(ea.BaseSystemCollection, ea.Constraints, ea.Forcing):
+        pass
+
+    def run(steps, dt):
+        sim = Sim()
+        rod = ea.CosseratRod.straight_rod(
+            N_ELEM, np.zeros(3), np.array([0.0, 0.0, 1.0]), np.array([0.0, 1.0, 0.0]), LENGTH,
+            RADIUS, DENSITY, youngs_modulus=E, shear_modulus=G)
+        sim.append(rod)
+        sim.constrain(rod).using(ea.OneEndFixedBC, constrained_position_idx=(0,),
+                                 constrained_director_idx=(0,))
+        # A step: EndpointForces scales by min(1, t/ramp_up_time), and position Verlet
+        # evaluates forces at t + dt/2 > 0.
+        force = np.array([-15.0, 0.0, 0.0])
+        sim.add_forcing_to(rod).using(ea.EndpointForces, 0.0 * force, force, ramp_up_time=1e-12)
+        sim.finalize()
+        stepper, t = ea.PositionVerlet(), np.float64(0.0)
+        start = time.perf_counter()
+        for _ in range(steps):
+            t = stepper.step(sim, t, np.float64(dt))
+        return rod.position_collection[:, -1], time.perf_counter() - start
+
+    steps = int(math.ceil(FINAL_TIME / dt - 1e-9))
+    dt = FINAL_TIME / steps
+    run(20, dt)  # numba compiles here
+    tip, seconds = run(steps, dt)
+    return dt, [tip[2], tip[1], tip[0]], seconds
+
+
+def liedyn_run(liedyn, integrator, h):
+    """liedyn's tip series (time, x, y, z) and its `bench` time for one integrator and h."""
+    frames = int(round(FINAL_TIME / h))
+    h = FINAL_TIME / frames
+    settings = ["--set", f"integrator={integrator}", "--set", f"time_step={h!r}",
+                "--set", f"frames={frames}"]
+    with tempfile.TemporaryDirectory() as out:
+        subprocess.run([liedyn, "simulate", SCENE, "--out", out, "--quiet", *settings], check=True)
+        series = []
+        with open(os.path.join(out, "trajectory.csv"), newline="") as f:
+            for r in csv.DictReader(f):
+                if r["object"] == "beam" and r["kind"] == "node" and r["index"] == str(N_ELEM):
+                    series.append((float(r["time"]), float(r["x"]), float(r["y"]), float(r["z"])))
+    bench = subprocess.run([liedyn, "bench", SCENE, "--repeat", "3", "--json", *settings],
+                           check=True, capture_output=True, text=True)
+    return h, series, json.loads(bench.stdout)["total_seconds"]
+
+
+def distance(a, b):
+    return math.sqrt(sum((x - y) ** 2 for x, y in zip(a, b)))
+
+
+def largest_deviation(series, reference):
+    """The largest tip distance from the reference over the run, at the run's frame times (the
+    reference, a finer run, interpolated linearly between its frames)."""
+    worst, j = 0.0, 0
+    for t, *p in series:
+        while j + 2 < len(reference) and reference[j + 1][0] < t:
+            j += 1
+        (t0, *p0), (t1, *p1) = reference[j], reference[j + 1]
+        w = 0.0 if t1 == t0 else min(1.0, max(0.0, (t - t0) / (t1 - t0)))
+        worst = max(worst, distance(p, [u + w * (v - u) for u, v in zip(p0, p1)]))
+    return worst
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("--pyelastica", required=True, help="a checkout of PyElastica's source")
+    parser.add_argument("--liedyn", default=os.path.join(ROOT, "build", "liedyn"))
+    parser.add_argument("--steps", default="8e-3,4e-3,2e-3,1e-3,5e-4",
+                        help="liedyn's time steps (and the finest / 2 as its reference)")
+    args = parser.parse_args()
+    sys.path.insert(0, args.pyelastica)
+
+    pyelastica = [pyelastica_tip(EXAMPLE_DT / k) for k in (1, 4, 16)]
+    hs = sorted((float(h) for h in args.steps.split(",")), reverse=True)
+    reference_h, reference, _ = liedyn_run(args.liedyn, "trapezoidal", hs[-1] / 2)
+    print(f"liedyn reference: trapezoidal, h = {reference_h:.4g} s, tip at {FINAL_TIME:g} s: "
+          + ", ".join(f"{c:.8f}" for c in reference[-1][1:]))
+    print(f"PyElastica reference: position Verlet, dt = {pyelastica[-1][0]:.4g} s, tip: "
+          + ", ".join(f"{c:.8f}" for c in pyelastica[-1][1]))
+    print(f"the two references differ by {distance(reference[-1][1:], pyelastica[-1][1]):.3e} m\n")
+    print("| code | integrator | h [s] | tip z at 10 s [m] | tip error at 10 s [m] | largest error "
+          "over 10 s [m] | wall time [s] | µs per step |")
+    print("|---|---|---|---|---|---|---|---|")
+    for dt, tip, seconds in pyelastica:
+        steps = round(FINAL_TIME / dt)
+        print(f"| PyElastica | position Verlet | {dt:.4g} | {tip[2]:.8f} | "
+              f"{distance(tip, pyelastica[-1][1]):.2e} (its own finest) | – | {seconds:.3f} | "
+              f"{1e6 * seconds / steps:.0f} |")
+    for integrator in ("backward_euler", "trapezoidal", "bdf2"):
+        for h in hs:
+            h, series, seconds = liedyn_run(args.liedyn, integrator, h)
+            tip = series[-1][1:]
+            print(f"| liedyn | {integrator} | {h:.4g} | {tip[2]:.8f} | "
+                  f"{distance(tip, reference[-1][1:]):.2e} | {largest_deviation(series, reference):.2e} | "
+                  f"{seconds:.3f} | {1e6 * seconds / round(FINAL_TIME / h):.0f} |")
+            sys.stdout.flush()
+
+
+if __name__ == "__main__":
+    main()
