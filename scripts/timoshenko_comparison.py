@@ -76,7 +76,8 @@ def liedyn_run(liedyn, integrator, h):
     settings = ["--set", f"integrator={integrator}", "--set", f"time_step={h!r}",
                 "--set", f"frames={frames}"]
     with tempfile.TemporaryDirectory() as out:
-        subprocess.run([liedyn, "simulate", SCENE, "--out", out, "--quiet", *settings], check=True)
+        subprocess.run([liedyn, "simulate", SCENE, "--out", out, "--quiet", *settings], check=True,
+                       capture_output=True)
         series = []
         with open(os.path.join(out, "trajectory.csv"), newline="") as f:
             for r in csv.DictReader(f):
