@@ -170,26 +170,48 @@ Eigen::VectorXd energy_gradient(const IncrementalPotential& potential, const Sta
   return g;
 }
 
+// A spring chain of three bodies under gravity (springs between body points: forces and
+// torques on every body), 40 steps at tolerance 1e-12: its states q_0 … q_40, its initial
+// step and its potential (for its forces), as the discrete-equation tests below read them.
+struct ChainRun {
+  Model model;
+  std::vector<State> q;
+  Step initial;
+  std::vector<Component> components;
+};
+
+ChainRun run_chain(Integrator integrator) {
+  ChainRun run;
+  run.model = test_models::spring_chain(3);
+  run.model.integrator = integrator;
+  SolverOptions options;
+  options.tolerance = 1e-12;
+  Simulator sim(run.model, options);
+  run.components = build_components(run.model);
+  EXPECT_EQ(run.components.size(), 1u);
+  run.initial = sim.last_step();
+  run.q = {sim.state()};
+  for (int k = 1; k <= 40; ++k) {
+    const StepReport r = sim.step();
+    EXPECT_TRUE(r.converged()) << k << " " << r.message;
+    if (!r.state_updated()) break;
+    run.q.push_back(sim.state());
+  }
+  return run;
+}
+
 // Each step of a spring chain under gravity (springs between body points: forces and torques
 // on every body) satisfies the scheme's equations (lib/history.hpp), with
 // r_k = m (x_k − 2x_{k−1} + x_{k−2})/h² + ¼ (∇V_k + 2∇V_{k−1} + ∇V_{k−2}) on points and
 // (2 vee(R_k J R_{k−1}ᵀ) − 2 vee(R_{k−1} J R_{k−2}ᵀ))/h² + ¼ (…) on rotations; the first step
 // with the initial velocities in place of q_{−1}.
 TEST(Trapezoidal, StepsSatisfyTheDiscreteEquations) {
-  const Model model = trapezoidal(test_models::spring_chain(3));
-  SolverOptions options;
-  options.tolerance = 1e-12;
-  Simulator sim(model, options);
-  const std::vector<Component> components = build_components(model);
-  ASSERT_EQ(components.size(), 1u);
-  const IncrementalPotential& P = components[0].potential;
+  const ChainRun run = run_chain(Integrator::kTrapezoidal);
+  const Model& model = run.model;
+  const std::vector<State>& q = run.q;
+  ASSERT_EQ(q.size(), 41u);
+  const IncrementalPotential& P = run.components[0].potential;
   const double h = model.time_step;
-  std::vector<State> q = {sim.state()};
-  for (int k = 1; k <= 40; ++k) {
-    const StepReport r = sim.step();
-    ASSERT_TRUE(r.converged()) << k << " " << r.message;
-    q.push_back(sim.state());
-  }
   // The residual's scale: the largest force or torque of the scene (the chain's weight and
   // the springs' pull are O(10 N), the inertia terms ~ m/h² · displacement).
   double largest = 0.0;
@@ -686,22 +708,13 @@ TEST(SecondOrder, StaticModeIsUnaffected) {
 // ½ h² a_0 and R_{−1} = exp(−φ + ½ h² α_0) R_0, a_0 and α_0 = I_w⁻¹(τ_0 − ω_0 × I_w ω_0) from
 // the forces at q_0.
 TEST(Bdf2, StepsSatisfyTheDiscreteEquations) {
-  Model model = test_models::spring_chain(3);
-  model.integrator = Integrator::kBdf2;
-  SolverOptions options;
-  options.tolerance = 1e-12;
-  Simulator sim(model, options);
-  const std::vector<Component> components = build_components(model);
-  ASSERT_EQ(components.size(), 1u);
-  const IncrementalPotential& P = components[0].potential;
+  const ChainRun run = run_chain(Integrator::kBdf2);
+  const Model& model = run.model;
+  const std::vector<State>& q = run.q;
+  ASSERT_EQ(q.size(), 41u);
+  const IncrementalPotential& P = run.components[0].potential;
   const double h = model.time_step;
-  const Step initial = sim.last_step();
-  std::vector<State> q = {sim.state()};
-  for (int k = 1; k <= 40; ++k) {
-    const StepReport r = sim.step();
-    ASSERT_TRUE(r.converged()) << k << " " << r.message;
-    q.push_back(sim.state());
-  }
+  const Step& initial = run.initial;
   const Eigen::VectorXd g_0 = energy_gradient(P, q[0]);
   // The states before q_0, for the step k that needs them: x_{−1} and x_{−2} at k = 1,
   // x_{−1} at k = 2.
