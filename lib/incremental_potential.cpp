@@ -12,6 +12,18 @@
 
 namespace liedyn {
 
+namespace {
+
+// q ← q ⊖ Δq: the state before a step, from the one after it and the step (x − Δx, ΔRᵀ R).
+void step_back(State& q, const Step& step) {
+  for (std::size_t i = 0; i < q.points.size(); ++i) q.points[i] -= step.points[i];
+  for (std::size_t j = 0; j < q.rotations.size(); ++j) {
+    q.rotations[j] = step.rotations[j].transpose() * q.rotations[j];
+  }
+}
+
+}  // namespace
+
 void IncrementalPotential::begin_step(const State& previous, const Step& previous_step,
                                       int frame, const Step* step_before) {
   for_each_term_vector([&](auto& terms) {
@@ -35,12 +47,7 @@ void IncrementalPotential::begin_step(const State& previous, const Step& previou
   state_terms_gradient(previous, gradient_previous_);
   older_ = previous;  // sized at the first step (which needs no q_{k−2}): no allocation after it
   if (!first) {
-    for (std::size_t i = 0; i < older_.points.size(); ++i) {
-      older_.points[i] -= previous_step.points[i];
-    }
-    for (std::size_t j = 0; j < older_.rotations.size(); ++j) {
-      older_.rotations[j] = previous_step.rotations[j].transpose() * previous.rotations[j];
-    }
+    step_back(older_, previous_step);
     state_terms_gradient(older_, gradient_older_);
   }
   const auto lagged = [&](int offset) -> Vector3 {
@@ -67,8 +74,10 @@ void IncrementalPotential::begin_step(const State& previous, const Step& previou
 
 void IncrementalPotential::begin_bdf2_step(const State& previous, const Step& previous_step,
                                            const Step& step_before, int frame) {
-  if (frame <= 1) {
-    older_ = previous;  // sized at the first step: no allocation after it
+  if (frame <= 2) {
+    // Sized at the first step: no allocation after it (a component first built at the second
+    // step, when islands change, allocates there once).
+    older_ = previous;
     corrected_step_ = step_before;
   }
   const Step* before = &step_before;
@@ -78,12 +87,7 @@ void IncrementalPotential::begin_bdf2_step(const State& previous, const Step& pr
     // acceleration, x_{−1} = x_0 − h v_0 + ½ h² a_0 and R_{−1} = exp(−h ω_0 + ½ h² α_0) R_0 are
     // O(h³): Δx_0' = Δx_0 + ∇V(q_0)/(2m/h²), ΔR_0' = exp(φ + A⁻¹(∇V(q_0) + ½ φ × A φ)) with
     // φ = h ω_0 and A = 2 I_w/h² (docs/design.md §15). At frame 1 x̃ does not depend on a_0.
-    for (std::size_t i = 0; i < older_.points.size(); ++i) {
-      older_.points[i] = previous.points[i] - previous_step.points[i];
-    }
-    for (std::size_t j = 0; j < older_.rotations.size(); ++j) {
-      older_.rotations[j] = previous_step.rotations[j].transpose() * previous.rotations[j];
-    }
+    step_back(older_, previous_step);
     state_terms_gradient(older_, gradient_older_);  // q_0
     for (const TranslationalInertia& t : terms<TranslationalInertia>()) {
       corrected_step_.points[t.point] =
