@@ -221,9 +221,7 @@ ReferenceGradient reference_gradient(const Scene& scene, int sample) {
 
 void gradient_error(const Scene& scene, const ReferenceGradient& reference, SweepRun& run) {
   if (!reference.failure.empty() || reference.differences.empty()) return;
-  if (!scene.model.static_equilibrium && scene.model.integrator == Integrator::kBdf2) {
-    return;  // no adjoint under BDF2 yet: gradient_error stays NaN
-  }
+  if (adjoint_limitation(scene.model)) return;  // gradient_error stays NaN
   try {
     const DifferentiableSimulation sim = make_differentiable_simulation(scene);
     const Eigen::VectorXd gamma = sim.initial_parameters();

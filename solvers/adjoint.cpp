@@ -57,6 +57,14 @@ std::unique_ptr<HessianSolve> make_hessian_solve(const Component& c) {
 
 }  // namespace
 
+std::optional<std::string> adjoint_limitation(const Model& model) {
+  if (!model.static_equilibrium && model.integrator == Integrator::kBdf2) {
+    return "bdf2 has no adjoint yet: optimise under backward_euler or trapezoidal (run bdf2 "
+           "forward with liedyn simulate)";
+  }
+  return std::nullopt;
+}
+
 SimulationFailed::SimulationFailed(int frame, const std::string& reason)
     : std::runtime_error("frame " + std::to_string(frame) + ": " + reason), frame_(frame) {}
 
@@ -67,10 +75,7 @@ DifferentiableSimulation::DifferentiableSimulation(Model base, ParameterSet para
       objective_(std::move(objective)),
       options_(options) {
   options_.validate();
-  if (!base_.static_equilibrium && base_.integrator == Integrator::kBdf2) {
-    throw ModelError("integrator", "bdf2 has no adjoint yet: optimise under backward_euler or "
-                                   "trapezoidal (run bdf2 forward with liedyn simulate)");
-  }
+  if (const auto why = adjoint_limitation(base_)) throw ModelError("integrator", *why);
   parameters_.apply(base_, initial_parameters()).validate();
 }
 

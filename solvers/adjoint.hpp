@@ -32,6 +32,7 @@
 // (…× forward)", and by the benchmark in tests/bench_adjoint.cpp (docs/design.md §8.7).
 
 #include <Eigen/Core>
+#include <optional>
 #include <stdexcept>
 #include <string>
 
@@ -52,6 +53,11 @@ class SimulationFailed : public std::runtime_error {
  private:
   int frame_;
 };
+
+// Why the adjoint cannot differentiate a model, or nothing if it can: BDF2 has no adjoint yet
+// (docs/design.md §15). DifferentiableSimulation refuses such a model (ModelError, field
+// `integrator`); a sweep leaves its gradient error undefined.
+std::optional<std::string> adjoint_limitation(const Model& model);
 
 class DifferentiableSimulation {
  public:

@@ -3,6 +3,7 @@
 #include <omp.h>
 
 #include <algorithm>
+#include <utility>
 
 #include "../lib/so3.hpp"
 #include "../lib/trajectory.hpp"
@@ -113,7 +114,9 @@ StepReport Simulator::step() {
     return report;
   }
   // The step; a static sequence of equilibria has none (zero velocities and kinetic energy).
-  step_before_ = previous_step_;  // Δq_{k−1}, the step before the next one's previous step
+  // Δq_{k−1} becomes the step before the next one's previous step (previous_step_ is set
+  // again at the next step's start: a swap, not a copy).
+  std::swap(step_before_, previous_step_);
   for (std::size_t i = 0; i < state_.points.size(); ++i) {
     step_.points[i] = dynamic ? Vector3(state_.points[i] - previous_.points[i]) : Vector3::Zero();
   }
