@@ -136,8 +136,10 @@ void validate_body_contact(const RigidBody& b, const std::string& path) {
 
 }  // namespace
 
-ModelError::ModelError(std::string field, const std::string& reason)
-    : std::invalid_argument(field + ": " + reason), field_(std::move(field)) {}
+ModelError::ModelError(std::string field, std::string reason)
+    : std::invalid_argument(field + ": " + reason),
+      field_(std::move(field)),
+      reason_(std::move(reason)) {}
 
 const char* to_string(Integrator integrator) {
   switch (integrator) {

@@ -30,11 +30,13 @@ struct EdgePair {
 
 class ModelError : public std::invalid_argument {
  public:
-  ModelError(std::string field, const std::string& reason);
+  ModelError(std::string field, std::string reason);
   const std::string& field() const { return field_; }
+  // What is wrong, without the field (what() is "field: reason").
+  const std::string& reason() const { return reason_; }
 
  private:
-  std::string field_;
+  std::string field_, reason_;
 };
 
 struct RigidBody {

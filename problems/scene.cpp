@@ -545,7 +545,7 @@ void require_body_shape(const ObjectReader& r, const Collider& solid, const std:
   try {
     validate_body_shape(solid, path);
   } catch (const ModelError& e) {
-    r.fail(e.field(), std::string(e.what()).substr(e.field().size() + 2));
+    r.fail(e.field(), e.reason());
   }
 }
 
@@ -632,7 +632,7 @@ ContactMaterial parse_contact(ObjectReader& owner, double default_radius,
           budget -= static_cast<int>(on_surface.size());
           points->insert(points->end(), on_surface.begin(), on_surface.end());
         } catch (const ModelError& e) {
-          c.fail(c.field("sample_spacing"), std::string(e.what()).substr(e.field().size() + 2));
+          c.fail(c.field("sample_spacing"), e.reason());
         }
       }
       *shape = std::make_shared<const Collider>(std::move(solid));
@@ -925,7 +925,7 @@ Scene parse(const json& root, const std::string& source) {
         body.mass = m.mass;
         body.inertia = m.inertia;
       } catch (const ModelError& e) {
-        b.fail(e.field(), std::string(e.what()).substr(e.field().size() + 2));
+        b.fail(e.field(), e.reason());
       }
     } else {
       body.mass = b.number("mass");
@@ -970,7 +970,7 @@ Scene parse(const json& root, const std::string& source) {
       try {
         solid.validate(path);  // here, while its fields are the collider's
       } catch (const ModelError& e) {
-        c.fail(e.field(), std::string(e.what()).substr(e.field().size() + 2));
+        c.fail(e.field(), e.reason());
       }
       claim_name(c, solid.name, c.field("name"), path, taken);
       RigidBody body;
@@ -1056,10 +1056,7 @@ Scene parse(const json& root, const std::string& source) {
     scene.solver.validate();
     if (optimization != nullptr) scene.optimization = parse_optimization(*optimization, scene);
   } catch (const ModelError& e) {
-    const std::string prefix = e.field() + ": ";
-    std::string reason = e.what();
-    if (reason.rfind(prefix, 0) == 0) reason = reason.substr(prefix.size());
-    throw SceneError(source, e.field(), reason);
+    throw SceneError(source, e.field(), e.reason());
   }
   check_analytic(scene);
   return scene;

@@ -1169,6 +1169,11 @@ TEST_F(OptimizationCli, SetOverridesTheSceneAndRejectsWhatItCannotApply) {
   EXPECT_EQ(unknown.exit_code, 2);
   EXPECT_NE(unknown.err.find("integrator=midpoint"), std::string::npos) << unknown.err;
   EXPECT_NE(unknown.err.find("integrator"), std::string::npos) << unknown.err;
+  // An integrator the adjoint cannot differentiate: bad input, naming the file and the field.
+  const Result bdf2 = run({"gradcheck", die(), "--set", "integrator=bdf2"});
+  EXPECT_EQ(bdf2.exit_code, 2);
+  EXPECT_NE(bdf2.err.find("die_throw.json [integrator=bdf2]: integrator: bdf2 has no adjoint"),
+            std::string::npos) << bdf2.err;
   const Result malformed = run({"gradcheck", die(), "--set", "integrator"});
   EXPECT_EQ(malformed.exit_code, 2);
   EXPECT_NE(malformed.err.find("--set integrator: expected PATH=VALUE"), std::string::npos)
