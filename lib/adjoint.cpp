@@ -4,6 +4,9 @@
 
 #include "incremental_potential.hpp"
 
+#include <Eigen/Cholesky>
+#include <type_traits>
+
 #include "so3.hpp"
 
 namespace liedyn {
@@ -39,6 +42,9 @@ void IncrementalPotential::add_step_adjoint(const State& q, const State& previou
   for_each_term_vector([&](const auto& terms) {
     using T = typename std::decay_t<decltype(terms)>::value_type;
     if constexpr (ReadsPreviousStep<T>) {
+      if constexpr (std::is_same_v<T, TranslationalInertia> || std::is_same_v<T, RotationalInertia>) {
+        if (integrator_ == Integrator::kBdf2) return;  // add_bdf2_adjoint's
+      }
       for (const T& t : terms) {
         if (has_dofs(t)) {
           t.add_step_adjoint(q, previous, previous_step, weight(t) * gather(t, z), a_previous,
@@ -83,49 +89,60 @@ void IncrementalPotential::add_weighted_terms_adjoint(
       if constexpr (HasParameters<T>) t.add_parameter_adjoint(s, frame, wz, dgamma);
     }
   });
-  // The Lie gradient field's derivative is H − ½ hat(G) per rotation block (design §1.4).
-  for (const RotationHistory& t : terms<RotationHistory>()) {
+  // The Lie gradient field's derivative is H − ½ hat(G) per rotation block (design §1.4); z is
+  // non-zero only on the rotations with inertia.
+  for (const RotationalInertia& t : terms<RotationalInertia>()) {
     const int o = t.offsets[0];
     u.segment<3>(o) += 0.5 * w * Vector3(G.segment<3>(o)).cross(Vector3(z.segment<3>(o)));
   }
 }
 
-void IncrementalPotential::add_history_adjoint(const State& previous, const Step& previous_step,
+void IncrementalPotential::add_older_adjoint(const State& previous, const Step& previous_step,
+                                             const Eigen::VectorXd& u, Eigen::VectorXd& a_previous,
+                                             Eigen::VectorXd& da_previous) const {
+  for (const TranslationalInertia& t : terms<TranslationalInertia>()) {
+    const int o = tangent_point(t.point);
+    a_previous.segment<3>(o) += u.segment<3>(t.offsets[0]);
+    da_previous.segment<3>(o) -= u.segment<3>(t.offsets[0]);
+  }
+  for (const RotationalInertia& t : terms<RotationalInertia>()) {
+    const int o = tangent_rotation(previous, t.rotation);
+    const Vector3 v = previous_step.rotations[t.rotation] * u.segment<3>(t.offsets[0]);
+    a_previous.segment<3>(o) += v;
+    da_previous.segment<3>(o) -= v;
+  }
+}
+
+void IncrementalPotential::add_history_adjoint(const State& q, const State& previous,
+                                               const Step& previous_step, const Step& step_before,
                                                int frame, const Eigen::VectorXd& z,
                                                Eigen::VectorXd& a_previous,
                                                Eigen::VectorXd& da_previous,
+                                               Eigen::VectorXd& da_before,
                                                Eigen::VectorXd& dgamma) const {
+  if (integrator_ == Integrator::kBdf2) {
+    add_bdf2_adjoint(q, previous, previous_step, step_before, frame, z, a_previous, da_previous,
+                     da_before, dgamma);
+    return;
+  }
   if (integrator_ != Integrator::kTrapezoidal) return;
   const bool first = frame <= 1;
-  const std::vector<PointHistory>& points = terms<PointHistory>();
   const std::vector<RotationHistory>& rotations = terms<RotationHistory>();
   // c = ½ ∇V(q_{k−1}) + ¼ ∇V(q_{k−2}) − μ_{k−3/2}/h   (frame 1: ¼ ∇V(q_0) − π_0/h).
   Eigen::VectorXd u = Eigen::VectorXd::Zero(z.size());
   add_weighted_terms_adjoint(previous, gradient_previous_, first ? 0.25 : 0.5, frame, previous,
                              previous_step, z, u, a_previous, da_previous, dgamma);
-  for (const PointHistory& t : points) {
+  for (const PointHistory& t : terms<PointHistory>()) {
     a_previous.segment<3>(tangent_point(t.point)) += u.segment<3>(t.offsets[0]);
   }
   for (const RotationHistory& t : rotations) {
     a_previous.segment<3>(tangent_rotation(previous, t.rotation)) += u.segment<3>(t.offsets[0]);
   }
   if (!first) {
-    // q_{k−2} = (x_{k−1} − Δx_{k−1}, ΔR_{k−1}ᵀ R_{k−1}): δx_{k−2} = δx_{k−1} − δΔx and
-    // δθ_{k−2} = ΔR_{k−1}ᵀ (δθ_{k−1} − δψ) (left perturbations of R_{k−1} and ΔR_{k−1}).
     u.setZero();
     add_weighted_terms_adjoint(older_, gradient_older_, 0.25, frame, previous, previous_step, z,
                                u, a_previous, da_previous, dgamma);
-    for (const PointHistory& t : points) {
-      const int o = tangent_point(t.point);
-      a_previous.segment<3>(o) += u.segment<3>(t.offsets[0]);
-      da_previous.segment<3>(o) -= u.segment<3>(t.offsets[0]);
-    }
-    for (const RotationHistory& t : rotations) {
-      const int o = tangent_rotation(previous, t.rotation);
-      const Vector3 v = previous_step.rotations[t.rotation] * u.segment<3>(t.offsets[0]);
-      a_previous.segment<3>(o) += v;
-      da_previous.segment<3>(o) -= v;
-    }
+    add_older_adjoint(previous, previous_step, u, a_previous, da_previous);
   }
   // The momentum m = μ_{k−3/2}/h (begin_step) enters c with a minus sign.
   const std::vector<RotationalInertia>& inertia = terms<RotationalInertia>();
@@ -156,6 +173,79 @@ void IncrementalPotential::add_history_adjoint(const State& previous, const Step
     a_previous.segment<3>(o) -= dm_dR.transpose() * zt;
     da_previous.segment<3>(o) -= dm_ddR.transpose() * zt;
   }
+}
+
+void IncrementalPotential::add_bdf2_adjoint(const State& q, const State& previous,
+                                            const Step& previous_step, const Step& step_before,
+                                            int frame, const Eigen::VectorXd& z,
+                                            Eigen::VectorXd& a_previous,
+                                            Eigen::VectorXd& da_previous,
+                                            Eigen::VectorXd& da_before,
+                                            Eigen::VectorXd& dgamma) const {
+  // Reverse mode through x̃ = ½(5x₁ − 4x₂ + x₃), x₂ = x₁ − Δx_{k−1}, x₃ = x₂ − Δx_{k−2}
+  // (x_i = x_{k−i}), and R̃ = ½(5R₁ − 4R₂ + R₃), R₂ = ΔR_{k−1}ᵀ R₁, R₃ = ΔR_{k−2}ᵀ R₂ (design
+  // §15.1). At frame 1 Δq_{k−2} is Δq_0 = Δq_{k−1}; at frame 2 it is the initial step
+  // corrected by the initial acceleration (begin_bdf2_step), whose inputs Δq_0, q_0 = q_{k−2}
+  // and ∇V(q_0) take its cotangent.
+  const bool corrected = frame == 2;
+  const Step& before = corrected ? corrected_step_ : step_before;
+  Eigen::VectorXd& d_before = frame <= 1 ? da_previous : da_before;
+  Eigen::VectorXd older = Eigen::VectorXd::Zero(z.size());  // at q_{k−2}, component layout
+  Eigen::VectorXd g_bar;                                     // of ∇V(q_0) (frame 2)
+  if (corrected) g_bar.setZero(z.size());
+  for (const TranslationalInertia& t : terms<TranslationalInertia>()) {
+    const int o = t.offsets[0];
+    const Vector3 x_bar = t.x_tilde_adjoint(z.segment<3>(o));
+    const Vector3 x3_bar = 0.5 * x_bar;
+    a_previous.segment<3>(tangent_point(t.point)) += 2.5 * x_bar;
+    older.segment<3>(o) = -2.0 * x_bar + x3_bar;
+    d_before.segment<3>(tangent_point(t.point)) -= x3_bar;
+    // Δx_0' = Δx_0 + ∇V(q_0)/(2m/h²).
+    if (corrected) g_bar.segment<3>(o) = -x3_bar / t.mass_over_h2;
+  }
+  for (const RotationalInertia& t : terms<RotationalInertia>()) {
+    const int o = t.offsets[0];
+    const Matrix3& R1 = previous.rotations[t.rotation];
+    const Matrix3& dR2 = before.rotations[t.rotation];
+    const Matrix3 R2 = previous_step.rotations[t.rotation].transpose() * R1;
+    const Matrix3 R3 = dR2.transpose() * R2;
+    // Ḡ_i = c_i Ḡ for R̃ = Σ c_i R_i; R_i → exp(θ_i) R_i: θ̄_i = 2 vee(Ḡ_i R_iᵀ).
+    const Matrix3 G = t.R_tilde_adjoint(q, z.segment<3>(o));
+    const Vector3 theta3 = so3::vee(G * R3.transpose());
+    a_previous.segment<3>(tangent_rotation(previous, t.rotation)) += 5.0 * so3::vee(G * R1.transpose());
+    // θ₃ = ΔR_{k−2}ᵀ (θ₂ − ψ_{k−2}).
+    older.segment<3>(o) = -4.0 * so3::vee(G * R2.transpose()) + dR2 * theta3;
+    const Vector3 psi = -dR2 * theta3;
+    if (!corrected) {
+      d_before.segment<3>(tangent_rotation(previous, t.rotation)) += psi;
+      continue;
+    }
+    // ΔR_0' = exp(w), w = φ + s, s = A⁻¹ r, r = ∇V(q_0) + ½ φ × A φ, φ = log ΔR_0,
+    // A = R_0 (tr(Ĵ) 1 − Ĵ) R_0ᵀ; δA = D(θ₀) with D(v) θ = δA v = (A hat(v) − hat(A v)) θ.
+    const Matrix3& R0 = older_.rotations[t.rotation];
+    Matrix3 J_phi, J_w;
+    const Vector3 phi = so3::log(step_before.rotations[t.rotation], &J_phi);
+    const Matrix3 A =
+        R0 * (t.J_over_h2.trace() * Matrix3::Identity() - t.J_over_h2) * R0.transpose();
+    const Eigen::LDLT<Matrix3> A_inverse(A);
+    const Vector3 Aphi = A * phi;
+    const Vector3 s =
+        A_inverse.solve(Vector3(gradient_older_.segment<3>(o) + 0.5 * phi.cross(Aphi)));
+    so3::exp(phi + s, &J_w);
+    const Vector3 w_bar = J_w.transpose() * psi;
+    const Vector3 p = A_inverse.solve(w_bar);
+    const auto D = [&](const Vector3& v) -> Matrix3 { return A * so3::hat(v) - so3::hat(A * v); };
+    g_bar.segment<3>(o) = p;
+    const Vector3 phi_bar = w_bar + 0.5 * (so3::hat(Aphi) - A * so3::hat(phi)) * p;
+    d_before.segment<3>(tangent_rotation(previous, t.rotation)) += J_phi.transpose() * phi_bar;
+    older.segment<3>(o) += (0.5 * so3::hat(phi) * D(phi) - D(s)).transpose() * p;
+  }
+  if (corrected) {
+    // ∇V(q_0): its Hessian, the terms' own reads and parameters at q_0 (= q_{k−2}).
+    add_weighted_terms_adjoint(older_, gradient_older_, 1.0, frame, previous, previous_step, g_bar,
+                               older, a_previous, da_previous, dgamma);
+  }
+  add_older_adjoint(previous, previous_step, older, a_previous, da_previous);
 }
 
 }  // namespace liedyn

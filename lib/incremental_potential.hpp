@@ -202,15 +202,21 @@ class IncrementalPotential {
       out.template segment<3>(o) = 0.5 * t.field.cross(Vector3(v.template segment<3>(o)));
     }
   }
-  // The mixed blocks of the history field c (14.4), which reads q_{k−1} and Δq_{k−1} (the
-  // weighted terms' gradients at q_{k−1} and at q_{k−2} = q_{k−1} ⊖ Δq_{k−1}, the previous
-  // step's momentum) and γ (the weighted terms' parameters there):
-  //   a_previous += (∂c/∂q_{k−1})ᵀ z,  da_previous += (∂c/∂Δq_{k−1})ᵀ z,  dgamma += (∂c/∂γ)ᵀ z,
-  // for the step set up by begin_step(previous, previous_step, frame). Nothing under backward
-  // Euler.
-  void add_history_adjoint(const State& previous, const Step& previous_step, int frame,
-                           const Eigen::VectorXd& z, Eigen::VectorXd& a_previous,
-                           Eigen::VectorXd& da_previous, Eigen::VectorXd& dgamma) const;
+  // The mixed blocks of what the integrator reads beyond backward Euler's x̃ and R̃, for the
+  // step set up by begin_step(previous, previous_step, frame, &step_before) and converged at q:
+  //   a_previous += (∂C/∂q_{k−1})ᵀ z,  da_previous += (∂C/∂Δq_{k−1})ᵀ z,
+  //   da_before  += (∂C/∂Δq_{k−2})ᵀ z,  dgamma += (∂C/∂γ)ᵀ z   (full layout).
+  // Trapezoidal: the history field c (14.4), which reads q_{k−1} and Δq_{k−1} (the weighted
+  // terms' gradients at q_{k−1} and at q_{k−2} = q_{k−1} ⊖ Δq_{k−1}, the previous step's
+  // momentum) and γ (the weighted terms' parameters there). BDF2: the inertia terms' x̃ and R̃
+  // from three states (design §15.1), which read Δq_{k−2} too (at frame 1 the initial step
+  // again, whose part joins da_previous), and at frame 2 the initial acceleration from ∇V(q_0)
+  // (so q_0 and γ). The inertia terms' own add_step_adjoint (backward Euler's R̃) is skipped
+  // under BDF2. Nothing under backward Euler.
+  void add_history_adjoint(const State& q, const State& previous, const Step& previous_step,
+                           const Step& step_before, int frame, const Eigen::VectorXd& z,
+                           Eigen::VectorXd& a_previous, Eigen::VectorXd& da_previous,
+                           Eigen::VectorXd& da_before, Eigen::VectorXd& dgamma) const;
 
   // Potential energy: the sum of the terms that are energies of the state (EnergyOfState,
   // term.hpp: gravity, constant forces, springs, rod elasticity, contact penalties, elastic
@@ -281,6 +287,17 @@ class IncrementalPotential {
                                   const Eigen::VectorXd& z, Eigen::VectorXd& u,
                                   Eigen::VectorXd& a_previous, Eigen::VectorXd& da_previous,
                                   Eigen::VectorXd& dgamma) const;
+  // u holds a cotangent at q_{k−2} = q_{k−1} ⊖ Δq_{k−1} on the inertia terms' blocks
+  // (component layout): δx_{k−2} = δx_{k−1} − δΔx and δθ_{k−2} = ΔR_{k−1}ᵀ (δθ_{k−1} − δψ)
+  // (left perturbations of R_{k−1} and ΔR_{k−1}) carry it to q_{k−1} and Δq_{k−1}.
+  void add_older_adjoint(const State& previous, const Step& previous_step,
+                         const Eigen::VectorXd& u, Eigen::VectorXd& a_previous,
+                         Eigen::VectorXd& da_previous) const;
+  // add_history_adjoint under BDF2.
+  void add_bdf2_adjoint(const State& q, const State& previous, const Step& previous_step,
+                        const Step& step_before, int frame, const Eigen::VectorXd& z,
+                        Eigen::VectorXd& a_previous, Eigen::VectorXd& da_previous,
+                        Eigen::VectorXd& da_before, Eigen::VectorXd& dgamma) const;
 
   Integrator integrator_ = Integrator::kBackwardEuler;
   double state_weight_ = 1.0;  // weight() of the terms of the state

@@ -125,6 +125,10 @@ void RotationalInertia::step_jacobians(const State& q, const Matrix3& R_previous
   }
 }
 
+Matrix3 RotationalInertia::R_tilde_adjoint(const State& q, const Vector3& z) const {
+  return -so3::hat(z) * q.rotations[rotation] * J_over_h2;
+}
+
 void TranslationalInertia::add_step_adjoint(const State&, const State&, const Step&,
                                             const LocalGradient<1>& z, Eigen::VectorXd& a_previous,
                                             Eigen::VectorXd& da_previous) const {

@@ -57,6 +57,9 @@ struct TranslationalInertia {
   void add_step_adjoint(const State& q, const State& previous, const Step& previous_step,
                         const LocalGradient<kBlocks>& z, Eigen::VectorXd& a_previous,
                         Eigen::VectorXd& da_previous) const;
+  // (∂C/∂x̃)ᵀ z = −(m/h²) z: what z makes of x̃, for an integrator whose x̃ reads more of the
+  // history than backward Euler's (BDF2, IncrementalPotential::add_history_adjoint).
+  Vector3 x_tilde_adjoint(const Vector3& z) const { return -mass_over_h2 * z; }
 
   static constexpr int kResiduals = 3;
   using Residual = LocalResidual<kResiduals>;
@@ -106,6 +109,11 @@ struct RotationalInertia {
   void add_step_adjoint(const State& q, const State& previous, const Step& previous_step,
                         const LocalGradient<kBlocks>& z, Eigen::VectorXd& a_previous,
                         Eigen::VectorXd& da_previous) const;
+  // The matrix Ḡ with zᵀ δC = ⟨Ḡ, δR̃⟩ (Frobenius) for any change δR̃ of R̃, for an integrator
+  // whose R̃ reads more of the history than backward Euler's (BDF2,
+  // IncrementalPotential::add_history_adjoint): C = 2 vee(R Ĵ R̃ᵀ), Ĵ = J/h², and
+  // 2 z·vee(X) = ⟨hat(z), X⟩ give zᵀ δC = ⟨hat(z), R Ĵ δR̃ᵀ⟩ = ⟨−hat(z) R Ĵ, δR̃⟩.
+  Matrix3 R_tilde_adjoint(const State& q, const Vector3& z) const;
 
   static constexpr int kResiduals = 9;
   using Residual = LocalResidual<kResiduals>;

@@ -346,13 +346,8 @@ DifferentiableSimulation make_differentiable_simulation(const Scene& scene) {
   if (!scene.optimization) {
     throw SceneError(scene.source, "optimization", "is required but missing (nothing to differentiate)");
   }
-  try {
-    return DifferentiableSimulation(scene.model, scene.optimization->parameters,
-                                    scene.optimization->objective, scene.solver);
-  } catch (const ModelError& e) {
-    // What the adjoint refuses (adjoint_limitation), named as the file's own errors are.
-    throw SceneError(scene.source, e.field(), e.reason());
-  }
+  return DifferentiableSimulation(scene.model, scene.optimization->parameters,
+                                  scene.optimization->objective, scene.solver);
 }
 
 namespace {

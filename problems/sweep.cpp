@@ -221,7 +221,6 @@ ReferenceGradient reference_gradient(const Scene& scene, int sample) {
 
 void gradient_error(const Scene& scene, const ReferenceGradient& reference, SweepRun& run) {
   if (!reference.failure.empty() || reference.differences.empty()) return;
-  if (adjoint_limitation(scene.model)) return;  // gradient_error stays NaN
   try {
     const DifferentiableSimulation sim = make_differentiable_simulation(scene);
     const Eigen::VectorXd gamma = sim.initial_parameters();

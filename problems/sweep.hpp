@@ -45,8 +45,7 @@
 //                      parameters against central differences of the reference run's loss,
 //                      over `gradient_sample` random parameters: max_j |a_j − d_j| /
 //                      max(|a_j|, |d_j|, 1e-3 max_i |d_i|) (solvers/gradient_check.hpp);
-//                      NaN when the run's parameter count differs from the reference's,
-//                      and under BDF2 (no adjoint yet).
+//                      NaN when the run's parameter count differs from the reference's.
 // A run whose step fails is kept, marked failed, with the errors of the frames it completed
 // (NaN when it completed none).
 

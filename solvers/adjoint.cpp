@@ -57,14 +57,6 @@ std::unique_ptr<HessianSolve> make_hessian_solve(const Component& c) {
 
 }  // namespace
 
-std::optional<std::string> adjoint_limitation(const Model& model) {
-  if (!model.static_equilibrium && model.integrator == Integrator::kBdf2) {
-    return "bdf2 has no adjoint yet: optimise under backward_euler or trapezoidal (run bdf2 "
-           "forward with liedyn simulate)";
-  }
-  return std::nullopt;
-}
-
 SimulationFailed::SimulationFailed(int frame, const std::string& reason)
     : std::runtime_error("frame " + std::to_string(frame) + ": " + reason), frame_(frame) {}
 
@@ -75,7 +67,6 @@ DifferentiableSimulation::DifferentiableSimulation(Model base, ParameterSet para
       objective_(std::move(objective)),
       options_(options) {
   options_.validate();
-  if (const auto why = adjoint_limitation(base_)) throw ModelError("integrator", *why);
   parameters_.apply(base_, initial_parameters()).validate();
 }
 
@@ -159,7 +150,10 @@ void DifferentiableSimulation::backward(const Model& model, const Eigen::VectorX
   const int size = tangent_size(trajectory.states[0]);
   gradient = Eigen::VectorXd::Zero(parameters_.size());
   Eigen::VectorXd a = Eigen::VectorXd::Zero(size), da = Eigen::VectorXd::Zero(size);
-  Eigen::VectorXd a_previous(size), da_previous(size), rhs, b, z;
+  // da_before: (∂C_{k+1}/∂Δq_{k−1})ᵀ z_{k+1}, BDF2's read of the step before its previous one,
+  // which joins Δa_{k−1} one step later.
+  Eigen::VectorXd a_previous(size), da_previous(size), da_before = Eigen::VectorXd::Zero(size);
+  Eigen::VectorXd rhs, b, z;
   objective_.add_state_gradient(trajectory, n, a, da);
   const bool dynamic = !trajectory.static_equilibrium;
   Step step = trajectory.step(n);  // Δq_k, then Δq_{k−1}
@@ -167,9 +161,11 @@ void DifferentiableSimulation::backward(const Model& model, const Eigen::VectorX
     const State& q = trajectory.states[k];
     const State& previous = trajectory.states[k - 1];
     const Step previous_step = trajectory.step(k - 1);
+    const Step step_before = trajectory.step(std::max(k - 2, 0));  // BDF2's (frame 1: Δq_0)
     rhs = a + da;  // ∂f_k/∂q_k = I
     a_previous.setZero();
     da_previous.setZero();
+    da_previous.swap(da_before);
     objective_.add_state_gradient(trajectory, k - 1, a_previous, da_previous);
     if (dynamic) {  // (∂f_k/∂q_{k−1})ᵀ Δa_k: −I for points, −ΔR_kᵀ for rotations
       for (std::size_t i = 0; i < q.points.size(); ++i) {
@@ -191,7 +187,7 @@ void DifferentiableSimulation::backward(const Model& model, const Eigen::VectorX
     const std::vector<int>& first_exact = islands.first_exact;
     for (std::size_t c = 0; c < components.size(); ++c) {
       IncrementalPotential& potential = components[c].potential;
-      potential.begin_step(previous, previous_step, k);
+      potential.begin_step(previous, previous_step, k, &step_before);
       // Trapezoidal: the history's Hessian vanishes at its reference (lib/history.hpp).
       potential.rereference_history(q);
       if (!dynamic) potential.set_load_scale(load_scale);
@@ -254,8 +250,8 @@ void DifferentiableSimulation::backward(const Model& model, const Eigen::VectorX
       }
       potential.add_parameter_adjoint(q, k, z, gradient);
       potential.add_step_adjoint(q, previous, previous_step, z, a_previous, da_previous);
-      potential.add_history_adjoint(previous, previous_step, k, z, a_previous, da_previous,
-                                    gradient);
+      potential.add_history_adjoint(q, previous, previous_step, step_before, k, z, a_previous,
+                                    da_previous, da_before, gradient);
     }
     a.swap(a_previous);
     da.swap(da_previous);

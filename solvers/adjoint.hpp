@@ -18,7 +18,8 @@
 // Under the trapezoidal integrator (docs/design.md §14.1) the step's Jacobian is H_k + K, K the
 // skew part of the rotations' history: z_k solves (H_k − K) z_k = −(a_k + Δa_k) by a fixed point
 // on H_k's factorisation, and the history field adds its mixed blocks through q_{k−1}, Δq_{k−1}
-// and γ (IncrementalPotential::add_history_adjoint).
+// and γ (IncrementalPotential::add_history_adjoint). Under BDF2 (§15.1) C_k reads Δq_{k−2} too:
+// (∂C_k/∂Δq_{k−2})ᵀ z_k joins Δa_{k−2} when the pass gets there.
 //
 // Exactness: H_k is the derivative of C_k only where C_k = 0 (the Lie Hessian differs from the
 // derivative of the Lie gradient field by ½ hat(C_k)), so the gradient is exact at converged
@@ -32,7 +33,6 @@
 // (…× forward)", and by the benchmark in tests/bench_adjoint.cpp (docs/design.md §8.7).
 
 #include <Eigen/Core>
-#include <optional>
 #include <stdexcept>
 #include <string>
 
@@ -53,11 +53,6 @@ class SimulationFailed : public std::runtime_error {
  private:
   int frame_;
 };
-
-// Why the adjoint cannot differentiate a model, or nothing if it can: BDF2 has no adjoint yet
-// (docs/design.md §15). DifferentiableSimulation refuses such a model (ModelError, field
-// `integrator`); a sweep leaves its gradient error undefined.
-std::optional<std::string> adjoint_limitation(const Model& model);
 
 class DifferentiableSimulation {
  public:

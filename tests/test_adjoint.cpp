@@ -1,8 +1,8 @@
 // End-to-end checks of the adjoint gradient (solvers/adjoint.hpp) against central finite
 // differences of the loss, for every parameter kind (lib/parameters.hpp) and objective term
 // (lib/objective.hpp), under the three rotation parameterisations, a loose and a tight
-// forward tolerance and both time integrators (the trapezoidal rule's history blocks and skew
-// solve, docs/design.md §14.1); and the measured dependence of the gradient error on the
+// forward tolerance and the three time integrators (the trapezoidal rule's history blocks and
+// skew solve, docs/design.md §14.1; BDF2's three-state history and start, §15.1); and the measured dependence of the gradient error on the
 // tolerance.
 
 #include <gtest/gtest.h>
@@ -232,11 +232,17 @@ INSTANTIATE_TEST_SUITE_P(
                       Case{RotationParameterization::kRotationVector, 1e-12,
                            Integrator::kTrapezoidal},
                       Case{RotationParameterization::kQuaternion, 1e-12,
-                           Integrator::kTrapezoidal}),
+                           Integrator::kTrapezoidal},
+                      Case{RotationParameterization::kLie, 1e-12, Integrator::kBdf2},
+                      Case{RotationParameterization::kLie, 1e-6, Integrator::kBdf2},
+                      Case{RotationParameterization::kRotationVector, 1e-12, Integrator::kBdf2},
+                      Case{RotationParameterization::kQuaternion, 1e-12, Integrator::kBdf2}),
     [](const auto& info) {
       return std::string(to_string(info.param.rotation)) +
              (info.param.tolerance <= 1e-10 ? "_tight" : "_loose") +
-             (info.param.integrator == Integrator::kTrapezoidal ? "_trapezoidal" : "");
+             (info.param.integrator == Integrator::kBackwardEuler
+                  ? std::string()
+                  : "_" + std::string(to_string(info.param.integrator)));
     });
 
 }  // namespace
