@@ -668,7 +668,7 @@ int run_optimize(const Scene& scene, const OptimizeOptions& options, std::ostrea
   Scene optimized = scene;
   optimized.model = sim.parameters().apply(scene.model, best);
   optimized.optimization.reset();
-  simulate_into(optimized, folder, nullptr);
+  simulate_into(optimized, &folder, nullptr);
   folder.commit();
 
   out << "optimizer " << to_string(optimizer.optimizer) << ": " << result.status

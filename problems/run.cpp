@@ -6,7 +6,6 @@
 #include <sstream>
 
 #include "../lib/so3.hpp"
-#include "../solvers/simulator.hpp"
 
 namespace liedyn {
 namespace {
@@ -63,22 +62,31 @@ void write_frame_row(std::ostream& out, const Simulator& sim, const StepReport* 
 
 }  // namespace
 
-SimulationSummary simulate_into(const Scene& scene, OutputFolder& out, std::ostream* progress) {
+SimulationSummary simulate_into(const Scene& scene, OutputFolder* out, std::ostream* progress,
+                                const FrameObserver& observer) {
   using Clock = std::chrono::steady_clock;
-  std::ostream& trajectory = out.add("trajectory.csv");
-  std::ostream& frames = out.add("frames.csv");
-  trajectory << "frame,time,object,kind,index,x,y,z,qw,qx,qy,qz\n";
-  frames << "frame,time,newton_iterations,gradient_norm,converged,kinetic_energy,"
-            "potential_energy,angular_momentum_x,angular_momentum_y,angular_momentum_z,"
-            "step_norm,regularized_iterations,status,max_penetration,constraint_violation,"
-            "multiplier_updates,contact_pairs,min_rod_separation\n";
+  std::ostream* trajectory = out ? &out->add("trajectory.csv") : nullptr;
+  std::ostream* frames = out ? &out->add("frames.csv") : nullptr;
+  if (out) {
+    *trajectory << "frame,time,object,kind,index,x,y,z,qw,qx,qy,qz\n";
+    *frames << "frame,time,newton_iterations,gradient_norm,converged,kinetic_energy,"
+               "potential_energy,angular_momentum_x,angular_momentum_y,angular_momentum_z,"
+               "step_norm,regularized_iterations,status,max_penetration,constraint_violation,"
+               "multiplier_updates,contact_pairs,min_rod_separation\n";
+  }
+  const auto record = [&](const Simulator& sim, const StepReport* report) {
+    if (out) {
+      write_trajectory_rows(*trajectory, sim);
+      write_frame_row(*frames, sim, report);
+    }
+    if (observer) observer(sim, report);
+  };
 
   Simulator sim(scene.model, scene.solver);
   SimulationSummary summary;
   summary.frames_requested = scene.frames;
   summary.initial_energy = sim.kinetic_energy() + sim.potential_energy();
-  write_trajectory_rows(trajectory, sim);
-  write_frame_row(frames, sim, nullptr);
+  record(sim, nullptr);
 
   const auto start = Clock::now();
   auto last_progress = start;
@@ -102,8 +110,7 @@ SimulationSummary simulate_into(const Scene& scene, OutputFolder& out, std::ostr
     if (!report.converged()) ++summary.unconverged_steps;
     if (report.status == StepStatus::kStalled) ++summary.stalled_steps;
     if (report.regularized_iterations > 0) ++summary.regularized_steps;
-    write_trajectory_rows(trajectory, sim);
-    write_frame_row(frames, sim, &report);
+    record(sim, &report);
 
     const auto now = Clock::now();
     writing += now - solved;
@@ -131,7 +138,7 @@ SimulationSummary simulate_into(const Scene& scene, OutputFolder& out, std::ostr
 SimulationSummary simulate_scene(const Scene& scene, const std::filesystem::path& out_dir,
                                  std::ostream* progress) {
   OutputFolder out(out_dir, "simulate " + scene.source, progress);
-  SimulationSummary summary = simulate_into(scene, out, progress);
+  SimulationSummary summary = simulate_into(scene, &out, progress);
   // Committed even after a failed step: the frames up to it are valid and are kept.
   const auto start = std::chrono::steady_clock::now();
   out.commit();

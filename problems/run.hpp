@@ -3,10 +3,12 @@
 // folder as one unit (output_folder.hpp): they are replaced together or not at all.
 
 #include <filesystem>
+#include <functional>
 #include <iosfwd>
 #include <string>
 #include <vector>
 
+#include "../solvers/simulator.hpp"
 #include "output_folder.hpp"
 #include "scene.hpp"
 
@@ -31,10 +33,17 @@ struct SimulationSummary {
   std::string failure;          // message when failed
 };
 
+// Called with the simulator at frame 0 (report null) and after every step that updated the
+// state (its report): what a caller collects of a run besides the files (the Python module's
+// arrays).
+using FrameObserver = std::function<void(const Simulator&, const StepReport*)>;
+
 // Simulates the scene, adding trajectory.csv and frames.csv to `out`'s current unit (the
-// caller commits it, with whatever else belongs to the run). Progress goes to `progress` (if
-// non-null) for runs longer than a second. The frames up to a failed step are written.
-SimulationSummary simulate_into(const Scene& scene, OutputFolder& out, std::ostream* progress);
+// caller commits it, with whatever else belongs to the run; null: no files). Progress goes to
+// `progress` (if non-null) for runs longer than a second. The frames up to a failed step are
+// written (and observed).
+SimulationSummary simulate_into(const Scene& scene, OutputFolder* out, std::ostream* progress,
+                                const FrameObserver& observer = nullptr);
 
 // simulate_into a locked OutputFolder at `out_dir` (created if missing), committed at the
 // end. Throws std::runtime_error on I/O errors (the folder's previous outputs then stay).

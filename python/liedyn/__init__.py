@@ -1,0 +1,130 @@
+"""liedyn from Python: scenes, forward simulation and exact adjoint gradients.
+
+    import liedyn
+    scene = liedyn.Scene.from_file("problems/scenes/butterfly_bolt.json")
+    run = liedyn.simulate(scene)                     # a Trajectory of NumPy arrays
+    sim = liedyn.Simulator(scene); sim.step()        # or one step at a time
+    prob = liedyn.DifferentiableProblem(liedyn.Scene.from_file(
+        "problems/scenes/optimization/die_throw.json"))
+    loss, gradient = prob.loss_and_gradient(prob.gamma0)
+
+Arrays are copies that own their memory. Calls that simulate release the GIL: use one
+Simulator or DifferentiableProblem per thread. Scenes, simulators and problems pickle.
+"""
+
+from __future__ import annotations
+
+import warnings
+from dataclasses import dataclass
+from os import PathLike
+from typing import Optional, Union
+
+import numpy as np
+
+from ._liedyn import (  # noqa: F401  (re-exported)
+    DifferentiableProblem,
+    ModelError,
+    Scene,
+    SceneError,
+    SimulationFailed,
+    Simulator,
+    StepReport,
+    _simulate,
+)
+
+__all__ = [
+    "DifferentiableProblem",
+    "ModelError",
+    "Scene",
+    "SceneError",
+    "SimulationFailed",
+    "Simulator",
+    "StepReport",
+    "Trajectory",
+    "simulate",
+]
+
+
+@dataclass
+class Trajectory:
+    """A run's frames as arrays (frame 0 is the initial state).
+
+    positions: F×N×3 (bodies' centres of mass, then every rod's nodes), m.
+    quaternions: F×M×4, w first (bodies, then every rod's edges).
+    time, kinetic_energy, potential_energy, max_penetration, gradient_norm, step_norm,
+    iterations, converged, status: one entry per frame (frame 0: the initial state, no solve),
+    as in frames.csv.
+    """
+
+    scene: Scene
+    time: np.ndarray
+    positions: np.ndarray
+    quaternions: np.ndarray
+    kinetic_energy: np.ndarray
+    potential_energy: np.ndarray
+    max_penetration: np.ndarray
+    gradient_norm: np.ndarray
+    step_norm: np.ndarray
+    iterations: np.ndarray
+    converged: np.ndarray
+    status: list
+
+    @property
+    def frames(self) -> int:
+        """Steps taken (the arrays hold frames + 1 states)."""
+        return len(self.time) - 1
+
+    @property
+    def unconverged_steps(self) -> int:
+        """Steps whose solve stopped short of the tolerance (their state was still updated)."""
+        return int(np.count_nonzero(~self.converged))
+
+
+def _trajectory(scene: Scene, arrays: dict) -> Trajectory:
+    fields = {k: arrays[k] for k in Trajectory.__dataclass_fields__ if k != "scene"}
+    return Trajectory(scene=scene, **fields)
+
+
+def simulate(scene: Scene, frames: Optional[int] = None,
+             out: Union[str, PathLike, None] = None) -> Trajectory:
+    """Runs a scene as `liedyn simulate` does and returns its Trajectory.
+
+    frames: how many steps (default: the scene's own `frames`).
+    out: a folder to write trajectory.csv and frames.csv into as well, as one unit, exactly
+        as the command line writes them.
+
+    A step that cannot update the state raises SimulationFailed, whose `trajectory` holds the
+    frames before it (and `out`, if given, has them too). Steps that stop short of the
+    tolerance are kept and counted: a RuntimeWarning says how many.
+    """
+    if frames is not None:
+        scene = scene.with_settings({"frames": int(frames)})
+    arrays = _simulate(scene, None if out is None else str(out))
+    trajectory = _trajectory(scene, arrays)
+    if arrays["failure"] is not None:
+        error = SimulationFailed(arrays["failure"])
+        error.frame = arrays["failed_frame"]
+        error.trajectory = trajectory
+        raise error
+    if trajectory.unconverged_steps:
+        warnings.warn(f"{scene.source}: {trajectory.unconverged_steps} of {trajectory.frames} "
+                      "steps did not meet the solver's tolerance (see Trajectory.status)",
+                      RuntimeWarning, stacklevel=2)
+    return trajectory
+
+
+def _problem_trajectory(self: DifferentiableProblem, gamma) -> Trajectory:
+    """The forward run at γ (positions and quaternions; the other columns are not recorded
+    by the adjoint's run and are NaN)."""
+    arrays = self._trajectory(np.asarray(gamma, dtype=float))
+    frames = len(arrays["time"])
+    nan = np.full(frames, np.nan)
+    return Trajectory(scene=self.scene, time=arrays["time"], positions=arrays["positions"],
+                      quaternions=arrays["quaternions"], kinetic_energy=nan,
+                      potential_energy=nan.copy(), max_penetration=nan.copy(),
+                      gradient_norm=nan.copy(), step_norm=nan.copy(),
+                      iterations=np.zeros(frames, dtype=np.int32),
+                      converged=np.ones(frames, dtype=bool), status=["converged"] * frames)
+
+
+DifferentiableProblem.trajectory = _problem_trajectory

@@ -1,0 +1,125 @@
+// liedyn.DifferentiableProblem: a scene's optimisation problem as a loss of γ and its exact
+// adjoint gradient (solvers/adjoint.hpp), for SciPy, PyTorch and other optimisers.
+
+#include <pybind11/eigen.h>
+#include <pybind11/stl.h>
+
+#include <cmath>
+#include <optional>
+
+#include "arrays.hpp"
+#include "bindings.hpp"
+#include "problems/optimization.hpp"
+
+namespace liedyn::python {
+
+namespace {
+
+class ProblemHandle {
+ public:
+  explicit ProblemHandle(SceneHandle scene)
+      : scene_(std::move(scene)), simulation_(make_differentiable_simulation(scene_.scene)) {}
+
+  const SceneHandle& scene() const { return scene_; }
+  const DifferentiableSimulation& simulation() const { return simulation_; }
+
+  Eigen::VectorXd checked(const Eigen::VectorXd& gamma) const {
+    if (gamma.size() != simulation_.parameters().size()) {
+      throw py::value_error("gamma has " + std::to_string(gamma.size()) + " entries, the problem " +
+                            std::to_string(simulation_.parameters().size()));
+    }
+    return gamma;
+  }
+
+ private:
+  SceneHandle scene_;
+  DifferentiableSimulation simulation_;
+};
+
+}  // namespace
+
+void bind_problem(py::module_& m) {
+  py::class_<ProblemHandle>(m, "DifferentiableProblem", R"doc(
+The optimisation problem of a scene's "optimization" block: the loss g(γ) of a forward
+simulation and its exact gradient dg/dγ by the adjoint method (one backward pass).
+
+    prob = liedyn.DifferentiableProblem(scene)
+    scipy.optimize.minimize(prob.loss_and_gradient, prob.gamma0, jac=True,
+                            method="L-BFGS-B", bounds=prob.bounds)
+
+The loss is the objective's raw value; `liedyn optimize` reports it divided by loss_scale.
+A forward step that does not converge raises SimulationFailed (the gradient would not be
+exact). Calls release the GIL; one problem per thread.)doc")
+      .def(py::init([](const SceneHandle& scene) { return ProblemHandle(scene); }), py::arg("scene"))
+      .def_property_readonly("scene", &ProblemHandle::scene)
+      .def_property_readonly("gamma0", [](const ProblemHandle& p) {
+             return Eigen::VectorXd(p.simulation().initial_parameters());
+           }, "The parameters' values in the scene, γ₀.")
+      .def_property_readonly("size", [](const ProblemHandle& p) { return p.simulation().parameters().size(); })
+      .def_property_readonly("names", [](const ProblemHandle& p) {
+             std::vector<std::string> names;
+             const ParameterSet& set = p.simulation().parameters();
+             for (int i = 0; i < set.size(); ++i) names.push_back(set.describe(p.simulation().base_model(), i));
+             return names;
+           }, "One name per entry of γ, as parameters.csv names them.")
+      .def_property_readonly("bounds", [](const ProblemHandle& p) {
+             const ParameterSet& set = p.simulation().parameters();
+             const Eigen::VectorXd lower = set.lower_bounds(), upper = set.upper_bounds();
+             const auto bound = [](double b) -> py::object {
+               return std::isfinite(b) ? py::object(py::float_(b)) : py::object(py::none());
+             };
+             std::vector<py::tuple> pairs;
+             for (int i = 0; i < set.size(); ++i) pairs.push_back(py::make_tuple(bound(lower(i)), bound(upper(i))));
+             return pairs;
+           }, "(lower, upper) per entry, None where unbounded: SciPy's bounds format.")
+      .def_property_readonly("loss_scale", [](const ProblemHandle& p) {
+             const double scale = p.scene().scene.optimization->loss_scale;
+             if (scale > 0.0) return scale;
+             py::gil_scoped_release release;
+             return p.simulation().evaluate(p.simulation().initial_parameters(), nullptr).loss;
+           }, "What `liedyn optimize` divides the loss by: the scene's loss_scale, else the loss at γ₀.")
+      .def("loss", [](const ProblemHandle& p, const Eigen::VectorXd& gamma) {
+             const Eigen::VectorXd g = p.checked(gamma);
+             py::gil_scoped_release release;
+             return p.simulation().evaluate(g, nullptr).loss;
+           }, py::arg("gamma"), "g(γ): one forward simulation.")
+      .def("loss_and_gradient", [](const ProblemHandle& p, const Eigen::VectorXd& gamma) {
+             const Eigen::VectorXd g = p.checked(gamma);
+             Eigen::VectorXd gradient;
+             double loss = 0.0;
+             {
+               py::gil_scoped_release release;
+               loss = p.simulation().evaluate(g, &gradient).loss;
+             }
+             return py::make_tuple(loss, gradient);
+           }, py::arg("gamma"),
+           "(g(γ), dg/dγ): one forward simulation and one adjoint (backward) pass.")
+      .def("_trajectory", [](const ProblemHandle& p, const Eigen::VectorXd& gamma) {
+             const Eigen::VectorXd g = p.checked(gamma);
+             DifferentiableSimulation::Result result;
+             {
+               py::gil_scoped_release release;
+               result = p.simulation().evaluate(g, nullptr);
+             }
+             const Trajectory& t = result.trajectory;
+             std::vector<double> time, positions, quaternions;
+             for (int k = 0; k <= t.frames(); ++k) {
+               time.push_back(k * t.time_step);
+               append_points(t.states[k], positions);
+               append_quaternions(t.states[k], quaternions);
+             }
+             const py::ssize_t f = t.frames() + 1;
+             const py::ssize_t n = static_cast<py::ssize_t>(t.states[0].points.size());
+             const py::ssize_t r = static_cast<py::ssize_t>(t.states[0].rotations.size());
+             py::dict d;
+             d["time"] = owned_array(std::move(time), {f});
+             d["positions"] = owned_array(std::move(positions), {f, n, 3});
+             d["quaternions"] = owned_array(std::move(quaternions), {f, r, 4});
+             d["loss"] = result.loss;
+             return d;
+           }, py::arg("gamma"), "The forward run at γ as arrays (use trajectory()).")
+      .def(py::pickle([](const ProblemHandle& p) { return py::make_tuple(p.scene()); },
+                      [](const py::tuple& t) { return ProblemHandle(t[0].cast<SceneHandle>()); }));
+}
+
+}  // namespace liedyn::python
