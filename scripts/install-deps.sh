@@ -9,7 +9,7 @@ packages=(
   libcairo2-dev fonts-dejavu-core libtinyobjloader-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   libfcl-dev
-  pybind11-dev python3-dev python3-numpy python3-pytest python3-scipy
+  pybind11-dev python3-dev python3-numpy python3-pytest python3-scipy python3-torch
 )
 missing=()
 for p in "${packages[@]}"; do

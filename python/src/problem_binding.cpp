@@ -4,6 +4,7 @@
 #include <pybind11/eigen.h>
 #include <pybind11/stl.h>
 
+#include <chrono>
 #include <cmath>
 #include <optional>
 
@@ -78,6 +79,9 @@ exact). Calls release the GIL; one problem per thread.)doc")
              py::gil_scoped_release release;
              return p.simulation().evaluate(p.simulation().initial_parameters(), nullptr).loss;
            }, "What `liedyn optimize` divides the loss by: the scene's loss_scale, else the loss at γ₀.")
+      .def_property_readonly("target_normalized_loss", [](const ProblemHandle& p) {
+             return p.scene().scene.optimization->optimizer.target_normalized_loss;
+           }, "The scene's target for loss / loss_scale (`liedyn optimize` stops there).")
       .def("loss", [](const ProblemHandle& p, const Eigen::VectorXd& gamma) {
              const Eigen::VectorXd g = p.checked(gamma);
              py::gil_scoped_release release;
@@ -118,6 +122,20 @@ exact). Calls release the GIL; one problem per thread.)doc")
              d["loss"] = result.loss;
              return d;
            }, py::arg("gamma"), "The forward run at γ as arrays (use trajectory()).")
+      .def("_cpp_seconds", [](const ProblemHandle& p, const Eigen::VectorXd& gamma, int repeat) {
+             // For scripts/python_overhead.py: the C++ call loss_and_gradient makes, timed in
+             // C++ (`repeat` times), to set the Python call's overhead against.
+             const Eigen::VectorXd g = p.checked(gamma);
+             std::vector<double> seconds;
+             Eigen::VectorXd gradient;
+             py::gil_scoped_release release;
+             for (int i = 0; i < repeat; ++i) {
+               const auto start = std::chrono::steady_clock::now();
+               p.simulation().evaluate(g, &gradient);
+               seconds.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+             }
+             return seconds;
+           }, py::arg("gamma"), py::arg("repeat"))
       .def(py::pickle([](const ProblemHandle& p) { return py::make_tuple(p.scene()); },
                       [](const py::tuple& t) { return ProblemHandle(t[0].cast<SceneHandle>()); }));
 }
