@@ -25,7 +25,7 @@ void step_back(State& q, const Step& step) {
 }  // namespace
 
 void IncrementalPotential::begin_step(const State& previous, const Step& previous_step,
-                                      int frame, const Step* step_before) {
+                                      int frame, const Step* step_before, int start_frame) {
   for_each_term_vector([&](auto& terms) {
     using T = typename std::decay_t<decltype(terms)>::value_type;
     if constexpr (BeginsStep<T>) {
@@ -37,13 +37,13 @@ void IncrementalPotential::begin_step(const State& previous, const Step& previou
   });
   if (integrator_ == Integrator::kBdf2) {
     if (step_before == nullptr) throw std::logic_error("begin_step: BDF2 needs the step before");
-    begin_bdf2_step(previous, previous_step, *step_before, frame);
+    begin_bdf2_step(previous, previous_step, *step_before, frame - start_frame);
     return;
   }
   if (integrator_ != Integrator::kTrapezoidal) return;
   // The history terms' fields (lib/history.hpp). At frame 1 the history is the initial
   // velocities: the trapezoidal rule's first step, c = ¼ ∇V(q_0) − π_0/h.
-  const bool first = frame <= 1;
+  const bool first = frame - start_frame <= 1;
   state_terms_gradient(previous, gradient_previous_);
   older_ = previous;  // sized at the first step (which needs no q_{k−2}): no allocation after it
   if (!first) {
@@ -73,20 +73,21 @@ void IncrementalPotential::begin_step(const State& previous, const Step& previou
 }
 
 void IncrementalPotential::begin_bdf2_step(const State& previous, const Step& previous_step,
-                                           const Step& step_before, int frame) {
-  if (frame <= 2) {
+                                           const Step& step_before, int steps) {
+  // `steps`: this step's number counted from the run's start (frame − start_frame).
+  if (steps <= 2) {
     // Sized at the first step: no allocation after it (a component first built at the second
     // step, when islands change, allocates there once).
     older_ = previous;
     corrected_step_ = step_before;
   }
   const Step* before = &step_before;
-  if (frame == 2) {
+  if (steps == 2) {
     // Δq_0 = (h v_0, exp(h ω_0)) makes x_{−1} = x_0 − h v_0, an O(h²) start that the two-step
     // history would carry into every later step as an O(h) error. With the initial
     // acceleration, x_{−1} = x_0 − h v_0 + ½ h² a_0 and R_{−1} = exp(−h ω_0 + ½ h² α_0) R_0 are
     // O(h³): Δx_0' = Δx_0 + ∇V(q_0)/(2m/h²), ΔR_0' = exp(φ + A⁻¹(∇V(q_0) + ½ φ × A φ)) with
-    // φ = h ω_0 and A = 2 I_w/h² (docs/design.md §15). At frame 1 x̃ does not depend on a_0.
+    // φ = h ω_0 and A = 2 I_w/h² (docs/design.md §15). At step 1 x̃ does not depend on a_0.
     step_back(older_, previous_step);
     state_terms_gradient(older_, gradient_older_);  // q_0
     for (const TranslationalInertia& t : terms<TranslationalInertia>()) {

@@ -94,8 +94,11 @@ class IncrementalPotential {
   // terms, at q_{k−1} and q_{k−2} (one at frame 1, whose history is the initial velocities).
   // Under BDF2 the inertia terms' extrapolation from three states, which needs Δq_{k−2} as
   // `step_before` too (at frame 1 the initial step again; docs/design.md §15).
+  // `start_frame`: the frame of the state the run started from (0), or was restarted from
+  // (Simulator::set_state): the integrators' first steps, which take their history from the
+  // initial step, count from there; the schedules count from frame 0.
   void begin_step(const State& previous, const Step& previous_step, int frame = 1,
-                  const Step* step_before = nullptr);
+                  const Step* step_before = nullptr, int start_frame = 0);
 
   // The time integrator (Model::Integrator) of a dynamic step, once, after the terms are
   // added: the trapezoidal one adds a history term beside each inertia term and weights the
@@ -277,7 +280,7 @@ class IncrementalPotential {
   void state_terms_gradient(const State& q, Eigen::VectorXd& g) const;
   // BDF2's extrapolations x̃ and R̃ of the inertia terms (begin_step; docs/design.md §15).
   void begin_bdf2_step(const State& previous, const Step& previous_step, const Step& step_before,
-                       int frame);
+                       int steps);
   // add_history_adjoint's part of w ∇V at s (s = q_{k−1} or q_{k−2}, G = ∇V(s) from
   // weighted_terms_gradient): u += w (H_V(s) z + ½ G × z on rotations), the derivative of the
   // Lie gradient field ∇V transposed (design §1.4), component layout; and the weighted terms'

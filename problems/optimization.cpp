@@ -551,6 +551,16 @@ Checkpoint read_checkpoint(const std::filesystem::path& file, const json& proble
 
 }  // namespace
 
+Bounds optimizer_bounds(const Scene& scene, const DifferentiableSimulation& sim,
+                        Optimizer optimizer, const std::string& field) {
+  if (!sim.parameters().bounded()) return {};
+  if (optimizer == Optimizer::kCeresLbfgs) {
+    throw SceneError(scene.source, field,
+                     std::string("the parameters have bounds, and ") + kCeresHasNoBounds);
+  }
+  return {sim.parameters().lower_bounds(), sim.parameters().upper_bounds()};
+}
+
 ObjectiveFunction objective_of(const DifferentiableSimulation& sim) {
   return [&sim](const Eigen::VectorXd& gamma, Eigen::VectorXd& gradient) {
     try {
@@ -569,14 +579,9 @@ int run_optimize(const Scene& scene, const OptimizeOptions& options, std::ostrea
   if (options.optimizer) optimizer.optimizer = *options.optimizer;
   if (options.max_iterations) optimizer.max_iterations = *options.max_iterations;
   optimizer.validate();
-  Bounds bounds;
-  if (sim.parameters().bounded()) {
-    if (optimizer.optimizer == Optimizer::kCeresLbfgs) {  // bad input: before anything is written
-      throw SceneError(scene.source, options.optimizer ? "--optimizer" : "optimization.optimizer",
-                       std::string("the parameters have bounds, and ") + kCeresHasNoBounds);
-    }
-    bounds = {sim.parameters().lower_bounds(), sim.parameters().upper_bounds()};
-  }
+  // Bad input, before anything is written.
+  const Bounds bounds = optimizer_bounds(scene, sim, optimizer.optimizer,
+                                         options.optimizer ? "--optimizer" : "optimization.optimizer");
   const std::filesystem::path checkpoint_file = options.out / "checkpoint.json";
 
   // The folder is locked from here to the end: no other run mixes its files in, and the

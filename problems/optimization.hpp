@@ -29,6 +29,11 @@ DifferentiableSimulation make_differentiable_simulation(const Scene& scene);
 // shorten their step (solvers/optimizer.hpp).
 ObjectiveFunction objective_of(const DifferentiableSimulation& sim);
 
+// The parameters' bounds for `optimizer` (none if no block has any). Bounds under ceres-lbfgs,
+// which cannot respect them, are bad input: SceneError naming `field`.
+Bounds optimizer_bounds(const Scene& scene, const DifferentiableSimulation& sim,
+                        Optimizer optimizer, const std::string& field);
+
 // `liedyn gradcheck`: checks the gradient at γ₀, or at the γ of `parameters_file` when it is
 // not empty (a parameters.csv of `liedyn optimize`, e.g. the point where an optimisation
 // stalled); prints one row per checked parameter (with --verbose) and then the last line

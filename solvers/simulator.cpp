@@ -3,6 +3,8 @@
 #include <omp.h>
 
 #include <algorithm>
+#include <stdexcept>
+#include <string>
 #include <utility>
 
 #include "../lib/so3.hpp"
@@ -46,6 +48,40 @@ Simulator::StepIslands& Simulator::islands_at(const std::vector<bool>& key) {
   });
 }
 
+void Simulator::set_state(const State& q, const Step& dq) {
+  if (q.points.size() != state_.points.size() || q.rotations.size() != state_.rotations.size() ||
+      dq.points.size() != state_.points.size() || dq.rotations.size() != state_.rotations.size()) {
+    throw std::invalid_argument("Simulator::set_state: the state or step has other sizes than the model's");
+  }
+  for (std::size_t i = 0; i < q.points.size(); ++i) {
+    if (!q.points[i].allFinite() || !dq.points[i].allFinite()) {
+      throw std::invalid_argument("Simulator::set_state: point " + std::to_string(i) + " is not finite");
+    }
+  }
+  for (std::size_t j = 0; j < q.rotations.size(); ++j) {
+    for (const Matrix3* R : {&q.rotations[j], &dq.rotations[j]}) {
+      if (!R->allFinite() || (R->transpose() * *R - Matrix3::Identity()).norm() > 1e-9 ||
+          R->determinant() < 0.0) {
+        throw std::invalid_argument("Simulator::set_state: rotation " + std::to_string(j) +
+                                    " is not a rotation matrix");
+      }
+    }
+  }
+  state_ = q;
+  step_ = dq;
+  if (model_.static_equilibrium) {
+    for (Vector3& x : step_.points) x.setZero();
+    for (Matrix3& R : step_.rotations) R.setIdentity();
+  }
+  step_before_ = step_;
+  start_frame_ = frame_;
+  // The couplings at the new state, as at the start of a run.
+  touching_.assign(search_.size(), false);
+  search_.find(state_, Step{}, touching_);
+  model_.coupling_key(frame_ + 1, touching_, key_);
+  current_ = &islands_at(key_);
+}
+
 void Simulator::set_measure_condition(bool on) {
   options_.measure_condition = on;  // for islands built later
   islands_.for_each([&](StepIslands& islands) {
@@ -85,7 +121,7 @@ StepReport Simulator::step() {
     // The islands write disjoint entries of state_ and read previous_ and the model only.
     const auto solve_island = [&](int i) {
       IncrementalPotential& potential = now.solvers[i]->component().potential;
-      potential.begin_step(previous_, previous_step_, frame_ + 1, &step_before_);
+      potential.begin_step(previous_, previous_step_, frame_ + 1, &step_before_, start_frame_);
       if (!dynamic) potential.set_load_scale(load_scale);
       now.reports[i] = now.solvers[i]->solve(state_);
     };

@@ -32,6 +32,13 @@ class Simulator {
   // is left exactly as before the call.
   StepReport step();
 
+  // Restarts the run from state q with the step dq (velocities dq/h; zero in static mode) at
+  // the current frame, as a control loop resets its plant: the integrators' history starts
+  // again from there, as at frame 0 (their first steps from the initial step), while time,
+  // the schedules and prescribed motions go on. q and dq must have the model's sizes, finite
+  // entries and rotations (throws std::invalid_argument otherwise; callers check more).
+  void set_state(const State& q, const Step& dq);
+
   const Model& model() const { return model_; }
   const State& state() const { return state_; }
   const Step& last_step() const { return step_; }
@@ -95,6 +102,7 @@ class Simulator {
   Step step_, previous_step_;
   Step step_before_;  // Δq_{k−2} for BDF2's step k (the initial step at k = 1 and 2)
   int frame_ = 0;
+  int start_frame_ = 0;  // the frame the run started, or was last restarted (set_state), from
   // The step solvers of one set of islands (one per island) and their threads.
   struct StepIslands {
     std::vector<std::unique_ptr<StepSolver>> solvers;

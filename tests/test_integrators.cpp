@@ -845,5 +845,57 @@ TEST(Bdf2, DampsWhatTheStepDoesNotResolveAndKeepsWhatItDoes) {
   EXPECT_LE(euler.last / euler.first, 1e-6);  // (1 + (ωh)²)^(−6237/2) = 3e-14
 }
 
+// ---------------------------------------------------------------------------------------
+// Restarting a run (Simulator::set_state).
+
+// A run restarted from (q_0, Δq_0) after some other steps takes, from there on, the steps of a
+// fresh run bit for bit, under each integrator: the history starts again as at frame 0 (the
+// trapezoidal rule's first step from the initial velocities, BDF2's start with the initial
+// acceleration at its second step). A spring chain under gravity (no schedules, so the frame
+// number does not matter).
+TEST(SetState, RestartsTheIntegratorsHistory) {
+  for (const Integrator integrator :
+       {Integrator::kBackwardEuler, Integrator::kTrapezoidal, Integrator::kBdf2}) {
+    SCOPED_TRACE(to_string(integrator));
+    Model model = test_models::spring_chain(3);
+    model.integrator = integrator;
+    SolverOptions options;
+    options.tolerance = 1e-12;
+    Simulator fresh(model, options);
+    Simulator restarted(model, options);
+    for (int k = 0; k < 7; ++k) ASSERT_TRUE(restarted.step().converged());
+    restarted.set_state(model.initial_state(), model.initial_step());
+    EXPECT_EQ(restarted.frame(), 7);
+    EXPECT_EQ(restarted.kinetic_energy(), fresh.kinetic_energy());
+    for (int k = 0; k < 6; ++k) {
+      ASSERT_TRUE(fresh.step().converged());
+      ASSERT_TRUE(restarted.step().converged());
+      for (std::size_t i = 0; i < fresh.state().points.size(); ++i) {
+        ASSERT_EQ(restarted.state().points[i], fresh.state().points[i]) << k;
+      }
+      for (std::size_t j = 0; j < fresh.state().rotations.size(); ++j) {
+        ASSERT_EQ(restarted.state().rotations[j], fresh.state().rotations[j]) << k;
+      }
+    }
+  }
+}
+
+// A state that is not the model's is refused, and the simulator is unchanged.
+TEST(SetState, RefusesWhatIsNotAState) {
+  const Model model = test_models::spring_chain(2);
+  Simulator sim(model, SolverOptions{});
+  State q = model.initial_state();
+  Step dq = model.initial_step();
+  q.points.pop_back();
+  EXPECT_THROW(sim.set_state(q, dq), std::invalid_argument);
+  q = model.initial_state();
+  q.rotations[0](0, 1) += 1e-3;  // not orthonormal
+  EXPECT_THROW(sim.set_state(q, dq), std::invalid_argument);
+  q = model.initial_state();
+  dq.points[0].x() = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_THROW(sim.set_state(q, dq), std::invalid_argument);
+  EXPECT_EQ(sim.state().points, model.initial_state().points);
+}
+
 }  // namespace
 }  // namespace liedyn

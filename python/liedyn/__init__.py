@@ -40,7 +40,10 @@ __all__ = [
     "SimulationFailed",
     "Simulator",
     "StepReport",
+    "OptimizationFailed",
+    "OptimizationResult",
     "Trajectory",
+    "optimize",
     "simulate",
 ]
 
@@ -128,3 +131,52 @@ def _problem_trajectory(self: DifferentiableProblem, gamma) -> Trajectory:
 
 
 DifferentiableProblem.trajectory = _problem_trajectory
+
+
+@dataclass
+class OptimizationResult:
+    """What `liedyn optimize` reports, and its history (one entry per evaluation of the loss
+    and gradient, as history.csv)."""
+
+    best_gamma: np.ndarray
+    best_loss: float
+    best_normalized_loss: float  # best_loss / loss_scale
+    loss_scale: float
+    iterations: int
+    evaluations: int
+    reached_target: bool
+    status: str  # target_reached, max_iterations, converged, roundoff_limited (or failed)
+    message: str  # the back-end's own status and message
+    optimizer: str
+    loss: np.ndarray
+    normalized_loss: np.ndarray
+    gradient_norm: np.ndarray
+    seconds: np.ndarray
+
+
+class OptimizationFailed(RuntimeError):
+    """The optimiser stopped on an error (`.result` holds the best point before it)."""
+
+
+def _problem_minimize(self: DifferentiableProblem, optimizer: Optional[str] = None,
+                      max_iterations: Optional[int] = None, start=None) -> OptimizationResult:
+    """Minimises the loss as `liedyn optimize` does (its optimiser settings from the scene,
+    unless `optimizer` ("nlopt-lbfgs", "ceres-lbfgs", "ipopt-lbfgs") or `max_iterations` say
+    otherwise; from `start`, default γ₀), without writing files. Raises OptimizationFailed if
+    the optimiser stopped on an error (status "failed")."""
+    start = None if start is None else np.asarray(start, dtype=float)
+    result = OptimizationResult(**self._minimize(optimizer, max_iterations, start))
+    if result.status == "failed":
+        error = OptimizationFailed(f"{self.scene.source}: {result.optimizer} failed: {result.message}")
+        error.result = result
+        raise error
+    return result
+
+
+DifferentiableProblem.minimize = _problem_minimize
+
+
+def optimize(scene: Scene, optimizer: Optional[str] = None,
+             max_iterations: Optional[int] = None) -> OptimizationResult:
+    """`liedyn optimize` without files: DifferentiableProblem(scene).minimize(...)."""
+    return DifferentiableProblem(scene).minimize(optimizer, max_iterations)

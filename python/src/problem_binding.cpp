@@ -122,6 +122,65 @@ exact). Calls release the GIL; one problem per thread.)doc")
              d["loss"] = result.loss;
              return d;
            }, py::arg("gamma"), "The forward run at γ as arrays (use trajectory()).")
+      .def("_minimize", [](const ProblemHandle& p, std::optional<std::string> optimizer,
+                           std::optional<int> max_iterations, std::optional<Eigen::VectorXd> start) {
+             // `liedyn optimize`'s minimisation (problems/optimization.cpp): the scene's
+             // optimiser settings, its loss scale rule and bounds; no files.
+             const Scene& scene = p.scene().scene;
+             OptimizerOptions options = scene.optimization->optimizer;
+             if (optimizer) {
+               const auto parsed = parse_optimizer(*optimizer);
+               if (!parsed) {
+                 throw SceneError(scene.source, "optimizer", "unknown optimizer '" + *optimizer +
+                                  "' (nlopt-lbfgs, ceres-lbfgs or ipopt-lbfgs)");
+               }
+               options.optimizer = *parsed;
+             }
+             if (max_iterations) options.max_iterations = *max_iterations;
+             options.validate();
+             const Bounds bounds = optimizer_bounds(scene, p.simulation(), options.optimizer,
+                                                    optimizer ? "optimizer" : "optimization.optimizer");
+             const Eigen::VectorXd x0 = p.checked(start.value_or(p.simulation().initial_parameters()));
+             std::vector<double> loss, normalized, gradient_norm, seconds;
+             OptimizationResult result;
+             double scale = scene.optimization->loss_scale;
+             {
+               py::gil_scoped_release release;
+               if (scale == 0.0) scale = p.simulation().evaluate(x0, nullptr).loss;
+               if (scale > 0.0) {
+                 const EvaluationCallback record = [&](const Evaluation& e, const Eigen::VectorXd&,
+                                                       const Eigen::VectorXd&) {
+                   loss.push_back(e.loss);
+                   normalized.push_back(e.normalized_loss);
+                   gradient_norm.push_back(e.gradient_norm);
+                   seconds.push_back(e.seconds);
+                 };
+                 result = minimize(objective_of(p.simulation()), x0, scale, options, record, bounds);
+               }
+             }
+             if (!(scale > 0.0)) {
+               throw py::value_error("the initial loss is " + std::to_string(scale) +
+                                     ": nothing to minimise (set optimization.loss_scale)");
+             }
+             const py::ssize_t n = static_cast<py::ssize_t>(loss.size());
+             py::dict d;
+             d["best_gamma"] = result.best_x;
+             d["best_loss"] = result.best_loss;
+             d["best_normalized_loss"] = result.best_normalized_loss;
+             d["loss_scale"] = scale;
+             d["iterations"] = result.iterations;
+             d["evaluations"] = result.evaluations;
+             d["reached_target"] = result.reached_target;
+             d["status"] = result.status;
+             d["message"] = result.message;
+             d["optimizer"] = std::string(to_string(options.optimizer));
+             d["loss"] = owned_array(std::move(loss), {n});
+             d["normalized_loss"] = owned_array(std::move(normalized), {n});
+             d["gradient_norm"] = owned_array(std::move(gradient_norm), {n});
+             d["seconds"] = owned_array(std::move(seconds), {n});
+             return d;
+           }, py::arg("optimizer") = py::none(), py::arg("max_iterations") = py::none(),
+           py::arg("start") = py::none(), "Use minimize().")
       .def("_cpp_seconds", [](const ProblemHandle& p, const Eigen::VectorXd& gamma, int repeat) {
              // For scripts/python_overhead.py: the C++ call loss_and_gradient makes, timed in
              // C++ (`repeat` times), to set the Python call's overhead against.

@@ -4,6 +4,8 @@
 #include <pybind11/stl.h>
 #include <pybind11/stl/filesystem.h>
 
+#include <algorithm>
+#include <cmath>
 #include <memory>
 #include <optional>
 
@@ -28,6 +30,32 @@ class SimulatorHandle {
   Simulator& simulator() { return *simulator_; }
   const Simulator& simulator() const { return *simulator_; }
 
+  // Simulator::set_state, remembered for pickling.
+  struct Restart {
+    int frame;
+    State state;
+    Step step;
+  };
+  void set_state(const State& q, const Step& dq) {
+    simulator_->set_state(q, dq);
+    restarts_.push_back({simulator_->frame(), q, dq});
+  }
+  const std::vector<Restart>& restarts() const { return restarts_; }
+
+  // Steps (and restarts) up to `frame`, as the pickled simulator did: the simulation is
+  // deterministic, so the state is bit for bit the same.
+  void replay(int frame, const std::vector<Restart>& restarts) {
+    std::size_t next = 0;
+    for (;;) {
+      while (next < restarts.size() && restarts[next].frame == simulator_->frame()) {
+        set_state(restarts[next].state, restarts[next].step);
+        ++next;
+      }
+      if (simulator_->frame() >= frame) break;
+      step_or_throw();
+    }
+  }
+
   // One step; SimulationFailed if it did not update the state (the simulator is then as
   // before the call).
   StepReport step_or_throw() {
@@ -43,7 +71,43 @@ class SimulatorHandle {
  private:
   SceneHandle scene_;
   std::unique_ptr<Simulator> simulator_;
+  std::vector<Restart> restarts_;
 };
+
+// A state and step as flat lists of numbers (exact: the pickled simulator's restarts).
+py::tuple to_numbers(const State& q, const Step& dq) {
+  std::vector<double> x, R, dx, dR;
+  append_points(q, x);
+  append_rotations(q, R);
+  for (const Vector3& v : dq.points) dx.insert(dx.end(), {v.x(), v.y(), v.z()});
+  for (const Matrix3& M : dq.rotations) {
+    for (int i = 0; i < 3; ++i) {
+      for (int j = 0; j < 3; ++j) dR.push_back(M(i, j));
+    }
+  }
+  return py::make_tuple(x, R, dx, dR);
+}
+
+void from_numbers(const py::tuple& t, State& q, Step& dq) {
+  const auto x = t[0].cast<std::vector<double>>(), R = t[1].cast<std::vector<double>>(),
+             dx = t[2].cast<std::vector<double>>(), dR = t[3].cast<std::vector<double>>();
+  if (x.size() != 3 * q.points.size() || R.size() != 9 * q.rotations.size() ||
+      dx.size() != x.size() || dR.size() != R.size()) {
+    throw py::value_error("a pickled simulator's restart does not fit its scene");
+  }
+  for (std::size_t i = 0; i < q.points.size(); ++i) {
+    q.points[i] = Vector3(x[3 * i], x[3 * i + 1], x[3 * i + 2]);
+    dq.points[i] = Vector3(dx[3 * i], dx[3 * i + 1], dx[3 * i + 2]);
+  }
+  for (std::size_t j = 0; j < q.rotations.size(); ++j) {
+    for (int a = 0; a < 3; ++a) {
+      for (int b = 0; b < 3; ++b) {
+        q.rotations[j](a, b) = R[9 * j + 3 * a + b];
+        dq.rotations[j](a, b) = dR[9 * j + 3 * a + b];
+      }
+    }
+  }
+}
 
 // The index of a rod given by index or name (IndexError / KeyError otherwise).
 int rod_index(const Model& model, const py::object& rod) {
@@ -154,6 +218,75 @@ edges (rod_points / rod_rotations give a rod's rows). One Simulator per thread.)
           "StepReports. callback(simulator, report), if given, runs after each step; returning "
           "False stops the run. Raises SimulationFailed at a step that cannot update the state. "
           "Releases the GIL while it steps.")
+      .def(
+          "set_state",
+          [](SimulatorHandle& h, const py::array_t<double, py::array::c_style | py::array::forcecast>& positions,
+             const py::array_t<double, py::array::c_style | py::array::forcecast>& rotations,
+             const std::optional<py::array_t<double, py::array::c_style | py::array::forcecast>>& velocities,
+             const std::optional<py::array_t<double, py::array::c_style | py::array::forcecast>>& angular_velocities) {
+            Simulator& sim = h.simulator();
+            const py::ssize_t n = static_cast<py::ssize_t>(sim.state().points.size());
+            const py::ssize_t m = static_cast<py::ssize_t>(sim.state().rotations.size());
+            const double step = h.scene().scene.model.time_step;
+            const auto shaped = [](const auto& a, std::vector<py::ssize_t> shape, const char* name) {
+              if (a.ndim() != static_cast<py::ssize_t>(shape.size()) ||
+                  !std::equal(shape.begin(), shape.end(), a.shape())) {
+                std::string expected;
+                for (const py::ssize_t d : shape) expected += (expected.empty() ? "" : "×") + std::to_string(d);
+                throw py::value_error(std::string(name) + ": expected an array of shape " + expected);
+              }
+            };
+            shaped(positions, {n, 3}, "positions");
+            shaped(rotations, {m, 3, 3}, "rotations");
+            if (velocities) shaped(*velocities, {n, 3}, "velocities");
+            if (angular_velocities) shaped(*angular_velocities, {m, 3}, "angular_velocities");
+            if (h.scene().scene.model.static_equilibrium && (velocities || angular_velocities)) {
+              throw py::value_error("velocities: a static scene has none (its states are equilibria)");
+            }
+            State q = sim.state();
+            Step dq = sim.last_step();
+            for (py::ssize_t i = 0; i < n; ++i) {
+              q.points[i] = Vector3(positions.at(i, 0), positions.at(i, 1), positions.at(i, 2));
+              dq.points[i] = velocities ? Vector3(step * Vector3(velocities->at(i, 0), velocities->at(i, 1),
+                                                                  velocities->at(i, 2)))
+                                        : Vector3::Zero();
+              if (!q.points[i].allFinite() || !dq.points[i].allFinite()) {
+                throw py::value_error("positions/velocities: row " + std::to_string(i) + " is not finite");
+              }
+            }
+            for (py::ssize_t j = 0; j < m; ++j) {
+              Matrix3 R;
+              for (int a = 0; a < 3; ++a) {
+                for (int b = 0; b < 3; ++b) R(a, b) = rotations.at(j, a, b);
+              }
+              // The scene's rule for orientations: within 1e-6 of a rotation it is made one,
+              // beyond it is refused.
+              if (!R.allFinite() || (R.transpose() * R - Matrix3::Identity()).norm() > kQuaternionNormTolerance ||
+                  R.determinant() <= 0.0) {
+                throw py::value_error("rotations: " + std::to_string(j) +
+                                      " is not a rotation matrix (RᵀR = I and det R = 1 within 1e-6)");
+              }
+              q.rotations[j] = so3::orthonormalize(R);
+              Vector3 omega = Vector3::Zero();
+              if (angular_velocities) {
+                omega = Vector3(angular_velocities->at(j, 0), angular_velocities->at(j, 1),
+                                angular_velocities->at(j, 2));
+              }
+              if (!omega.allFinite() || !(omega.norm() * step < M_PI)) {
+                throw py::value_error("angular_velocities: row " + std::to_string(j) +
+                                      " turns by π or more per step (|ω| h ≥ π), or is not finite");
+              }
+              dq.rotations[j] = so3::exp(step * omega);
+            }
+            h.set_state(q, dq);
+          },
+          py::arg("positions"), py::arg("rotations"), py::arg("velocities") = py::none(),
+          py::arg("angular_velocities") = py::none(),
+          "Restarts the run from this state (arrays as positions(), rotations(), velocities(), "
+          "angular_velocities(); velocities default to rest) at the current frame: the time "
+          "integrator's history starts again from it, as at frame 0, while time and the scene's "
+          "schedules go on. Raises ValueError for wrong shapes, non-finite entries, matrices "
+          "that are not rotations (within 1e-6) or |ω| h ≥ π.")
       .def_property_readonly("scene", &SimulatorHandle::scene)
       .def_property_readonly("frame", [](const SimulatorHandle& h) { return h.simulator().frame(); })
       .def_property_readonly("time", [](const SimulatorHandle& h) { return h.simulator().time(); })
@@ -208,14 +341,26 @@ edges (rod_points / rod_rotations give a rod's rows). One Simulator per thread.)
              return rows;
            }, py::arg("rod"), "The rows of rotations() that hold a rod's edges.")
       .def(py::pickle(
-          // A simulator pickles as its scene and frame; unpickling replays the steps (the
-          // simulation is deterministic: the state is bit for bit the same).
-          [](const SimulatorHandle& h) { return py::make_tuple(h.scene(), h.simulator().frame()); },
+          // A simulator pickles as its scene, frame and restarts (set_state); unpickling
+          // replays them (the simulation is deterministic: the state is bit for bit the same).
+          [](const SimulatorHandle& h) {
+            py::list restarts;
+            for (const auto& r : h.restarts()) restarts.append(py::make_tuple(r.frame, to_numbers(r.state, r.step)));
+            return py::make_tuple(h.scene(), h.simulator().frame(), restarts);
+          },
           [](const py::tuple& t) {
             SimulatorHandle h(t[0].cast<SceneHandle>());
+            std::vector<SimulatorHandle::Restart> restarts;
+            for (const py::handle r : t[2].cast<py::list>()) {
+              const py::tuple entry = r.cast<py::tuple>();
+              SimulatorHandle::Restart restart{entry[0].cast<int>(), h.simulator().state(),
+                                               h.simulator().last_step()};
+              from_numbers(entry[1].cast<py::tuple>(), restart.state, restart.step);
+              restarts.push_back(std::move(restart));
+            }
             const int frame = t[1].cast<int>();
             py::gil_scoped_release release;
-            for (int k = 0; k < frame; ++k) h.step_or_throw();
+            h.replay(frame, restarts);
             return h;
           }));
 

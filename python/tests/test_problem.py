@@ -2,6 +2,8 @@
 
 import pickle
 
+from conftest import read_csv
+
 import numpy as np
 import pytest
 
@@ -95,3 +97,37 @@ def test_loss_is_the_command_lines(die, cli, scenes, tmp_path):
                  "solver.tolerance=1e-13", "--sample", "1")
     line = next(l for l in result.stdout.splitlines() if l.startswith("loss "))
     assert float(line.split()[1].rstrip(";")) == pytest.approx(die.loss(die.gamma0), rel=1e-5)
+
+
+def test_minimize_is_the_command_lines_optimisation(scenes, cli, tmp_path):
+    path = scenes / "optimization" / "die_throw.json"
+    result = liedyn.optimize(liedyn.Scene.from_file(path))
+    assert result.status == "target_reached" and result.reached_target
+    assert result.optimizer == "nlopt-lbfgs"
+    assert result.loss.shape == (result.evaluations,) and result.seconds.dtype == np.float64
+    assert result.best_loss == result.loss.min()
+    np.testing.assert_array_equal(result.normalized_loss, result.loss / result.loss_scale)
+    cli_run = cli("optimize", path, "--out", tmp_path / "die")
+    assert cli_run.returncode == 0, cli_run.stderr
+    rows = read_csv(tmp_path / "die" / "parameters.csv")
+    np.testing.assert_array_equal(result.best_gamma, [float(r["value"]) for r in rows])
+    history = read_csv(tmp_path / "die" / "history.csv")
+    np.testing.assert_array_equal(result.loss, [float(r["loss"]) for r in history])
+
+
+def test_minimize_options_are_checked(die):
+    with pytest.raises(liedyn.SceneError) as error:
+        die.minimize(optimizer="adam")
+    assert error.value.field == "optimizer"
+    with pytest.raises(liedyn.ModelError):
+        die.minimize(max_iterations=0)
+    result = die.minimize(optimizer="ipopt-lbfgs", max_iterations=2, start=die.gamma0 + 0.1)
+    assert result.optimizer == "ipopt-lbfgs" and result.iterations <= 2
+
+
+def test_problems_travel_to_other_processes(die):
+    import concurrent.futures
+    gammas = [die.gamma0 + 0.01 * i for i in range(3)]
+    with concurrent.futures.ProcessPoolExecutor(max_workers=2) as pool:
+        losses = list(pool.map(die.loss, gammas))
+    assert losses == [die.loss(g) for g in gammas]
