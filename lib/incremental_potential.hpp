@@ -130,6 +130,11 @@ class IncrementalPotential {
   // and returns the largest angle one moved, 0 without any (StepSolver::solve re-solves while
   // it exceeds the tolerance).
   double rereference_history(const State& q);
+  // The same, with g the Lie gradient at q about the old references (value_and_gradient's):
+  // each history term's part of g is replaced by its gradient about the new reference (its
+  // field), so that g becomes what an assembly at q would give (Newton's estimated check).
+  template <class Vector>
+  void rereference_history(const State& q, Vector& g);
   bool has_rotation_history() const { return !terms<RotationHistory>().empty(); }
 
   // Multiplies every load (gravity, forces, torques) by λ (static load stepping).
@@ -137,6 +142,11 @@ class IncrementalPotential {
 
   // Ψ(q).
   double value(const State& q) const;
+  // Ψ(q) and its Lie gradient g (overwritten; sized by the caller) in one pass, without the
+  // Hessian: Newton's line-search trial where it estimates the next Newton step (newton.hpp).
+  // Ψ is summed in value()'s order (the same number).
+  template <class Vector>
+  double value_and_gradient(const State& q, Vector& g) const;
 
   // Ψ(q), and its Lie gradient g and Lie Hessian H (overwritten; sized by the caller).
   // If `roundoff` is non-null it receives an estimate of the absolute round-off error of
@@ -355,6 +365,38 @@ inline void static_for(Function&& f) {
   [&]<int... I>(std::integer_sequence<int, I...>) {
     (f(std::integral_constant<int, I>{}), ...);
   }(std::make_integer_sequence<int, N>{});
+}
+
+template <class Vector>
+double IncrementalPotential::value_and_gradient(const State& q, Vector& g) const {
+  g.setZero();
+  double value = 0.0;
+  for_each_term_vector([&](const auto& terms) {
+    using Term = typename std::decay_t<decltype(terms)>::value_type;
+    LocalGradient<Term::kBlocks> g_local;
+    for (const Term& term : terms) {
+      const double w = weight(term);
+      value += w * term.evaluate(q, &g_local, nullptr);
+      static_for<Term::kBlocks>([&](auto i) {
+        const int oi = term.offsets[i];
+        if (oi >= 0) g.template segment<3>(oi) += w * g_local.template segment<3>(3 * i);
+      });
+    }
+  });
+  return value;
+}
+
+template <class Vector>
+void IncrementalPotential::rereference_history(const State& q, Vector& g) {
+  LocalGradient<1> g_local;
+  for (RotationHistory& t : terms<RotationHistory>()) {
+    const int o = t.offsets[0];
+    t.evaluate(q, &g_local, nullptr);
+    g.template segment<3>(o) -= g_local;
+    t.rereference(q);
+    t.evaluate(q, &g_local, nullptr);
+    g.template segment<3>(o) += g_local;
+  }
 }
 
 template <class Vector, class Sink>

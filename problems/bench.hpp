@@ -24,6 +24,7 @@ struct BenchResult {
                                        //   factorisation + triangular solves per assembly
   double iterations_per_frame = 0.0;   // Newton updates
   double assemblies_per_frame = 0.0;
+  double factorizations_per_frame = 0.0;  // including regularisation retries
   int max_iterations_in_frame = 0;
   int unconverged_steps = 0;           // in the last repeat
   bool failed = false;                 // a step failed; figures cover the frames before it

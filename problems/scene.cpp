@@ -829,7 +829,8 @@ Scene parse(const json& root, const std::string& source) {
   if (top.has("solver")) {
     ObjectReader s(top.get("solver"), "solver", source,
                    {"backend", "rotation", "tolerance", "max_iterations", "armijo",
-                    "min_step_length", "assembly_threads", "island_threads", "ceres", "ipopt"});
+                    "min_step_length", "convergence_check", "assembly_threads", "island_threads",
+                    "ceres", "ipopt"});
     scene.solver.backend = named_value(s, "backend", "solver.backend", "newton", &parse_backend,
                                        "backend", "\"newton\", \"ceres\" or \"ipopt\"");
     scene.solver.rotation =
@@ -839,6 +840,9 @@ Scene parse(const json& root, const std::string& source) {
     if (s.has("max_iterations")) scene.solver.max_iterations = s.integer("max_iterations", 1);
     scene.solver.armijo = s.number("armijo", scene.solver.armijo);
     scene.solver.min_step_length = s.number("min_step_length", scene.solver.min_step_length);
+    scene.solver.convergence_check =
+        named_value(s, "convergence_check", "solver.convergence_check", "estimated",
+                    &parse_convergence_check, "convergence check", "\"estimated\" or \"assembled\"");
     if (s.has("assembly_threads")) {
       scene.solver.assembly_threads =
           s.integer("assembly_threads", 0, SolverOptions::kMaxAssemblyThreads);

@@ -35,6 +35,7 @@ Newton<System>::Newton(Component component, const SolverOptions& options)
       delta0_(component_.dofs),
       skew_(component_.dofs),
       correction_(component_.dofs),
+      trial_gradient_(component_.dofs),
       saved_(component_),
       entry_(component_) {
   const std::size_t n = component_.rotations.size();
@@ -146,6 +147,13 @@ namespace {
 // decrease of ‖g‖ or ‖δ‖∞ that counts as progress.
 constexpr int kStallIterations = 10;
 constexpr double kProgress = 0.01;
+// The estimated convergence check (newton.hpp): how well the quadratic model must have
+// predicted the update's decrease of Ψ, and by how much that decrease must exceed Ψ's
+// round-off to be measured at all.
+constexpr double kModelAgreement = 0.05;
+constexpr double kMeasurableDecrease = 100.0;
+// ... and how far above the tolerance the estimate may be predicted to land and still be tried.
+constexpr double kHopefulEstimate = 10.0;
 
 }  // namespace
 
@@ -243,11 +251,25 @@ StepReport Newton<System>::iterate(State& q, int max_iterations) {
     }
 
     const double slope = g.dot(delta_);  // < 0: H (or H + μI) is positive definite
+    // The estimated check needs the gradient at the full step, taken with its value in one
+    // pass. Only for H's own Newton step (not regularised), and where its decrease of Ψ can be
+    // measured: for Newton's step the model predicts Ψ(q ⊕ δ) − Ψ(q) = gᵀδ + ½ δᵀHδ = ½ gᵀδ.
+    // And where it may succeed: Newton's steps shrink quadratically, ‖δ̂‖∞ ≈ C ‖δ‖∞², with C
+    // as the last estimate found it (0 before any): no estimate predicted above 10× the
+    // tolerance is attempted (it would cost a gradient and a solve for nothing).
+    const double predicted = 0.5 * slope;
+    const bool estimate = options_.convergence_check == ConvergenceCheck::kEstimated &&
+                          !regularized && -predicted > kMeasurableDecrease * roundoff &&
+                          contraction_ * report.step_norm * report.step_norm <=
+                              kHopefulEstimate * options_.tolerance;
     save(q);
     double alpha = 1.0;
+    double psi_trial = psi;
     for (;;) {
       retract(q, alpha);
-      const double psi_trial = component_.potential.value(q);
+      psi_trial = estimate && alpha == 1.0
+                      ? component_.potential.value_and_gradient(q, trial_gradient_)
+                      : component_.potential.value(q);
       if (std::isfinite(psi_trial) &&
           psi_trial <= psi + options_.armijo * alpha * slope + roundoff) {
         break;
@@ -258,7 +280,46 @@ StepReport Newton<System>::iterate(State& q, int max_iterations) {
     }
     ++report.iterations;
     if (regularized) ++report.regularized_iterations;
+    if (estimate && alpha == 1.0 && std::abs((psi_trial - psi) / predicted - 1.0) <= kModelAgreement &&
+        converged_by_estimate(q, chart, psi_trial, report)) {
+      return report;
+    }
   }
+}
+
+template <class System>
+bool Newton<System>::converged_by_estimate(const State& q, const RotationVectorChart* chart,
+                                           double psi, StepReport& report) {
+  using Clock = std::chrono::steady_clock;
+  const auto start = options_.measure_time ? Clock::now() : Clock::time_point{};
+  // Trapezoidal: the gradient the next iteration would assemble, its torque fields
+  // re-referenced at q (which the step then keeps, converged or not).
+  const bool follow_history = component_.potential.has_rotation_history();
+  if (follow_history) component_.potential.rereference_history(q, trial_gradient_);
+  if (chart != nullptr) chart->to_chart_gradient(trial_gradient_);
+  if (!std::isfinite(trial_gradient_.sum())) return false;
+  system_.solve_linear(trial_gradient_, correction_);  // −δ̂, with the last factorisation
+  if (follow_history && options_.rotation == RotationParameterization::kLie) {
+    // As correct_for_history_skew: −δ̂ ← −δ̂₀ − H⁻¹K(−δ̂).
+    delta0_ = correction_;
+    for (int m = 0; m < kSkewCorrections; ++m) {
+      component_.potential.history_skew(correction_, skew_);
+      system_.solve_linear(skew_, delta_);
+      correction_ = delta0_ - delta_;
+    }
+  }
+  if (options_.measure_time) {
+    report.solve_seconds += std::chrono::duration<double>(Clock::now() - start).count();
+  }
+  const double step_norm = correction_.template lpNorm<Eigen::Infinity>();
+  if (report.step_norm > 0.0) contraction_ = step_norm / (report.step_norm * report.step_norm);
+  if (!(step_norm <= options_.tolerance)) return false;
+  report.status = StepStatus::kConverged;
+  report.step_norm = step_norm;
+  report.gradient_norm = trial_gradient_.norm();
+  report.psi = psi;
+  if (report.assemblies == 1) report.second_gradient_norm = report.gradient_norm;
+  return true;
 }
 
 std::unique_ptr<StepSolver> make_newton(Component component, const SolverOptions& options) {

@@ -20,6 +20,20 @@
 // quadratic model puts the minimiser within `tolerance` metres and radians. Unlike a
 // gradient threshold this does not depend on the scale of masses, stiffnesses or h.
 // The final gradient norm is reported beside it.
+// Judging an accepted update q₁ = q₀ ⊕ δ exactly takes an assembly and a factorisation at q₁,
+// which a step that converges in one iteration then spends only on the verdict. With
+// SolverOptions::convergence_check "estimated" (the default) the Newton step at q₁ is
+// estimated with q₀'s factorisation, δ̂ = −H(q₀)⁻¹ g(q₁) (g(q₁) from the line search's pass,
+// which then evaluates Ψ and g together), when the full step was taken and the quadratic
+// model predicted its decrease of Ψ within kModelAgreement (5 %; newton.cpp): the model's
+// error is −⅙ Ψ'''[δ,δ,δ] against ½ δᵀHδ, so H changed by ~3× that fraction along δ, and δ̂
+// is the exact step to about that relative accuracy. ‖δ̂‖∞ ≤ tolerance ends the step (one
+// assembly, one factorisation); otherwise the next iteration assembles at q₁ as before.
+// An estimate is tried only where the last one's contraction C (‖δ̂‖ ≈ C ‖δ‖²) predicts at
+// most 10× the tolerance: early iterations of a long solve cannot succeed.
+// Under the trapezoidal integrator g(q₁) is taken with the torque fields re-referenced at q₁
+// (what the next iteration would assemble) and δ̂ gets the skew corrections of δ. Not
+// estimated: regularised steps, decreases within 100× Ψ's round-off (not measurable).
 //
 // Stall: a solve whose iterates stop improving ends early, unconverged, as
 // StepStatus::kStalled (state updated, like kMaxIterations): after kStallIterations (10)
@@ -100,6 +114,11 @@ class Newton final : public StepSolver {
   // without them every Newton iteration would.
   void correct_for_history_skew();
   static constexpr int kSkewCorrections = 2;
+  // The estimated convergence check at the accepted full step (above), whose Ψ and Lie
+  // gradient (trial_gradient_) the line search computed: true, with the report filled in, if
+  // ‖H⁻¹ g‖∞ ≤ tolerance with the last factorisation.
+  bool converged_by_estimate(const State& q, const RotationVectorChart* chart, double psi,
+                             StepReport& report);
 
   // Sets the rotation-vector or quaternion parameters from the rotations of q (and the
   // rotations from them, so that both agree exactly).
@@ -109,7 +128,9 @@ class Newton final : public StepSolver {
   SolverOptions options_;
   System system_;
   Vector delta_;
-  Vector delta0_, skew_, correction_;  // correct_for_history_skew's, sized at construction
+  Vector delta0_, skew_, correction_;  // correct_for_history_skew's and the estimate's scratch
+  Vector trial_gradient_;              // g at the line search's full step (the estimate)
+  double contraction_ = 0.0;           // C in ‖δ̂‖∞ ≈ C ‖δ‖∞², from the last estimate
   ComponentSnapshot saved_, entry_;  // line-search backtracking; restore on failure
   // Rotation vectors: the chart (current and saved r's and J_l(r)'s).
   RotationVectorChart chart_;

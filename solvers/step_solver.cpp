@@ -104,6 +104,21 @@ std::optional<RotationParameterization> parse_rotation(std::string_view name) {
   return std::nullopt;
 }
 
+const char* to_string(ConvergenceCheck check) {
+  switch (check) {
+    case ConvergenceCheck::kEstimated: return "estimated";
+    case ConvergenceCheck::kAssembled: return "assembled";
+  }
+  return "unknown";
+}
+
+std::optional<ConvergenceCheck> parse_convergence_check(std::string_view name) {
+  for (const auto c : {ConvergenceCheck::kEstimated, ConvergenceCheck::kAssembled}) {
+    if (name == to_string(c)) return c;
+  }
+  return std::nullopt;
+}
+
 const char* to_string(StepStatus status) {
   switch (status) {
     case StepStatus::kConverged: return "converged";

@@ -32,6 +32,10 @@ namespace liedyn {
 
 enum class Backend { kNewton, kCeres, kIpopt };
 enum class RotationParameterization { kLie, kRotationVector, kQuaternion };
+// How Newton judges an accepted update (newton.hpp, "Convergence"): "estimated" — the Newton
+// step at the new iterate from the last factorisation, where the quadratic model predicted the
+// update; "assembled" — always from a new assembly and factorisation there.
+enum class ConvergenceCheck { kEstimated, kAssembled };
 
 // The scene file's names ("newton", "ceres", "ipopt"; "lie", "rotvec", "quat") and back
 // (nullopt for another name).
@@ -39,6 +43,8 @@ const char* to_string(Backend backend);
 std::optional<Backend> parse_backend(std::string_view name);
 const char* to_string(RotationParameterization rotation);
 std::optional<RotationParameterization> parse_rotation(std::string_view name);
+const char* to_string(ConvergenceCheck check);  // "estimated", "assembled"
+std::optional<ConvergenceCheck> parse_convergence_check(std::string_view name);
 
 // Components with more DOFs than this use sparse linear algebra (Newton: SparseSystem; Ceres:
 // SPARSE_NORMAL_CHOLESKY); up to it, dense. Measured (BM_ChainIteration, one Newton iteration
@@ -91,6 +97,9 @@ struct SolverOptions {
   double armijo = 1e-4;
   // Newton's smallest line-search step α before the step is declared failed; in (0, 1).
   double min_step_length = 1e-10;
+  // How Newton judges an update (ConvergenceCheck above; newton.hpp). Estimated by default: a
+  // step that converges in one iteration then costs one assembly and one factorisation.
+  ConvergenceCheck convergence_check = ConvergenceCheck::kEstimated;
   // Measure wall time of assembly and of factorisation + solve (StepReport; Newton). Off by
   // default: the clock reads cost ~10 % of a single rigid body's Newton iteration.
   bool measure_time = false;
