@@ -124,6 +124,19 @@ int rod_index(const Model& model, const py::object& rod) {
   throw py::key_error("no rod named '" + name + "'");
 }
 
+// The simulator's state as an array, one row per point (`append` = append_points) or per
+// rotation, each row of shape `row` (arrays.hpp).
+py::array_t<double> state_array(const SimulatorHandle& h,
+                                void (*append)(const State&, std::vector<double>&),
+                                std::vector<py::ssize_t> row) {
+  const State& q = h.simulator().state();
+  std::vector<double> data;
+  append(q, data);
+  const std::size_t rows = append == &append_points ? q.points.size() : q.rotations.size();
+  row.insert(row.begin(), static_cast<py::ssize_t>(rows));
+  return owned_array(std::move(data), std::move(row));
+}
+
 py::array_t<double> vectors(int count, const auto& value_of) {
   std::vector<double> data;
   data.reserve(3 * count);
@@ -290,24 +303,12 @@ edges (rod_points / rod_rotations give a rod's rows). One Simulator per thread.)
       .def_property_readonly("scene", &SimulatorHandle::scene)
       .def_property_readonly("frame", [](const SimulatorHandle& h) { return h.simulator().frame(); })
       .def_property_readonly("time", [](const SimulatorHandle& h) { return h.simulator().time(); })
-      .def("positions", [](const SimulatorHandle& h) {
-             const State& q = h.simulator().state();
-             std::vector<double> data;
-             append_points(q, data);
-             return owned_array(std::move(data), {static_cast<py::ssize_t>(q.points.size()), 3});
-           }, "Every point's position, N×3 (bodies, then rod nodes), m.")
-      .def("rotations", [](const SimulatorHandle& h) {
-             const State& q = h.simulator().state();
-             std::vector<double> data;
-             append_rotations(q, data);
-             return owned_array(std::move(data), {static_cast<py::ssize_t>(q.rotations.size()), 3, 3});
-           }, "Every rotation matrix, M×3×3 (bodies, then rod edges): body frame to world.")
-      .def("quaternions", [](const SimulatorHandle& h) {
-             const State& q = h.simulator().state();
-             std::vector<double> data;
-             append_quaternions(q, data);
-             return owned_array(std::move(data), {static_cast<py::ssize_t>(q.rotations.size()), 4});
-           }, "Every rotation as a unit quaternion, M×4, w first (as trajectory.csv).")
+      .def("positions", [](const SimulatorHandle& h) { return state_array(h, &append_points, {3}); },
+           "Every point's position, N×3 (bodies, then rod nodes), m.")
+      .def("rotations", [](const SimulatorHandle& h) { return state_array(h, &append_rotations, {3, 3}); },
+           "Every rotation matrix, M×3×3 (bodies, then rod edges): body frame to world.")
+      .def("quaternions", [](const SimulatorHandle& h) { return state_array(h, &append_quaternions, {4}); },
+           "Every rotation as a unit quaternion, M×4, w first (as trajectory.csv).")
       .def("velocities", [](const SimulatorHandle& h) {
              const Simulator& s = h.simulator();
              return vectors(static_cast<int>(s.state().points.size()),
