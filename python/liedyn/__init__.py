@@ -29,7 +29,9 @@ from ._liedyn import (  # noqa: F401  (re-exported)
     SimulationFailed,
     Simulator,
     StepReport,
+    _compare,
     _simulate,
+    _sweep,
 )
 
 __all__ = [
@@ -43,8 +45,10 @@ __all__ = [
     "OptimizationFailed",
     "OptimizationResult",
     "Trajectory",
+    "compare",
     "optimize",
     "simulate",
+    "sweep",
 ]
 
 
@@ -180,3 +184,38 @@ def optimize(scene: Scene, optimizer: Optional[str] = None,
              max_iterations: Optional[int] = None) -> OptimizationResult:
     """`liedyn optimize` without files: DifferentiableProblem(scene).minimize(...)."""
     return DifferentiableProblem(scene).minimize(optimizer, max_iterations)
+
+
+def _records(columns: dict) -> np.recarray:
+    return np.rec.fromarrays(list(columns.values()), names=list(columns.keys()))
+
+
+def compare(scene: Scene, backends=None, rotations=None, repeats: int = 3) -> np.recarray:
+    """`liedyn compare` without files: the scene run under each back-end ("newton", "ceres",
+    "ipopt") and rotation parameterisation ("lie", "rotvec", "quat"), one record per run with
+    its iterations, µs per step, deviations from the first (reference) run, unconverged steps
+    and failure (problems/compare.hpp). Defaults as on the command line: the scene's back-end,
+    and all three parameterisations when no back-end is given."""
+    return _records(_compare(scene, list(backends or []), list(rotations or []), int(repeats)))
+
+
+@dataclass
+class SweepResult:
+    """liedyn.sweep's runs, one record per grid point, and what the reader should know of
+    them (the command line prints these notes under its table)."""
+
+    runs: np.recarray
+    notes: list
+
+
+def sweep(scene: Scene, axes: dict, reference_refinement: int = 4, gradient_sample: int = 8,
+          repeats: int = 1) -> SweepResult:
+    """`liedyn sweep` without files: the scene run at every point of the grid
+    {path: [values]} (e.g. {"integrator": ["backward_euler", "bdf2"], "time_step": [0.01,
+    0.005]}; strings as typed on the command line, other values as JSON), errors measured
+    against a reference run at the smallest h / reference_refinement or a declared closed form
+    (problems/sweep.hpp). One record per run, in the command line's order; its settings as the
+    command line prints them."""
+    columns, notes = _sweep(scene, dict(axes), int(reference_refinement), int(gradient_sample),
+                            int(repeats))
+    return SweepResult(runs=_records(columns), notes=list(notes))

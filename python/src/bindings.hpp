@@ -34,5 +34,6 @@ SceneHandle parse_scene_handle(const std::string& json, const std::string& sourc
 void bind_scene(py::module_& m);
 void bind_simulator(py::module_& m);
 void bind_problem(py::module_& m);
+void bind_studies(py::module_& m);
 
 }  // namespace liedyn::python

@@ -48,4 +48,5 @@ PYBIND11_MODULE(_liedyn, m) {
   liedyn::python::bind_scene(m);
   liedyn::python::bind_simulator(m);
   liedyn::python::bind_problem(m);
+  liedyn::python::bind_studies(m);
 }
