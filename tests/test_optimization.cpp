@@ -1087,14 +1087,18 @@ double gradcheck_error(const std::string& out) {
 }
 
 // Every bundled optimisation scene (letters included) passes gradcheck under the three time
-// integrators, its integrator set from the command line. The forward tolerance is set to 1e-13:
-// at the scenes' own (1e-10, 1e-12) the differences of the loss measure the forward solver's
-// noise (the letters at their defaults: up to 1.2 relative, either integrator), not the
-// gradient (docs/design.md §8.5). 12 sampled parameters per scene. Some need more than that:
-// the die through contact under the second-order integrators (GradcheckOfTheBouncingDie-
+// integrators, its integrator set from the command line (one test per integrator, so that they
+// run side by side). The forward tolerance is set to 1e-13: at the scenes' own (1e-10, 1e-12)
+// the differences of the loss measure the forward solver's noise (the letters at their
+// defaults: up to 1.2 relative), not the gradient (docs/design.md §8.5). 12 sampled parameters per scene. Some need more than
+// that: the die through contact under the second-order integrators (GradcheckOfTheBouncingDie-
 // ConvergesAsTheStepShrinks) and the two tip-curve rods under backward Euler and BDF2
 // (GradcheckOfTheTipCurveRodsFollowsTheForwardTolerance).
-TEST_F(OptimizationCli, GradcheckPassesOnEveryBundledOptimisationSceneUnderEachIntegrator) {
+class OptimizationCliIntegrator : public OptimizationCli,
+                                  public ::testing::WithParamInterface<const char*> {};
+
+TEST_P(OptimizationCliIntegrator, GradcheckPassesOnEveryBundledOptimisationScene) {
+  const std::string integrator = GetParam();
   std::vector<fs::path> scenes;
   for (const char* folder : {"problems/scenes/optimization", "problems/scenes/letters"}) {
     for (const auto& entry : fs::directory_iterator(kSourceDir / folder)) {
@@ -1104,22 +1108,24 @@ TEST_F(OptimizationCli, GradcheckPassesOnEveryBundledOptimisationSceneUnderEachI
   std::sort(scenes.begin(), scenes.end());
   ASSERT_EQ(scenes.size(), 14u);
   for (const fs::path& scene : scenes) {
-    for (const std::string integrator : {"backward_euler", "trapezoidal", "bdf2"}) {
-      if (integrator != "backward_euler" && scene.stem() == "die_throw_contact") continue;
-      if (integrator != "trapezoidal" &&
-          (scene.stem() == "cable_tip_curve" || scene.stem() == "rest_shape_tip_curve")) {
-        continue;
-      }
-      SCOPED_TRACE(scene.filename().string() + " " + integrator);
-      const Result r = run({"gradcheck", scene.string(), "--sample", "12", "--step", "1e-5",
-                            "--set", "integrator=" + integrator, "--set", "solver.tolerance=1e-13"});
-      EXPECT_EQ(r.exit_code, 0) << r.out << r.err;
-      const double error = gradcheck_error(r.out);
-      EXPECT_GE(error, 0.0) << r.out;
-      EXPECT_LE(error, 1e-5) << r.out;
+    if (integrator != "backward_euler" && scene.stem() == "die_throw_contact") continue;
+    if (integrator != "trapezoidal" &&
+        (scene.stem() == "cable_tip_curve" || scene.stem() == "rest_shape_tip_curve")) {
+      continue;
     }
+    SCOPED_TRACE(scene.filename().string() + " " + integrator);
+    const Result r = run({"gradcheck", scene.string(), "--sample", "12", "--step", "1e-5",
+                          "--set", "integrator=" + integrator, "--set", "solver.tolerance=1e-13"});
+    EXPECT_EQ(r.exit_code, 0) << r.out << r.err;
+    const double error = gradcheck_error(r.out);
+    EXPECT_GE(error, 0.0) << r.out;
+    EXPECT_LE(error, 1e-5) << r.out;
   }
 }
+
+INSTANTIATE_TEST_SUITE_P(Integrators, OptimizationCliIntegrator,
+                         ::testing::Values("backward_euler", "trapezoidal", "bdf2"),
+                         [](const auto& info) { return std::string(info.param); });
 
 // The die thrown onto the table under the second-order integrators keeps bouncing: under the
 // trapezoidal rule its stiff contact is undamped (ω h = 6 at h = 2 ms), and the loss after 400
