@@ -307,6 +307,8 @@ bool Newton<System>::converged_by_estimate(const State& q, const RotationVectorC
       system_.solve_linear(skew_, delta_);
       correction_ = delta0_ - delta_;
     }
+    // Where the series does not settle (‖H⁻¹K‖ not small) the estimate says nothing.
+    if (!(delta_.norm() <= 0.5 * delta0_.norm())) return false;
   }
   if (options_.measure_time) {
     report.solve_seconds += std::chrono::duration<double>(Clock::now() - start).count();
