@@ -119,7 +119,7 @@ void IncrementalPotential::add_history_adjoint(const State& q, const State& prev
                                                Eigen::VectorXd& a_previous,
                                                Eigen::VectorXd& da_previous,
                                                Eigen::VectorXd& da_before,
-                                               Eigen::VectorXd& dgamma) const {
+                                               Eigen::VectorXd& dgamma) {
   if (integrator_ == Integrator::kBdf2) {
     add_bdf2_adjoint(q, previous, previous_step, step_before, frame, z, a_previous, da_previous,
                      da_before, dgamma);
@@ -129,7 +129,8 @@ void IncrementalPotential::add_history_adjoint(const State& q, const State& prev
   const bool first = frame <= 1;
   const std::vector<RotationHistory>& rotations = terms<RotationHistory>();
   // c = ½ ∇V(q_{k−1}) + ¼ ∇V(q_{k−2}) − μ_{k−3/2}/h   (frame 1: ¼ ∇V(q_0) − π_0/h).
-  Eigen::VectorXd u = Eigen::VectorXd::Zero(z.size());
+  Eigen::VectorXd& u = adjoint_older_;
+  u.setZero(z.size());
   add_weighted_terms_adjoint(previous, gradient_previous_, first ? 0.25 : 0.5, frame, previous,
                              previous_step, z, u, a_previous, da_previous, dgamma);
   for (const PointHistory& t : terms<PointHistory>()) {
@@ -181,7 +182,7 @@ void IncrementalPotential::add_bdf2_adjoint(const State& q, const State& previou
                                             Eigen::VectorXd& a_previous,
                                             Eigen::VectorXd& da_previous,
                                             Eigen::VectorXd& da_before,
-                                            Eigen::VectorXd& dgamma) const {
+                                            Eigen::VectorXd& dgamma) {
   // Reverse mode through x̃ = ½(5x₁ − 4x₂ + x₃), x₂ = x₁ − Δx_{k−1}, x₃ = x₂ − Δx_{k−2}
   // (x_i = x_{k−i}), and R̃ = ½(5R₁ − 4R₂ + R₃), R₂ = ΔR_{k−1}ᵀ R₁, R₃ = ΔR_{k−2}ᵀ R₂ (design
   // §15.1). At frame 1 Δq_{k−2} is Δq_0 = Δq_{k−1}; at frame 2 it is the initial step
@@ -190,8 +191,9 @@ void IncrementalPotential::add_bdf2_adjoint(const State& q, const State& previou
   const bool corrected = frame == 2;
   const Step& before = corrected ? corrected_step_ : step_before;
   Eigen::VectorXd& d_before = frame <= 1 ? da_previous : da_before;
-  Eigen::VectorXd older = Eigen::VectorXd::Zero(z.size());  // at q_{k−2}, component layout
-  Eigen::VectorXd g_bar;                                     // of ∇V(q_0) (frame 2)
+  Eigen::VectorXd& older = adjoint_older_;     // at q_{k−2}, component layout
+  Eigen::VectorXd& g_bar = adjoint_gradient_;  // of ∇V(q_0) (frame 2)
+  older.setZero(z.size());
   if (corrected) g_bar.setZero(z.size());
   for (const TranslationalInertia& t : terms<TranslationalInertia>()) {
     const int o = t.offsets[0];

@@ -48,6 +48,14 @@ struct DenseHessianSink {
   }
 };
 
+// Takes no Hessian at all: assembly without it evaluates the terms' values and gradients only
+// (IncrementalPotential::value_and_gradient).
+struct NoHessian {
+  void clear() {}
+  template <class Block>
+  void add(int, int, const Block&) {}
+};
+
 class IncrementalPotential {
  public:
   // The one list of term types (term.hpp). Every consumer — assembly, begin_step, load
@@ -229,7 +237,7 @@ class IncrementalPotential {
   void add_history_adjoint(const State& q, const State& previous, const Step& previous_step,
                            const Step& step_before, int frame, const Eigen::VectorXd& z,
                            Eigen::VectorXd& a_previous, Eigen::VectorXd& da_previous,
-                           Eigen::VectorXd& da_before, Eigen::VectorXd& dgamma) const;
+                           Eigen::VectorXd& da_before, Eigen::VectorXd& dgamma);
 
   // Potential energy: the sum of the terms that are energies of the state (EnergyOfState,
   // term.hpp: gravity, constant forces, springs, rod elasticity, contact penalties, elastic
@@ -310,7 +318,7 @@ class IncrementalPotential {
   void add_bdf2_adjoint(const State& q, const State& previous, const Step& previous_step,
                         const Step& step_before, int frame, const Eigen::VectorXd& z,
                         Eigen::VectorXd& a_previous, Eigen::VectorXd& da_previous,
-                        Eigen::VectorXd& da_before, Eigen::VectorXd& dgamma) const;
+                        Eigen::VectorXd& da_before, Eigen::VectorXd& dgamma);
 
   Integrator integrator_ = Integrator::kBackwardEuler;
   double state_weight_ = 1.0;  // weight() of the terms of the state
@@ -318,6 +326,9 @@ class IncrementalPotential {
   // q_{k−1} and q_{k−2}, and the whole state q_{k−2} (trapezoidal; BDF2: q_0 and its gradient
   // at frame 2), and BDF2's initial step corrected by the initial acceleration.
   Eigen::VectorXd gradient_previous_, gradient_older_;
+  // add_history_adjoint's cotangents at q_{k−1}/q_{k−2} and of ∇V(q_0) (component layout),
+  // sized at its first call: the backward pass does not allocate per step for them.
+  Eigen::VectorXd adjoint_older_, adjoint_gradient_;
   State older_;
   Step corrected_step_;
 
@@ -369,21 +380,8 @@ inline void static_for(Function&& f) {
 
 template <class Vector>
 double IncrementalPotential::value_and_gradient(const State& q, Vector& g) const {
-  g.setZero();
-  double value = 0.0;
-  for_each_term_vector([&](const auto& terms) {
-    using Term = typename std::decay_t<decltype(terms)>::value_type;
-    LocalGradient<Term::kBlocks> g_local;
-    for (const Term& term : terms) {
-      const double w = weight(term);
-      value += w * term.evaluate(q, &g_local, nullptr);
-      static_for<Term::kBlocks>([&](auto i) {
-        const int oi = term.offsets[i];
-        if (oi >= 0) g.template segment<3>(oi) += w * g_local.template segment<3>(3 * i);
-      });
-    }
-  });
-  return value;
+  NoHessian none;
+  return assemble_into(q, g, none);
 }
 
 template <class Vector>
@@ -427,16 +425,17 @@ double IncrementalPotential::add_terms(const State& q, Vector& g, Sink& sink, Pa
     const std::size_t n = terms.size();
     const std::size_t begin = part.count == 1 ? 0 : n * part.index / part.count;
     const std::size_t end = part.count == 1 ? n : n * (part.index + 1) / part.count;
+    constexpr bool kHessian = !std::is_same_v<Sink, NoHessian>;
     for (std::size_t t = begin; t < end; ++t) {
       const Term& term = terms[t];
-      double term_value = term.evaluate(q, &g_local, &H_local);
+      double term_value = term.evaluate(q, &g_local, kHessian ? &H_local : nullptr);
       if (const double w = weight(term); w != 1.0) {
         term_value *= w;
         g_local *= w;
-        H_local *= w;
+        if constexpr (kHessian) H_local *= w;
       }
       value += term_value;
-      if (magnitude != nullptr) {
+      if (kHessian && magnitude != nullptr) {
         const double ambient_gradient =
             std::sqrt(2.0 * std::abs(term_value) * H_local.diagonal().cwiseAbs().sum());
         roundoff_sum += std::abs(term_value) +
@@ -448,11 +447,13 @@ double IncrementalPotential::add_terms(const State& q, Vector& g, Sink& sink, Pa
         const int oi = term.offsets[i];
         if (oi < 0) return;
         g.template segment<3>(oi) += g_local.template segment<3>(3 * i);
-        static_for<B>([&](auto j) {
-          const int oj = term.offsets[j];
-          if (oj < 0) return;
-          sink.add(oi, oj, H_local.template block<3, 3>(3 * i, 3 * j));
-        });
+        if constexpr (kHessian) {
+          static_for<B>([&](auto j) {
+            const int oj = term.offsets[j];
+            if (oj < 0) return;
+            sink.add(oi, oj, H_local.template block<3, 3>(3 * i, 3 * j));
+          });
+        }
       });
     }
   });

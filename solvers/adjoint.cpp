@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cmath>
 #include <memory>
+#include <utility>
 
 #include "linear_system.hpp"
 #include "simulator.hpp"
@@ -156,12 +157,14 @@ void DifferentiableSimulation::backward(const Model& model, const Eigen::VectorX
   Eigen::VectorXd rhs, b, z;
   objective_.add_state_gradient(trajectory, n, a, da);
   const bool dynamic = !trajectory.static_equilibrium;
-  Step step = trajectory.step(n);  // Δq_k, then Δq_{k−1}
+  // Δq_k, Δq_{k−1} and Δq_{k−2} (BDF2's; frame 1: Δq_0), each built once and passed down.
+  Step step = trajectory.step(n);
+  Step previous_step = trajectory.step(n - 1);
+  Step step_before;
   for (int k = n; k >= 1; --k) {
     const State& q = trajectory.states[k];
     const State& previous = trajectory.states[k - 1];
-    const Step previous_step = trajectory.step(k - 1);
-    const Step step_before = trajectory.step(std::max(k - 2, 0));  // BDF2's (frame 1: Δq_0)
+    step_before = trajectory.step(std::max(k - 2, 0));
     rhs = a + da;  // ∂f_k/∂q_k = I
     a_previous.setZero();
     da_previous.setZero();
@@ -255,7 +258,8 @@ void DifferentiableSimulation::backward(const Model& model, const Eigen::VectorX
     }
     a.swap(a_previous);
     da.swap(da_previous);
-    step = previous_step;
+    std::swap(step, previous_step);
+    std::swap(previous_step, step_before);
   }
   parameters_.add_initial_gradient(model, gamma, a, da, gradient);
   objective_.add_parameter_gradient(gamma, gradient);
