@@ -8,78 +8,95 @@
 #include "../lib/so3.hpp"
 
 namespace liedyn {
-namespace {
 
-void write_trajectory_rows(std::ostream& out, const Simulator& sim) {
-  const auto& bodies = sim.model().bodies;
-  for (std::size_t i = 0; i < bodies.size(); ++i) {
-    const Vector3& x = sim.state().points[i];
-    const Eigen::Quaterniond q = so3::to_quaternion(sim.state().rotations[i]);
-    out << sim.frame() << ',' << sim.time() << ',' << csv_field(bodies[i].name) << ",body,0," << x.x() << ','
-        << x.y() << ',' << x.z() << ',' << q.w() << ',' << q.x() << ',' << q.y() << ',' << q.z()
-        << '\n';
+void FrameRecord::capture(const Simulator& sim, const StepReport* step_report) {
+  frame = sim.frame();
+  time = sim.time();
+  state.points = sim.state().points;  // assignment keeps the vectors' capacity
+  state.rotations = sim.state().rotations;
+  if (step_report != nullptr) {
+    report = *step_report;
+  } else {
+    report.reset();
+  }
+  kinetic_energy = sim.kinetic_energy();
+  potential_energy = sim.potential_energy();
+  angular_momentum = sim.angular_momentum();
+  max_penetration = sim.max_penetration();
+  constraint_violation = step_report ? step_report->constraint_violation : sim.constraint_violation();
+  contact_pairs = sim.contact_pairs();
+  min_rod_separation = sim.has_rod_contact() ? std::optional<double>(sim.min_rod_separation())
+                                             : std::nullopt;
+}
+
+RunFiles::RunFiles(OutputFolder& out)
+    : trajectory_(out.add("trajectory.csv")), frames_(out.add("frames.csv")) {
+  trajectory_ << "frame,time,object,kind,index,x,y,z,qw,qx,qy,qz\n";
+  frames_ << "frame,time,newton_iterations,gradient_norm,converged,kinetic_energy,"
+             "potential_energy,angular_momentum_x,angular_momentum_y,angular_momentum_z,"
+             "step_norm,regularized_iterations,status,max_penetration,constraint_violation,"
+             "multiplier_updates,contact_pairs,min_rod_separation\n";
+}
+
+void RunFiles::add(const Model& model, const FrameRecord& r) {
+  const std::vector<Vector3>& x = r.state.points;
+  const std::vector<Matrix3>& R = r.state.rotations;
+  std::ostream& out = trajectory_;
+  for (std::size_t i = 0; i < model.bodies.size(); ++i) {
+    const Eigen::Quaterniond q = so3::to_quaternion(R[i]);
+    out << r.frame << ',' << r.time << ',' << csv_field(model.bodies[i].name) << ",body,0," << x[i].x()
+        << ',' << x[i].y() << ',' << x[i].z() << ',' << q.w() << ',' << q.x() << ',' << q.y() << ','
+        << q.z() << '\n';
   }
   // Rods: one row per node (position only, orientation columns empty), then one row per
   // edge (midpoint and edge frame).
-  const auto& rods = sim.model().rods;
-  for (std::size_t r = 0; r < rods.size(); ++r) {
-    const int rod = static_cast<int>(r);
-    for (int i = 0; i < rods[r].node_count(); ++i) {
-      const Vector3& x = sim.state().points[sim.model().rod_point(rod, i)];
-      out << sim.frame() << ',' << sim.time() << ',' << csv_field(rods[r].name) << ",node," << i << ','
-          << x.x() << ',' << x.y() << ',' << x.z() << ",,,,\n";
+  for (std::size_t r_index = 0; r_index < model.rods.size(); ++r_index) {
+    const RodSpec& rod = model.rods[r_index];
+    const int k = static_cast<int>(r_index);
+    for (int i = 0; i < rod.node_count(); ++i) {
+      const Vector3& p = x[model.rod_point(k, i)];
+      out << r.frame << ',' << r.time << ',' << csv_field(rod.name) << ",node," << i << ',' << p.x()
+          << ',' << p.y() << ',' << p.z() << ",,,,\n";
     }
-    for (int j = 0; j < rods[r].edge_count(); ++j) {
-      const Vector3 x = 0.5 * (sim.state().points[sim.model().rod_point(rod, j)] +
-                               sim.state().points[sim.model().rod_point(rod, j + 1)]);
-      const Eigen::Quaterniond q =
-          so3::to_quaternion(sim.state().rotations[sim.model().rod_rotation(rod, j)]);
-      out << sim.frame() << ',' << sim.time() << ',' << csv_field(rods[r].name) << ",edge," << j << ','
-          << x.x() << ',' << x.y() << ',' << x.z() << ',' << q.w() << ',' << q.x() << ','
-          << q.y() << ',' << q.z() << '\n';
+    for (int j = 0; j < rod.edge_count(); ++j) {
+      const Vector3 p = 0.5 * (x[model.rod_point(k, j)] + x[model.rod_point(k, j + 1)]);
+      const Eigen::Quaterniond q = so3::to_quaternion(R[model.rod_rotation(k, j)]);
+      out << r.frame << ',' << r.time << ',' << csv_field(rod.name) << ",edge," << j << ',' << p.x()
+          << ',' << p.y() << ',' << p.z() << ',' << q.w() << ',' << q.x() << ',' << q.y() << ','
+          << q.z() << '\n';
     }
   }
-}
 
-void write_frame_row(std::ostream& out, const Simulator& sim, const StepReport* report) {
-  const Vector3 L = sim.angular_momentum();
-  out << sim.frame() << ',' << sim.time() << ',';
+  const StepReport* report = r.report ? &*r.report : nullptr;
+  const Vector3& L = r.angular_momentum;
+  frames_ << r.frame << ',' << r.time << ',';
   if (report != nullptr) {
-    out << report->iterations << ',' << report->gradient_norm << ','
-        << (report->converged() ? 1 : 0) << ',';
+    frames_ << report->iterations << ',' << report->gradient_norm << ','
+            << (report->converged() ? 1 : 0) << ',';
   } else {
-    out << "0,0,1,";  // frame 0: the initial state, not a solve
+    frames_ << "0,0,1,";  // frame 0: the initial state, not a solve
   }
-  out << sim.kinetic_energy() << ',' << sim.potential_energy() << ',' << L.x() << ',' << L.y()
-      << ',' << L.z() << ',' << (report ? report->step_norm : 0.0) << ','
-      << (report ? report->regularized_iterations : 0) << ','
-      << (report ? to_string(report->status) : "initial") << ',' << sim.max_penetration() << ','
-      << (report ? report->constraint_violation : sim.constraint_violation()) << ','
-      << (report ? report->multiplier_updates : 0) << ',' << sim.contact_pairs() << ',';
-  if (sim.has_rod_contact()) out << sim.min_rod_separation();  // empty without
-  out << '\n';
+  frames_ << r.kinetic_energy << ',' << r.potential_energy << ',' << L.x() << ',' << L.y() << ','
+          << L.z() << ',' << (report ? report->step_norm : 0.0) << ','
+          << (report ? report->regularized_iterations : 0) << ','
+          << (report ? to_string(report->status) : "initial") << ',' << r.max_penetration << ','
+          << r.constraint_violation << ',' << (report ? report->multiplier_updates : 0) << ','
+          << r.contact_pairs << ',';
+  if (r.min_rod_separation) frames_ << *r.min_rod_separation;  // empty without
+  frames_ << '\n';
 }
-
-}  // namespace
 
 SimulationSummary simulate_into(const Scene& scene, OutputFolder* out, std::ostream* progress,
                                 const FrameObserver& observer) {
   using Clock = std::chrono::steady_clock;
-  std::ostream* trajectory = out ? &out->add("trajectory.csv") : nullptr;
-  std::ostream* frames = out ? &out->add("frames.csv") : nullptr;
-  if (out) {
-    *trajectory << "frame,time,object,kind,index,x,y,z,qw,qx,qy,qz\n";
-    *frames << "frame,time,newton_iterations,gradient_norm,converged,kinetic_energy,"
-               "potential_energy,angular_momentum_x,angular_momentum_y,angular_momentum_z,"
-               "step_norm,regularized_iterations,status,max_penetration,constraint_violation,"
-               "multiplier_updates,contact_pairs,min_rod_separation\n";
-  }
+  std::optional<RunFiles> files;
+  if (out) files.emplace(*out);
+  FrameRecord frame_record;
   const auto record = [&](const Simulator& sim, const StepReport* report) {
-    if (out) {
-      write_trajectory_rows(*trajectory, sim);
-      write_frame_row(*frames, sim, report);
-    }
-    if (observer) observer(sim, report);
+    if (!files && !observer) return;
+    frame_record.capture(sim, report);
+    if (files) files->add(scene.model, frame_record);
+    if (observer) observer(frame_record);
   };
 
   Simulator sim(scene.model, scene.solver);

@@ -5,6 +5,7 @@
 #include <filesystem>
 #include <functional>
 #include <iosfwd>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -33,10 +34,41 @@ struct SimulationSummary {
   std::string failure;          // message when failed
 };
 
-// Called with the simulator at frame 0 (report null) and after every step that updated the
-// state (its report): what a caller collects of a run besides the files (the Python module's
-// arrays).
-using FrameObserver = std::function<void(const Simulator&, const StepReport*)>;
+// One frame of a run as trajectory.csv and frames.csv show it: the state, and what the step
+// that reached it did (none at frame 0, the initial state).
+struct FrameRecord {
+  int frame = 0;
+  double time = 0.0;
+  State state;
+  std::optional<StepReport> report;
+  double kinetic_energy = 0.0, potential_energy = 0.0;
+  Vector3 angular_momentum = Vector3::Zero();  // about the world origin
+  double max_penetration = 0.0;
+  double constraint_violation = 0.0;  // the step's, or the state's at frame 0
+  int contact_pairs = 0;
+  std::optional<double> min_rod_separation;  // only where rods can touch
+
+  // Fills this record from the simulator's current frame (reusing its storage).
+  void capture(const Simulator& sim, const StepReport* step_report);
+};
+
+// trajectory.csv and frames.csv of one run, added to an OutputFolder's current unit with their
+// header lines; then a row (or a block of rows) per frame. The one writer of both files, for
+// `liedyn simulate`, `optimize`'s final run and Python's Trajectory.to_csv.
+class RunFiles {
+ public:
+  explicit RunFiles(OutputFolder& out);
+  // Every body's row, then every rod's node rows and edge rows (the model names them).
+  void add(const Model& model, const FrameRecord& record);
+
+ private:
+  std::ostream& trajectory_;
+  std::ostream& frames_;
+};
+
+// Called with the record of frame 0 and of every step that updated the state: what a caller
+// collects of a run besides the files (the Python module's arrays).
+using FrameObserver = std::function<void(const FrameRecord&)>;
 
 // Simulates the scene, adding trajectory.csv and frames.csv to `out`'s current unit (the
 // caller commits it, with whatever else belongs to the run; null: no files). Progress goes to

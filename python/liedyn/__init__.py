@@ -30,6 +30,7 @@ from ._liedyn import (  # noqa: F401  (re-exported)
     Simulator,
     StepReport,
     _compare,
+    _Recording,
     _simulate,
     _sweep,
 )
@@ -75,6 +76,7 @@ class Trajectory:
     iterations: np.ndarray
     converged: np.ndarray
     status: list
+    _recording: Optional[_Recording] = None  # what to_csv writes (simulate's runs only)
 
     @property
     def frames(self) -> int:
@@ -86,10 +88,20 @@ class Trajectory:
         """Steps whose solve stopped short of the tolerance (their state was still updated)."""
         return int(np.count_nonzero(~self.converged))
 
+    def to_csv(self, out: Union[str, PathLike]) -> None:
+        """Writes trajectory.csv and frames.csv into the folder `out` (created if missing), as
+        one unit and exactly as `liedyn simulate` writes them (the same writer). Only
+        simulate's trajectories have every column: a DifferentiableProblem's trajectory
+        raises ValueError."""
+        if self._recording is None:
+            raise ValueError("to_csv: this trajectory records positions and rotations only (a "
+                             "DifferentiableProblem's run); use liedyn.simulate for the files")
+        self._recording.write_csv(self.scene, str(out))
+
 
 def _trajectory(scene: Scene, arrays: dict) -> Trajectory:
-    fields = {k: arrays[k] for k in Trajectory.__dataclass_fields__ if k != "scene"}
-    return Trajectory(scene=scene, **fields)
+    fields = {k: arrays[k] for k in Trajectory.__dataclass_fields__ if k not in ("scene", "_recording")}
+    return Trajectory(scene=scene, _recording=arrays["recording"], **fields)
 
 
 def simulate(scene: Scene, frames: Optional[int] = None,

@@ -147,28 +147,64 @@ py::array_t<double> vectors(int count, const auto& value_of) {
   return owned_array(std::move(data), {count, 3});
 }
 
-// What _simulate collects per frame, turned into arrays once the run is over.
+// A run's frames as _simulate recorded them: the arrays of a Trajectory are built from them,
+// and Trajectory.to_csv writes them through the command line's own writer.
 struct Recording {
-  std::vector<double> time, positions, quaternions, kinetic, potential, gradient_norm, step_norm,
-      penetration;
-  std::vector<int> iterations;
-  std::vector<bool> converged;
-  std::vector<std::string> status;
-  int frames = 0;
+  std::vector<FrameRecord> frames;
 
-  void observe(const Simulator& sim, const StepReport* report) {
-    ++frames;
-    time.push_back(sim.time());
-    append_points(sim.state(), positions);
-    append_quaternions(sim.state(), quaternions);
-    kinetic.push_back(sim.kinetic_energy());
-    potential.push_back(sim.potential_energy());
-    penetration.push_back(sim.max_penetration());
-    iterations.push_back(report ? report->iterations : 0);
-    gradient_norm.push_back(report ? report->gradient_norm : 0.0);
-    step_norm.push_back(report ? report->step_norm : 0.0);
-    converged.push_back(report ? report->converged() : true);
-    status.push_back(report ? to_string(report->status) : "initial");
+  py::dict arrays() const {
+    const py::ssize_t f = static_cast<py::ssize_t>(frames.size());
+    const py::ssize_t n = f > 0 ? static_cast<py::ssize_t>(frames[0].state.points.size()) : 0;
+    const py::ssize_t r = f > 0 ? static_cast<py::ssize_t>(frames[0].state.rotations.size()) : 0;
+    std::vector<double> time, positions, quaternions, kinetic, potential, gradient_norm, step_norm,
+        penetration;
+    py::array_t<int> iterations(f);
+    py::array_t<bool> converged(f);
+    py::list status;
+    for (py::ssize_t k = 0; k < f; ++k) {
+      const FrameRecord& record = frames[k];
+      const StepReport* report = record.report ? &*record.report : nullptr;
+      time.push_back(record.time);
+      append_points(record.state, positions);
+      append_quaternions(record.state, quaternions);
+      kinetic.push_back(record.kinetic_energy);
+      potential.push_back(record.potential_energy);
+      penetration.push_back(record.max_penetration);
+      gradient_norm.push_back(report ? report->gradient_norm : 0.0);
+      step_norm.push_back(report ? report->step_norm : 0.0);
+      iterations.mutable_at(k) = report ? report->iterations : 0;
+      converged.mutable_at(k) = report ? report->converged() : true;
+      status.append(report ? to_string(report->status) : "initial");
+    }
+    py::dict d;
+    d["time"] = owned_array(std::move(time), {f});
+    d["positions"] = owned_array(std::move(positions), {f, n, 3});
+    d["quaternions"] = owned_array(std::move(quaternions), {f, r, 4});
+    d["kinetic_energy"] = owned_array(std::move(kinetic), {f});
+    d["potential_energy"] = owned_array(std::move(potential), {f});
+    d["max_penetration"] = owned_array(std::move(penetration), {f});
+    d["gradient_norm"] = owned_array(std::move(gradient_norm), {f});
+    d["step_norm"] = owned_array(std::move(step_norm), {f});
+    d["iterations"] = iterations;
+    d["converged"] = converged;
+    d["status"] = status;
+    return d;
+  }
+
+  // trajectory.csv and frames.csv in `out`, one unit (as `liedyn simulate` writes them).
+  void write_csv(const SceneHandle& scene, const std::filesystem::path& out) const {
+    const Model& model = scene.scene.model;
+    for (const FrameRecord& record : frames) {
+      const auto rods = static_cast<int>(model.rods.size());
+      if (static_cast<int>(record.state.points.size()) != model.point_count() ||
+          static_cast<int>(record.state.rotations.size()) != model.rod_rotation(rods, 0)) {
+        throw py::value_error("to_csv: the trajectory's states do not fit the scene " + scene.scene.source);
+      }
+    }
+    OutputFolder folder(out, "python Trajectory.to_csv " + scene.scene.source, nullptr);
+    RunFiles files(folder);
+    for (const FrameRecord& record : frames) files.add(model, record);
+    folder.commit();
   }
 };
 
@@ -365,15 +401,20 @@ edges (rod_points / rod_rotations give a rod's rows). One Simulator per thread.)
             return h;
           }));
 
+  py::class_<Recording, std::shared_ptr<Recording>>(m, "_Recording",
+                                                     "A run's frames as recorded (Trajectory.to_csv).")
+      .def("write_csv", &Recording::write_csv, py::arg("scene"), py::arg("out"),
+           py::call_guard<py::gil_scoped_release>());
+
   m.def(
       "_simulate",
       [](const SceneHandle& scene, std::optional<std::filesystem::path> out) {
-        Recording recording;
+        auto recording = std::make_shared<Recording>();
         SimulationSummary summary;
         {
           py::gil_scoped_release release;
-          const FrameObserver observe = [&](const Simulator& sim, const StepReport* report) {
-            recording.observe(sim, report);
+          const FrameObserver observe = [&](const FrameRecord& record) {
+            recording->frames.push_back(record);
           };
           if (out) {
             OutputFolder folder(*out, "python simulate " + scene.scene.source, nullptr);
@@ -383,32 +424,17 @@ edges (rod_points / rod_rotations give a rod's rows). One Simulator per thread.)
             summary = simulate_into(scene.scene, nullptr, nullptr, observe);
           }
         }
-        const py::ssize_t f = recording.frames;
-        const py::ssize_t n = f > 0 ? static_cast<py::ssize_t>(recording.positions.size()) / (3 * f) : 0;
-        const py::ssize_t r = f > 0 ? static_cast<py::ssize_t>(recording.quaternions.size()) / (4 * f) : 0;
-        py::dict d;
-        d["time"] = owned_array(std::move(recording.time), {f});
-        d["positions"] = owned_array(std::move(recording.positions), {f, n, 3});
-        d["quaternions"] = owned_array(std::move(recording.quaternions), {f, r, 4});
-        d["kinetic_energy"] = owned_array(std::move(recording.kinetic), {f});
-        d["potential_energy"] = owned_array(std::move(recording.potential), {f});
-        d["max_penetration"] = owned_array(std::move(recording.penetration), {f});
-        d["gradient_norm"] = owned_array(std::move(recording.gradient_norm), {f});
-        d["step_norm"] = owned_array(std::move(recording.step_norm), {f});
-        d["iterations"] = py::array_t<int>(f, recording.iterations.data());
-        py::array_t<bool> converged(f);
-        for (py::ssize_t i = 0; i < f; ++i) converged.mutable_at(i) = recording.converged[i];
-        d["converged"] = converged;
-        d["status"] = recording.status;
+        py::dict d = recording->arrays();
+        d["recording"] = recording;
         d["failure"] = summary.failed ? py::object(py::str(summary.failure)) : py::object(py::none());
         d["failed_frame"] = summary.failed ? summary.frames_completed + 1 : -1;
         d["solve_seconds"] = summary.solve_seconds;
         return d;
       },
       py::arg("scene"), py::arg("out") = py::none(),
-      "The command line's run (problems/run.hpp) with every frame recorded as arrays; with "
-      "`out`, trajectory.csv and frames.csv written there as one unit, as `liedyn simulate` "
-      "writes them. Use liedyn.simulate.");
+      "The command line's run (problems/run.hpp) with every frame recorded (arrays, and the "
+      "recording for Trajectory.to_csv); with `out`, trajectory.csv and frames.csv written "
+      "there as one unit, as `liedyn simulate` writes them. Use liedyn.simulate.");
 }
 
 }  // namespace liedyn::python

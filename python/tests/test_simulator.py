@@ -94,8 +94,10 @@ def test_simulate_matches_the_command_line_to_the_last_digit(scenes, cli, tmp_pa
         result = cli("simulate", scenes / name, "--set", f"frames={frames}", "--out",
                      tmp_path / "cli", "--quiet")
         assert result.returncode == 0, result.stderr
+        run.to_csv(tmp_path / "to_csv")
         for file in ["trajectory.csv", "frames.csv"]:
             assert (tmp_path / "py" / file).read_text() == (tmp_path / "cli" / file).read_text()
+            assert (tmp_path / "to_csv" / file).read_text() == (tmp_path / "cli" / file).read_text()
         rows = read_csv(tmp_path / "cli" / "trajectory.csv")
         # Parsed back (17 significant digits: exact) against the arrays.
         sim = liedyn.Simulator(scene)
@@ -118,6 +120,31 @@ def test_simulate_matches_the_command_line_to_the_last_digit(scenes, cli, tmp_pa
         sim.run()
         np.testing.assert_array_equal(sim.positions(), run.positions[-1])
         np.testing.assert_array_equal(sim.quaternions(), run.quaternions[-1])
+
+
+def test_to_csv_writes_every_column_of_a_contact_run_and_refuses_a_problem_run(scenes, cli, tmp_path):
+    # Rods that touch each other: frames.csv's min_rod_separation column is filled.
+    name = "contact/rod_coil.json"
+    scene = liedyn.Scene.from_file(scenes / name).with_settings({"frames": 20})
+    liedyn.simulate(scene).to_csv(tmp_path / "py")
+    result = cli("simulate", scenes / name, "--set", "frames=20", "--out", tmp_path / "cli", "--quiet")
+    assert result.returncode == 0, result.stderr
+    frames_csv = read_csv(tmp_path / "cli" / "frames.csv")
+    assert frames_csv[-1]["min_rod_separation"] != ""
+    for file in ["trajectory.csv", "frames.csv", "run.json"]:
+        assert (tmp_path / "py" / file).exists()
+    for file in ["trajectory.csv", "frames.csv"]:
+        assert (tmp_path / "py" / file).read_text() == (tmp_path / "cli" / file).read_text()
+    # A second to_csv replaces the unit (no stale temporaries left beside it).
+    liedyn.simulate(scene.with_settings({"frames": 5})).to_csv(tmp_path / "py")
+    assert len(read_csv(tmp_path / "py" / "frames.csv")) == 6
+    assert not [p for p in (tmp_path / "py").iterdir() if p.name.startswith(".")]
+
+    problem = liedyn.DifferentiableProblem(
+        liedyn.Scene.from_file(scenes / "optimization" / "die_throw.json"))
+    with pytest.raises(ValueError, match="DifferentiableProblem"):
+        problem.trajectory(problem.gamma0).to_csv(tmp_path / "problem")
+    assert not (tmp_path / "problem").exists()
 
 
 def test_trajectory_columns(bolt):
