@@ -14,10 +14,7 @@ if [ "${1:-}" = "--sanitize" ]; then
   # test_rod_validation.cpp), which is most of this phase in CI; -g1 keeps the line tables
   # that sanitizer reports print.
   options=(-DCMAKE_BUILD_TYPE=RelWithDebInfo "-DCMAKE_CXX_FLAGS_RELWITHDEBINFO=-O1 -g1 -DNDEBUG"
-           -DLIEDYN_SANITIZE=ON -DLIEDYN_BUILD_BENCHMARKS=OFF
-           # The Python module is tested in the Release build: an instrumented module needs
-           # the sanitizer runtime preloaded into an uninstrumented interpreter.
-           -DLIEDYN_PYTHON=OFF)
+           -DLIEDYN_SANITIZE=ON -DLIEDYN_BUILD_BENCHMARKS=OFF)
   export ASAN_OPTIONS=detect_leaks=1:abort_on_error=1
   export UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1
   export LSAN_OPTIONS="suppressions=$root/tests/lsan.supp:print_suppressions=0"
