@@ -31,6 +31,7 @@
 #include <CLI/CLI.hpp>
 #include <algorithm>
 #include <iostream>
+#include <memory>
 #include <optional>
 #include <string_view>
 
@@ -39,11 +40,13 @@
 #include "compare.hpp"
 #include "optimization.hpp"
 #include "output.hpp"
+#include "parallel.hpp"
+#include "process_group.hpp"
 #include "memory_budget.hpp"
 #include "scene_settings.hpp"
 #include "run.hpp"
 #include "scene_checks.hpp"
-#include "sweep.hpp"
+#include "sweep_command.hpp"
 
 #include <unistd.h>
 
@@ -72,43 +75,6 @@ void print_warnings(const liedyn::Scene& scene) {
   for (const std::string& w : liedyn::scene_warnings(scene)) {
     std::cerr << "liedyn: warning: " << scene.source << ": " << w << "\n";
   }
-}
-
-// `liedyn sweep`: the axes from --set, --rotations and --backends, the runs, the outputs.
-int run_sweep_command(const std::string& scene_file, const std::vector<std::string>& set_texts,
-                      const std::vector<std::string>& backend_names,
-                      const std::vector<std::string>& rotation_names, const std::string& out_dir,
-                      bool quiet, liedyn::SweepOptions options) {
-  std::vector<liedyn::Backend> backends;
-  std::vector<liedyn::RotationParameterization> rotations;
-  if (!parse_names(backend_names, liedyn::parse_backend, "--backends", "back-end",
-                   "newton, ceres or ipopt", backends) ||
-      !parse_names(rotation_names, liedyn::parse_rotation, "--rotations", "parameterisation",
-                   "lie, rotvec or quat", rotations)) {
-    return 2;
-  }
-  try {
-    for (const std::string& text : set_texts) options.axes.push_back(liedyn::parse_sweep_axis(text));
-  } catch (const std::invalid_argument& e) {
-    std::cerr << "liedyn: " << e.what() << "\n";
-    return 2;
-  }
-  if (!backend_names.empty()) options.axes.push_back({"solver.backend", backend_names});
-  if (!rotation_names.empty()) options.axes.push_back({"solver.rotation", rotation_names});
-  options.progress = quiet ? nullptr : &std::cerr;
-  options.progress_bar = ::isatty(STDERR_FILENO) != 0;
-  std::optional<liedyn::OutputFolder> folder;
-  options.before_runs = [&] { folder.emplace(out_dir, "sweep " + scene_file, &std::cerr); };
-  const liedyn::SweepResult result =
-      liedyn::run_sweep(liedyn::read_scene_file(scene_file), scene_file, options);
-  liedyn::write_sweep(result, *folder);
-  std::cout << liedyn::format_sweep(result);
-  std::cout << "outputs: " << out_dir << "/sweep.csv and the *_vs_time.png plots\n";
-  const bool failed = std::any_of(result.runs.begin(), result.runs.end(),
-                                  [](const liedyn::SweepRun& r) { return r.failed; }) ||
-                      std::any_of(result.references.begin(), result.references.end(),
-                                  [](const liedyn::SweepRun& r) { return r.failed; });
-  return failed ? 4 : 0;
 }
 
 }  // namespace
@@ -214,16 +180,31 @@ int main(int argc, char** argv) {
   optimize->add_option("--max-iterations", optimize_iterations, "Overrides the scene's")
       ->check(CLI::PositiveNumber);
   optimize->add_flag("--resume", optimize_options.resume,
-                     "Continue from DIR/checkpoint.json, appending to DIR/history.csv");
+                     "Continue from DIR/checkpoint.json (multi-start: keep its finished starts)");
+  optimize_options.jobs = liedyn::default_jobs();
+  optimize->add_option("--starts", optimize_options.starts,
+                       "Optimise from K points: the scene's, then K−1 drawn (uniform within "
+                       "bounds, else the scene's value + spread·N(0,1)); keeps the best")
+      ->check(CLI::Range(1, 1000000));
+  optimize->add_option("--seed", optimize_options.seed, "Seed of the drawn starts")
+      ->capture_default_str();
+  optimize->add_option("--spread", optimize_options.spread,
+                       "σ of the drawn starts of unbounded parameters")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
+  optimize->add_option("-j,--jobs", optimize_options.jobs,
+                       "Starts at once (threads; default: the machine's cores)")
+      ->check(CLI::Range(1, 1024));
 
-  std::vector<std::string> set_texts;
-  liedyn::SweepOptions sweep_options;
+  liedyn::SweepCommand sweep_command;
+  liedyn::SweepOptions& sweep_options = sweep_command.options;
+  sweep_options.jobs = liedyn::default_jobs();
   CLI::App* sweep = app.add_subcommand(
       "sweep",
       "Run a scene over a grid of settings, each run measured for cost and for accuracy "
       "(against the scene's analytic solution or a finer reference run)");
   sweep->add_option("scene", scene_file, "Scene file (JSON)")->required();
-  sweep->add_option("--set", set_texts,
+  sweep->add_option("--set", sweep_command.set_texts,
                     "An axis of the grid: PATH=V1,V2,… (dotted path into the scene, e.g. "
                     "time_step=0.02,0.01 or solver.tolerance=1e-4,1e-8); repeatable");
   sweep
@@ -246,6 +227,22 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(1, 1000))
       ->capture_default_str();
   sweep->add_flag("--quiet", quiet, "No progress on stderr");
+  sweep->add_option("-j,--jobs", sweep_options.jobs,
+                    "Runs at once (threads; default: the machine's cores). Timings meant for "
+                    "comparison: -j 1 (the CSV's parallel_runs says how many ran at once)")
+      ->check(CLI::Range(1, 1024));
+  sweep->add_option("--shard", sweep_command.shard,
+                    "I/N: run every N-th grid point from I into OUT/shard-I-of-N (N alone: I "
+                    "from $SLURM_ARRAY_TASK_ID); join the shards with sweep-merge");
+  sweep->add_flag("--resume", sweep_command.resume,
+                  "Keep the runs of OUT/checkpoint.json and run the rest");
+
+  std::vector<std::string> merge_dirs;
+  CLI::App* sweep_merge = app.add_subcommand(
+      "sweep-merge", "Join the shards of a sweep (--shard) into the outputs of one sweep");
+  sweep_merge->add_option("shards", merge_dirs, "Shard folders (each with its sweep.json)")
+      ->required();
+  sweep_merge->add_option("--out", out_dir, "Output directory")->required();
 
   std::vector<std::string> settings;
   for (CLI::App* command : {simulate, bench, compare, gradcheck, optimize}) {
@@ -261,6 +258,15 @@ int main(int argc, char** argv) {
   }
 
   liedyn::install_output_signal_handlers();
+  // The ranks of an MPI job (mpirun -np P liedyn sweep|optimize …), else this process alone.
+  std::unique_ptr<liedyn::ProcessGroup> mpi;
+  try {
+    mpi = liedyn::start_process_group(argc, argv);
+  } catch (const std::exception& e) {
+    std::cerr << "liedyn: " << e.what() << "\n";
+    return 2;
+  }
+  liedyn::ProcessGroup& group = mpi ? *mpi : liedyn::single_process();
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -300,12 +306,28 @@ int main(int argc, char** argv) {
         return 2;
       }
     }
+    if (sweep_merge->parsed()) {
+      std::vector<std::filesystem::path> dirs(merge_dirs.begin(), merge_dirs.end());
+      return liedyn::run_sweep_merge(dirs, out_dir, std::cout);
+    }
     if (sweep->parsed()) {
+      std::vector<liedyn::Backend> backends;
+      std::vector<liedyn::RotationParameterization> rotations;
+      if (!parse_names(backend_names, liedyn::parse_backend, "--backends", "back-end",
+                       "newton, ceres or ipopt", backends) ||
+          !parse_names(rotation_names, liedyn::parse_rotation, "--rotations", "parameterisation",
+                       "lie, rotvec or quat", rotations)) {
+        return 2;
+      }
       const liedyn::Scene base = liedyn::load_scene(scene_file);
-      print_warnings(base);
+      if (group.rank() == 0) print_warnings(base);
       liedyn::admit_memory(base, base.optimization ? 1 : 0, memory_limit);
-      return run_sweep_command(scene_file, set_texts, backend_names, rotation_names, out_dir,
-                               quiet, sweep_options);
+      sweep_command.scene_file = scene_file;
+      sweep_command.backend_names = backend_names;
+      sweep_command.rotation_names = rotation_names;
+      sweep_command.out = out_dir;
+      sweep_command.quiet = quiet;
+      return liedyn::run_sweep_command(sweep_command, group, std::cout);
     }
     liedyn::Scene scene = liedyn::load_scene(scene_file, settings);
     scene.solver.ipopt.output_file = ipopt_log;
@@ -323,6 +345,7 @@ int main(int argc, char** argv) {
     }
     if (optimize->parsed()) {
       optimize_options.out = out_dir;
+      optimize_options.group = &group;
       if (::isatty(STDERR_FILENO) != 0) optimize_options.progress = &std::cerr;
       if (optimize_iterations > 0) optimize_options.max_iterations = optimize_iterations;
       return liedyn::run_optimize(scene, optimize_options, std::cout);
@@ -379,11 +402,16 @@ int main(int argc, char** argv) {
       return 3;
     }
     return 0;
+  } catch (const liedyn::RootFailed&) {
+    return 1;  // rank 0 says why
   } catch (const liedyn::SceneError& e) {
-    std::cerr << "liedyn: " << e.what() << "\n";
+    // Bad input: every rank read the same and fails alike; rank 0 says it.
+    if (group.rank() == 0) std::cerr << "liedyn: " << e.what() << "\n";
     return 2;
   } catch (const std::exception& e) {
-    std::cerr << "liedyn: " << e.what() << "\n";
+    std::cerr << "liedyn: " << (group.size() > 1 ? "rank " + std::to_string(group.rank()) + ": " : "")
+              << e.what() << "\n";
+    group.abort(1);  // the other ranks may be waiting for this one
     return 1;
   }
 }

@@ -16,7 +16,9 @@
 #include "../lib/so3.hpp"
 #include "json_reader.hpp"
 #include "letters.hpp"
+#include "multistart.hpp"
 #include "output.hpp"
+#include "process_group.hpp"
 #include "run.hpp"
 
 namespace liedyn {
@@ -454,18 +456,8 @@ struct Checkpoint {
   double best_loss = INFINITY;
   double loss_scale = 0.0;
   double seconds = 0.0;  // wall time of earlier runs
-  json problem;          // what the checkpoint belongs to (problem_of)
+  json problem;          // what the checkpoint belongs to (problem_identity)
 };
-
-// The identity of an optimisation problem: the scene's content (Scene::identity) and the
-// optimiser settings that shape its path. max_iterations is left out: continuing a run for
-// longer is the same problem.
-json problem_of(const Scene& scene, const OptimizerOptions& optimizer) {
-  return {{"scene", scene.identity},
-          {"optimizer", to_string(optimizer.optimizer)},
-          {"lbfgs_memory", optimizer.lbfgs_memory},
-          {"target_normalized_loss", optimizer.target_normalized_loss}};
-}
 
 void write_history(std::ostream& f, const std::vector<HistoryRow>& rows) {
   f << std::setprecision(17) << "iteration,loss,normalized_loss,gradient_norm,seconds\n";
@@ -514,17 +506,7 @@ Checkpoint read_checkpoint(const std::filesystem::path& file, const json& proble
                        "(written by an older liedyn?); start without --resume");
     }
     c.problem = j.at("problem");
-    for (const auto& [key, value] : problem.items()) {
-      if (!c.problem.contains(key) || c.problem[key] != value) {
-        throw SceneError(source, "problem." + key,
-                         "is " + (c.problem.contains(key) ? c.problem[key].dump() : "missing") +
-                             ", this run's " + value.dump() +
-                             ": the checkpoint belongs to another problem (" +
-                             (key == "scene" ? "the scene's content differs"
-                                             : "the optimiser settings differ") +
-                             ")");
-      }
-    }
+    check_problem_identity(c.problem, problem, source);
     const std::vector<double> best = j.at("best").get<std::vector<double>>();
     if (static_cast<int>(best.size()) != size) {
       throw SceneError(source, "best",
@@ -551,6 +533,49 @@ Checkpoint read_checkpoint(const std::filesystem::path& file, const json& proble
 
 }  // namespace
 
+json problem_identity(const Scene& scene, const OptimizerOptions& optimizer) {
+  return {{"scene", scene.identity},
+          {"optimizer", to_string(optimizer.optimizer)},
+          {"lbfgs_memory", optimizer.lbfgs_memory},
+          {"target_normalized_loss", optimizer.target_normalized_loss}};
+}
+
+void check_problem_identity(const json& stored, const json& expected, const std::string& source) {
+  for (const auto& [key, value] : expected.items()) {
+    if (!stored.contains(key) || stored[key] != value) {
+      throw SceneError(source, "problem." + key,
+                       "is " + (stored.contains(key) ? stored[key].dump() : "missing") +
+                           ", this run's " + value.dump() +
+                           ": the checkpoint belongs to another problem (" +
+                           (key == "scene" ? "the scene's content differs"
+                                           : "the optimiser or start settings differ") +
+                           ")");
+    }
+  }
+}
+
+OptimizerOptions resolve_optimizer(const Scene& scene, const OptimizeOptions& options) {
+  OptimizerOptions optimizer = scene.optimization->optimizer;
+  if (options.optimizer) optimizer.optimizer = *options.optimizer;
+  if (options.max_iterations) optimizer.max_iterations = *options.max_iterations;
+  optimizer.validate();
+  return optimizer;
+}
+
+void write_best_run(OutputFolder& folder, const Scene& scene, const DifferentiableSimulation& sim,
+                    const Eigen::VectorXd& best) {
+  std::ostream& p = folder.add("parameters.csv");
+  p << std::setprecision(17) << "parameter,value\n";
+  for (int i = 0; i < best.size(); ++i) {
+    p << csv_field(sim.parameters().describe(scene.model, i)) << ',' << best(i) << '\n';
+  }
+  Scene optimized = scene;
+  optimized.model = sim.parameters().apply(scene.model, best);
+  optimized.optimization.reset();
+  simulate_into(optimized, &folder, nullptr);
+  folder.commit();
+}
+
 Bounds optimizer_bounds(const Scene& scene, const DifferentiableSimulation& sim,
                         Optimizer optimizer, const std::string& field) {
   if (!sim.parameters().bounded()) return {};
@@ -574,11 +599,11 @@ ObjectiveFunction objective_of(const DifferentiableSimulation& sim) {
 }
 
 int run_optimize(const Scene& scene, const OptimizeOptions& options, std::ostream& out) {
+  if (options.starts > 1 || (options.group != nullptr && options.group->size() > 1)) {
+    return run_multistart(scene, options, out);
+  }
   const DifferentiableSimulation sim = make_differentiable_simulation(scene);
-  OptimizerOptions optimizer = scene.optimization->optimizer;
-  if (options.optimizer) optimizer.optimizer = *options.optimizer;
-  if (options.max_iterations) optimizer.max_iterations = *options.max_iterations;
-  optimizer.validate();
+  OptimizerOptions optimizer = resolve_optimizer(scene, options);
   // Bad input, before anything is written.
   const Bounds bounds = optimizer_bounds(scene, sim, optimizer.optimizer,
                                          options.optimizer ? "--optimizer" : "optimization.optimizer");
@@ -588,7 +613,7 @@ int run_optimize(const Scene& scene, const OptimizeOptions& options, std::ostrea
   // checkpoint cannot change under us.
   OutputFolder folder(options.out, "optimize " + scene.source, &std::cerr);
   Checkpoint checkpoint;
-  checkpoint.problem = problem_of(scene, optimizer);
+  checkpoint.problem = problem_identity(scene, optimizer);
   Eigen::VectorXd start = sim.initial_parameters();
   if (options.resume) {
     // A missing, foreign or edited checkpoint is bad input (exit 2).
@@ -665,16 +690,7 @@ int run_optimize(const Scene& scene, const OptimizeOptions& options, std::ostrea
   const Eigen::VectorXd& best =
       checkpoint.best.size() == start.size() ? checkpoint.best : result.best_x;
   // The best γ and its trajectory, replaced together.
-  std::ostream& p = folder.add("parameters.csv");
-  p << std::setprecision(17) << "parameter,value\n";
-  for (int i = 0; i < best.size(); ++i) {
-    p << csv_field(sim.parameters().describe(scene.model, i)) << ',' << best(i) << '\n';
-  }
-  Scene optimized = scene;
-  optimized.model = sim.parameters().apply(scene.model, best);
-  optimized.optimization.reset();
-  simulate_into(optimized, &folder, nullptr);
-  folder.commit();
+  write_best_run(folder, scene, sim, best);
 
   out << "optimizer " << to_string(optimizer.optimizer) << ": " << result.status
       << (result.message.empty() ? "" : " (" + result.message + ")") << '\n'

@@ -5,6 +5,7 @@
 #include <filesystem>
 #include <iosfwd>
 #include <nlohmann/json_fwd.hpp>
+#include <cstdint>
 #include <optional>
 #include <string>
 
@@ -44,13 +45,36 @@ Bounds optimizer_bounds(const Scene& scene, const DifferentiableSimulation& sim,
 int run_gradcheck(const Scene& scene, const GradientCheckOptions& options, bool verbose,
                   std::ostream& out, const std::filesystem::path& parameters_file = {});
 
+class ProcessGroup;
+class OutputFolder;
+
 struct OptimizeOptions {
   std::filesystem::path out;              // output directory (created)
   std::optional<Optimizer> optimizer;     // overrides the scene's
   std::optional<int> max_iterations;      // overrides the scene's
   bool resume = false;                    // continue from out/checkpoint.json
   std::ostream* progress = nullptr;       // evaluation, loss, best, elapsed (a terminal)
+  // Multi-start (problems/multistart.hpp): starts > 1 optimisations from drawn points.
+  int starts = 1;
+  std::uint64_t seed = 1;                 // of the drawn starts
+  double spread = 0.1;                    // σ of the starts of unbounded parameters
+  int jobs = 1;                           // starts at once (threads)
+  ProcessGroup* group = nullptr;          // MPI ranks sharing the starts (null: alone)
 };
+
+// The identity of an optimisation problem, which checkpoints name: the scene's content
+// (Scene::identity) and the optimiser settings that shape its path. max_iterations is left
+// out: continuing a run for longer is the same problem.
+nlohmann::json problem_identity(const Scene& scene, const OptimizerOptions& optimizer);
+// SceneError naming `source` and the first field of `expected` that `stored` lacks or differs in.
+void check_problem_identity(const nlohmann::json& stored, const nlohmann::json& expected,
+                            const std::string& source);
+// The scene's optimiser settings with the command line's overrides, validated.
+OptimizerOptions resolve_optimizer(const Scene& scene, const OptimizeOptions& options);
+// One unit of `folder`: parameters.csv (name,value of `best`) with trajectory.csv and
+// frames.csv of its forward simulation; committed.
+void write_best_run(OutputFolder& folder, const Scene& scene, const DifferentiableSimulation& sim,
+                    const Eigen::VectorXd& best);
 
 // `liedyn optimize`: minimises the scene's objective. The output folder is locked for the
 // run (output_folder.hpp); after every evaluation one unit replaces
@@ -64,7 +88,8 @@ struct OptimizeOptions {
 // loss re-evaluated at its best point, is refused (SceneError: exit 2); otherwise the
 // optimisation restarts from the checkpoint's best parameters (the L-BFGS memory is not
 // kept) and appends to its history. Returns 0 when the target was reached, 3 when it stopped
-// otherwise (iterations, round-off, back-end convergence), 4 on failure.
+// otherwise (iterations, round-off, back-end convergence), 4 on failure. With starts > 1 (or
+// under mpirun): run_multistart (problems/multistart.hpp).
 int run_optimize(const Scene& scene, const OptimizeOptions& options, std::ostream& out);
 
 }  // namespace liedyn

@@ -4,6 +4,9 @@
 #include <chrono>
 #include <cmath>
 #include <iomanip>
+#include <map>
+#include <mutex>
+#include <optional>
 #include <nlohmann/json.hpp>
 #include <ostream>
 #include <sstream>
@@ -13,6 +16,7 @@
 #include "analytic.hpp"
 #include "bench.hpp"
 #include "optimization.hpp"
+#include "parallel.hpp"
 #include "output.hpp"
 #include "plot.hpp"
 #include "scene_settings.hpp"
@@ -243,11 +247,12 @@ void gradient_error(const Scene& scene, const ReferenceGradient& reference, Swee
   }
 }
 
-// A progress bar on a terminal, else one line per finished task.
+// A progress bar on a terminal, else one line per finished task; callable from any thread.
 class Progress {
  public:
   Progress(std::ostream* out, bool bar, int total) : out_(out), bar_(bar), total_(total) {}
   void start(const std::string& what) {
+    const std::lock_guard<std::mutex> lock(mutex_);
     if (out_ == nullptr || !bar_) return;
     const int width = 30;
     const int filled = total_ > 0 ? width * done_ / total_ : width;
@@ -255,6 +260,7 @@ class Progress {
           << "/" << total_ << " " << what << "\033[K" << std::flush;
   }
   void finish(const std::string& what, double seconds) {
+    const std::lock_guard<std::mutex> lock(mutex_);
     ++done_;
     if (out_ == nullptr) return;
     if (bar_) {
@@ -266,6 +272,7 @@ class Progress {
   }
 
  private:
+  std::mutex mutex_;
   std::ostream* out_;
   bool bar_;
   int total_, done_ = 0;
@@ -352,9 +359,12 @@ SweepAxis parse_sweep_axis(const std::string& text) {
 
 SweepResult run_sweep(const std::string& scene_text, const std::string& source,
                       const SweepOptions& options) {
-  if (options.reference_refinement < 1 || options.gradient_sample < 0 || options.repeats < 1) {
+  if (options.reference_refinement < 1 || options.gradient_sample < 0 || options.repeats < 1 ||
+      options.jobs < 1 || options.share.count < 1 || options.share.index < 0 ||
+      options.share.index >= options.share.count || options.other_processes < 0) {
     throw std::invalid_argument(
-        "sweep: reference_refinement ≥ 1, gradient_sample ≥ 0 and repeats ≥ 1");
+        "sweep: reference_refinement ≥ 1, gradient_sample ≥ 0, repeats ≥ 1, jobs ≥ 1, "
+        "0 ≤ share index < share count, other_processes ≥ 0");
   }
   const Scene base_scene = parse_scene(scene_text, source);  // its errors name the file itself
   const json base = json::parse(scene_text);
@@ -459,13 +469,84 @@ SweepResult run_sweep(const std::string& scene_text, const std::string& source,
         ", a swept tolerance / 100, Newton with lie); the finest runs' errors read low");
   }
 
+  result.grid_size = static_cast<int>(grid.size());
+  result.share = options.share;
+  nlohmann::ordered_json identity = {{"scene", base_scene.identity},
+                                     {"axes", nlohmann::ordered_json::array()},
+                                     {"reference_refinement", options.reference_refinement},
+                                     {"gradient_sample", options.gradient_sample},
+                                     {"repeats", options.repeats}};
+  for (const SweepAxis& axis : options.axes) {
+    identity["axes"].push_back({{"path", axis.path}, {"values", axis.values}});
+  }
+  result.identity = identity.dump();
+
+  // What a checkpoint holds is kept (sweep.hpp).
+  std::map<int, SweepRun> kept_runs, kept_references;
+  if (options.resume != nullptr) {
+    const SweepResult& done = *options.resume;
+    if (done.identity != result.identity) {
+      throw SceneError(options.resume_source, "identity",
+                       "belongs to another sweep (scene content, axes or options differ): "
+                       "start without --resume, or with the sweep's own command");
+    }
+    for (const SweepRun& r : done.runs) kept_runs[r.index] = r;
+    for (const SweepRun& r : done.references) kept_references[r.index] = r;
+  }
+
+  // This process's grid points, the ones left to run, and the references they need.
   const bool simulate_references = !analytic;
-  const int tasks = static_cast<int>(grid.size()) +
-                    (simulate_references || optimization ? static_cast<int>(references.size()) : 0);
-  Progress progress(options.progress, options.progress_bar, tasks);
+  const bool compute_references = simulate_references || optimization;
+  std::vector<int> mine, runs_left, references_left;
+  std::vector<bool> group_in_share(references.size(), false), group_needed(references.size(), false);
+  for (std::size_t i = 0; i < grid.size(); ++i) {
+    if (static_cast<int>(i) % options.share.count != options.share.index) continue;
+    mine.push_back(static_cast<int>(i));
+    group_in_share[reference_of[i]] = true;
+    if (kept_runs.count(static_cast<int>(i)) == 0) {
+      runs_left.push_back(static_cast<int>(i));
+      group_needed[reference_of[i]] = true;
+    }
+  }
+  for (std::size_t r = 0; r < references.size() && compute_references; ++r) {
+    if (group_in_share[r] && (group_needed[r] || kept_references.count(static_cast<int>(r)) == 0)) {
+      references_left.push_back(static_cast<int>(r));
+    }
+  }
+
+  // Finished rows by index; the result so far is built from them in index order.
+  std::map<int, SweepRun> finished_runs = kept_runs, finished_references;
+  for (std::size_t r = 0; r < references.size(); ++r) {
+    const auto kept = kept_references.find(static_cast<int>(r));
+    if (group_in_share[r] && kept != kept_references.end() &&
+        std::find(references_left.begin(), references_left.end(), int(r)) == references_left.end()) {
+      finished_references.insert(*kept);
+    }
+  }
+  std::mutex finished_mutex;
+  const auto so_far = [&] {
+    SweepResult partial = result;
+    for (const auto& [index, run] : finished_references) partial.references.push_back(run);
+    for (const auto& [index, run] : finished_runs) {
+      if (std::binary_search(mine.begin(), mine.end(), index)) partial.runs.push_back(run);
+    }
+    return partial;
+  };
+  const auto finished = [&](std::map<int, SweepRun>& rows, SweepRun row) {
+    const std::lock_guard<std::mutex> lock(finished_mutex);
+    rows[row.index] = std::move(row);
+    if (options.on_finished) options.on_finished(so_far());
+  };
+
+  Progress progress(options.progress, options.progress_bar,
+                    static_cast<int>(references_left.size() + runs_left.size()));
   using Clock = std::chrono::steady_clock;
-  for (Reference& ref : references) {
-    if (!simulate_references && !optimization) break;
+  const auto sharing = [&](std::size_t tasks) {
+    return std::min(options.jobs, static_cast<int>(tasks)) + options.other_processes;
+  };
+  parallel_for(static_cast<int>(references_left.size()), options.jobs, [&](int t) {
+    const int r = references_left[t];
+    Reference& ref = references[r];
     const auto start = Clock::now();
     const std::string what = "reference " + ref.scene.label;
     progress.start(what);
@@ -473,25 +554,30 @@ SweepResult run_sweep(const std::string& scene_text, const std::string& source,
     if (optimization) ref.gradient = reference_gradient(ref.scene.scene, options.gradient_sample);
     progress.finish(what, std::chrono::duration<double>(Clock::now() - start).count());
     SweepRun summary;
+    summary.index = r;
     summary.settings = {ref.scene.label};
     summary.reference = "(reference)";
+    summary.parallel_runs = sharing(references_left.size());
     fill_cost(ref.scene.scene, ref.recording, summary);
     if (!ref.gradient.failure.empty()) {
       summary.failed = true;
       summary.failure += std::string(summary.failure.empty() ? "" : "; ") +
                          "reference gradient: " + ref.gradient.failure;
     }
-    result.references.push_back(summary);
-  }
+    finished(finished_references, std::move(summary));
+  });
 
-  for (std::size_t i = 0; i < grid.size(); ++i) {
+  parallel_for(static_cast<int>(runs_left.size()), options.jobs, [&](int t) {
+    const int i = runs_left[t];
     const GridScene& g = grid[i];
     const Reference& ref = references[reference_of[i]];
     const auto start = Clock::now();
     const std::string what = describe(result.axis_names, g.settings);
     progress.start(what);
     SweepRun run;
+    run.index = i;
     run.settings = g.settings;
+    run.parallel_runs = sharing(runs_left.size());
     const Recording r = record(g.scene, options.repeats);
     fill_cost(g.scene, r, run);
     // Errors over the frames the run completed: none (NaN) when its first step failed.
@@ -504,9 +590,9 @@ SweepResult run_sweep(const std::string& scene_text, const std::string& source,
     }
     if (optimization) gradient_error(g.scene, ref.gradient, run);
     progress.finish(what, std::chrono::duration<double>(Clock::now() - start).count());
-    result.runs.push_back(std::move(run));
-  }
-  return result;
+    finished(finished_runs, std::move(run));
+  });
+  return so_far();
 }
 
 namespace {
@@ -551,11 +637,190 @@ std::vector<bool> on_front(const SweepResult& result, double SweepRun::*metric) 
 
 }  // namespace
 
+namespace {
+
+using ordered_json = nlohmann::ordered_json;
+
+// NaN (a metric not defined) as null: JSON has no NaN.
+ordered_json number_or_null(double x) { return std::isnan(x) ? ordered_json(nullptr) : ordered_json(x); }
+
+ordered_json run_to_json(const SweepRun& r) {
+  return {{"index", r.index},
+          {"settings", r.settings},
+          {"frames", r.frames},
+          {"frames_completed", r.frames_completed},
+          {"wall_seconds", number_or_null(r.wall_seconds)},
+          {"parallel_runs", r.parallel_runs},
+          {"newton_iterations", r.newton_iterations},
+          {"factorizations", r.factorizations},
+          {"unconverged_steps", r.unconverged_steps},
+          {"position_error", number_or_null(r.position_error)},
+          {"orientation_error", number_or_null(r.orientation_error)},
+          {"energy_drift", number_or_null(r.energy_drift)},
+          {"momentum_drift", number_or_null(r.momentum_drift)},
+          {"gradient_error", number_or_null(r.gradient_error)},
+          {"gradient_seconds", number_or_null(r.gradient_seconds)},
+          {"reference", r.reference},
+          {"failed", r.failed},
+          {"failure", r.failure}};
+}
+
+// Reads fields of one JSON object, naming `where`.field in its errors.
+class FieldReader {
+ public:
+  FieldReader(const ordered_json& object, std::string source, std::string where)
+      : object_(object), source_(std::move(source)), where_(std::move(where)) {
+    if (!object_.is_object()) throw SceneError(source_, where_, "must be an object");
+  }
+  const ordered_json& at(const char* key) const {
+    const auto it = object_.find(key);
+    if (it == object_.end()) throw SceneError(source_, field(key), "is missing");
+    return *it;
+  }
+  template <typename T>
+  T get(const char* key) const {
+    try {
+      return at(key).get<T>();
+    } catch (const nlohmann::json::exception&) {
+      throw SceneError(source_, field(key), "has the wrong type");
+    }
+  }
+  double number(const char* key) const {  // null: NaN
+    const ordered_json& v = at(key);
+    if (v.is_null()) return SweepRun::kNaN;
+    if (!v.is_number()) throw SceneError(source_, field(key), "must be a number or null");
+    return v.get<double>();
+  }
+  std::string field(const char* key) const { return where_.empty() ? key : where_ + "." + key; }
+
+ private:
+  const ordered_json& object_;
+  std::string source_, where_;
+};
+
+SweepRun run_from_json(const ordered_json& value, const std::string& source, const std::string& where) {
+  const FieldReader f(value, source, where);
+  SweepRun r;
+  r.index = f.get<int>("index");
+  r.settings = f.get<std::vector<std::string>>("settings");
+  r.frames = f.get<int>("frames");
+  r.frames_completed = f.get<int>("frames_completed");
+  r.wall_seconds = f.number("wall_seconds");
+  r.parallel_runs = f.get<int>("parallel_runs");
+  r.newton_iterations = f.get<long>("newton_iterations");
+  r.factorizations = f.get<long>("factorizations");
+  r.unconverged_steps = f.get<int>("unconverged_steps");
+  r.position_error = f.number("position_error");
+  r.orientation_error = f.number("orientation_error");
+  r.energy_drift = f.number("energy_drift");
+  r.momentum_drift = f.number("momentum_drift");
+  r.gradient_error = f.number("gradient_error");
+  r.gradient_seconds = f.number("gradient_seconds");
+  r.reference = f.get<std::string>("reference");
+  r.failed = f.get<bool>("failed");
+  r.failure = f.get<std::string>("failure");
+  if (r.index < 0) throw SceneError(source, f.field("index"), "must be ≥ 0");
+  return r;
+}
+
+constexpr const char* kSweepFormat = "liedyn sweep 1";
+
+}  // namespace
+
+ordered_json sweep_to_json(const SweepResult& result) {
+  ordered_json j = {{"format", kSweepFormat},
+                    {"scene", result.scene},
+                    {"identity", ordered_json::parse(result.identity)},
+                    {"grid_size", result.grid_size},
+                    {"share", {{"index", result.share.index}, {"count", result.share.count}}},
+                    {"axis_names", result.axis_names},
+                    {"notes", result.notes},
+                    {"references", ordered_json::array()},
+                    {"runs", ordered_json::array()}};
+  for (const SweepRun& r : result.references) j["references"].push_back(run_to_json(r));
+  for (const SweepRun& r : result.runs) j["runs"].push_back(run_to_json(r));
+  return j;
+}
+
+SweepResult sweep_from_json(const ordered_json& value, const std::string& source) {
+  const FieldReader f(value, source, "");
+  if (f.get<std::string>("format") != kSweepFormat) {
+    throw SceneError(source, "format", std::string("is not \"") + kSweepFormat + "\"");
+  }
+  SweepResult result;
+  result.scene = f.get<std::string>("scene");
+  result.identity = f.at("identity").dump();
+  result.grid_size = f.get<int>("grid_size");
+  const FieldReader share(f.at("share"), source, "share");
+  result.share = {share.get<int>("index"), share.get<int>("count")};
+  if (result.share.count < 1 || result.share.index < 0 || result.share.index >= result.share.count) {
+    throw SceneError(source, "share", "must have 0 ≤ index < count");
+  }
+  result.axis_names = f.get<std::vector<std::string>>("axis_names");
+  result.notes = f.get<std::vector<std::string>>("notes");
+  for (const char* key : {"references", "runs"}) {
+    const ordered_json& rows = f.at(key);
+    if (!rows.is_array()) throw SceneError(source, key, "must be an array");
+    std::vector<SweepRun>& out = std::string(key) == "runs" ? result.runs : result.references;
+    for (std::size_t i = 0; i < rows.size(); ++i) {
+      out.push_back(run_from_json(rows[i], source, std::string(key) + "[" + std::to_string(i) + "]"));
+      if (std::string(key) == "runs" &&
+          (out.back().index >= result.grid_size ||
+           out.back().settings.size() != result.axis_names.size())) {
+        throw SceneError(source, std::string(key) + "[" + std::to_string(i) + "]",
+                         "is not a grid point of this sweep (index or settings)");
+      }
+    }
+  }
+  return result;
+}
+
+SweepResult merge_sweeps(const std::vector<SweepResult>& parts, const std::vector<std::string>& sources,
+                         bool complete) {
+  if (parts.empty()) throw std::invalid_argument("merge_sweeps: no parts");
+  const SweepResult& first = parts.front();
+  std::vector<int> shares(first.share.count, 0);
+  SweepResult merged = first;
+  merged.share = {};
+  merged.runs.clear();
+  merged.references.clear();
+  std::map<int, SweepRun> runs, references;
+  for (std::size_t p = 0; p < parts.size(); ++p) {
+    const SweepResult& part = parts[p];
+    const std::string& source = sources.at(p);
+    if (part.identity != first.identity || part.grid_size != first.grid_size) {
+      throw SceneError(source, "identity", "is another sweep's than " + sources.front() + "'s");
+    }
+    if (part.share.count != first.share.count) {
+      throw SceneError(source, "share", "has count " + std::to_string(part.share.count) + ", " +
+                                            sources.front() + " " + std::to_string(first.share.count));
+    }
+    if (shares[part.share.index]++ > 0) {
+      throw SceneError(source, "share", "index " + std::to_string(part.share.index) + " is given twice");
+    }
+    for (const SweepRun& r : part.runs) {
+      if (r.index % part.share.count != part.share.index || !runs.emplace(r.index, r).second) {
+        throw SceneError(source, "runs", "grid point " + std::to_string(r.index) + " is not this share's");
+      }
+    }
+    for (const SweepRun& r : part.references) references.emplace(r.index, r);
+  }
+  for (int i = 0; i < first.share.count && complete; ++i) {
+    if (shares[i] == 0) {
+      throw SceneError(sources.front(), "share",
+                       "share " + std::to_string(i) + " of " + std::to_string(first.share.count) + " is missing");
+    }
+  }
+  for (const auto& [index, run] : references) merged.references.push_back(run);
+  for (const auto& [index, run] : runs) merged.runs.push_back(run);
+  return merged;
+}
+
 std::string sweep_csv(const SweepResult& result) {
   std::ostringstream os;
   for (const std::string& name : result.axis_names) os << csv_field(name) << ",";
-  os << "frames_requested,frames_completed,wall_seconds,newton_iterations,factorizations,"
-        "unconverged_steps";
+  os << "frames_requested,frames_completed,wall_seconds,parallel_runs,newton_iterations,"
+        "factorizations,unconverged_steps";
   for (const Metric& m : kMetrics) os << "," << m.key;
   os << ",gradient_seconds,pareto,failed,reference,failure\n";
   const std::vector<bool> front = on_front(result, primary_metric(result).value);
@@ -563,7 +828,7 @@ std::string sweep_csv(const SweepResult& result) {
     const SweepRun& r = result.runs[i];
     for (const std::string& v : r.settings) os << csv_field(v) << ",";
     os << r.frames << "," << r.frames_completed << "," << format_number(r.wall_seconds, 9) << ","
-       << r.newton_iterations << "," << r.factorizations << "," << r.unconverged_steps;
+       << r.parallel_runs << "," << r.newton_iterations << "," << r.factorizations << "," << r.unconverged_steps;
     for (const Metric& m : kMetrics) os << "," << format_number(r.*m.value, 9);
     os << "," << format_number(r.gradient_seconds, 9) << "," << (front[i] ? 1 : 0) << ","
        << (r.failed ? 1 : 0) << "," << csv_field(r.reference) << "," << csv_field(r.failure)
@@ -638,6 +903,7 @@ std::string format_sweep(const SweepResult& result) {
 
 void write_sweep(const SweepResult& result, OutputFolder& out) {
   out.add("sweep.csv") << sweep_csv(result);
+  out.add("sweep.json") << sweep_to_json(result).dump(1) << "\n";
   for (const Metric& m : kMetrics) {
     if (std::none_of(result.runs.begin(), result.runs.end(),
                      [&](const SweepRun& r) { return std::isfinite(r.*m.value) && r.*m.value > 0.0; })) {

@@ -48,13 +48,25 @@
 //                      NaN when the run's parameter count differs from the reference's.
 // A run whose step fails is kept, marked failed, with the errors of the frames it completed
 // (NaN when it completed none).
-
+//
+// Many runs at once (issue 23's `-j`, `--shard`, MPI, `--resume`). Grid points are numbered
+// in grid order (SweepRun::index). `jobs` threads run them (problems/parallel.hpp): first
+// the references, then the runs; the outputs are ordered by index, so they are those of a
+// serial run except for the timing columns (wall_seconds, gradient_seconds, and the pareto
+// marks that follow from them) and `parallel_runs`, the number of runs that shared the
+// machine — keep -j 1 for timings meant for comparison. A share {index, count} runs only
+// the grid points i with i mod count = index, and the references those need (a reference
+// needed by two shares is computed by each); merge_sweeps joins the shares' results into the
+// result of the whole grid. A resumed sweep keeps the runs and references its checkpoint
+// holds and runs the rest (a reference is recomputed when a run left still needs it).
 #include <filesystem>
 #include <functional>
 #include <iosfwd>
 #include <limits>
 #include <string>
 #include <vector>
+
+#include <nlohmann/json_fwd.hpp>
 
 #include "output_folder.hpp"
 #include "scene.hpp"
@@ -70,6 +82,15 @@ struct SweepAxis {
 // naming the text when the path or the values are missing.
 SweepAxis parse_sweep_axis(const std::string& text);
 
+struct SweepRun;
+struct SweepResult;
+
+// Which grid points a process runs: i mod count = index (a Slurm array task, an MPI rank).
+struct SweepShare {
+  int index = 0;
+  int count = 1;
+};
+
 struct SweepOptions {
   std::vector<SweepAxis> axes;
   int reference_refinement = 4;      // reference h = smallest h on the grid / this, ≥ 1
@@ -80,10 +101,22 @@ struct SweepOptions {
   std::function<void()> before_runs;
   std::ostream* progress = nullptr;  // progress reports, if set:
   bool progress_bar = false;         //   a bar redrawn in place (a terminal), else a line per run
+  int jobs = 1;                      // runs at once (threads), ≥ 1
+  SweepShare share;                  // the grid points to run (all by default)
+  // Another process's runs on the same machine (MPI ranks), for SweepRun::parallel_runs.
+  int other_processes = 0;
+  // A checkpoint of this sweep (same identity, else SceneError naming `resume_source` and
+  // the field): its runs of this share and the references they need are kept, not rerun.
+  const SweepResult* resume = nullptr;
+  std::string resume_source;
+  // Called after every finished reference and run with the result so far (runs in index
+  // order), one call at a time: checkpoints.
+  std::function<void(const SweepResult&)> on_finished;
 };
 
 struct SweepRun {
   static constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+  int index = 0;                      // grid point (references: their group, in grid order)
   std::vector<std::string> settings;  // one value per axis
   int frames = 0;                     // requested
   int frames_completed = 0;
@@ -96,12 +129,18 @@ struct SweepRun {
   double gradient_error = kNaN;
   double gradient_seconds = kNaN;  // the adjoint evaluation (forward + backward pass)
   std::string reference;           // "analytic free_body", or the reference run's settings
+  int parallel_runs = 1;           // runs sharing the machine while it ran (threads × processes)
   bool failed = false;
   std::string failure;
 };
 
 struct SweepResult {
   std::string scene;
+  // What makes two results parts of one sweep: the scene's content, the axes and the options
+  // that change the numbers (refinement, gradient sample, repeats), as compact JSON.
+  std::string identity;
+  int grid_size = 0;  // grid points of the whole sweep
+  SweepShare share;   // the points this result holds (merged: {0, 1})
   std::vector<std::string> axis_names;
   std::vector<SweepRun> runs;
   std::vector<SweepRun> references;  // the reference runs (settings: their overrides)
@@ -113,6 +152,18 @@ struct SweepResult {
 SweepResult run_sweep(const std::string& scene_text, const std::string& source,
                       const SweepOptions& options);
 
+// A result as JSON (sweep.json, the checkpoint; NaN as null, numbers to the last digit) and
+// back: sweep_from_json throws SceneError naming `source` and the field that is wrong.
+nlohmann::ordered_json sweep_to_json(const SweepResult& result);
+SweepResult sweep_from_json(const nlohmann::ordered_json& value, const std::string& source);
+
+// The shares of one sweep joined (`liedyn sweep-merge`): SceneError naming the part's source
+// when the parts are not one sweep's (other identity or share count) or a share is repeated,
+// or (`complete`) missing. References that several shares computed appear once. The result's
+// share is {0, 1}: it can resume any share.
+SweepResult merge_sweeps(const std::vector<SweepResult>& parts,
+                         const std::vector<std::string>& sources, bool complete = true);
+
 // One row per run: the axes, then the cost and accuracy fields above, `pareto` (1 if no other
 // run is both cheaper and more accurate, else 0), reference, failure. "More accurate" is in
 // the primary error: position_error, or orientation_error if no run has a positive position
@@ -120,7 +171,7 @@ SweepResult run_sweep(const std::string& scene_text, const std::string& source,
 std::string sweep_csv(const SweepResult& result);
 // A table for the terminal.
 std::string format_sweep(const SweepResult& result);
-// DIR/sweep.csv, and DIR/<metric>_vs_time.png for every metric with a positive finite value
+// DIR/sweep.csv, DIR/sweep.json (sweep_to_json: for sweep-merge), and DIR/<metric>_vs_time.png for every metric with a positive finite value
 // (the plots are log-log; a body spinning in place has no position error to show).
 // Added to `out`'s current unit and committed: they replace the folder's earlier sweep
 // outputs together.

@@ -10,6 +10,7 @@ packages=(
   libgtest-dev libgmock-dev libbenchmark-dev
   libfcl-dev
   pybind11-dev python3-dev python3-numpy python3-pytest python3-scipy python3-torch
+  libopenmpi-dev openmpi-bin
 )
 missing=()
 for p in "${packages[@]}"; do

@@ -1,4 +1,5 @@
 #include "ipopt_step.hpp"
+#include "ipopt_lock.hpp"
 #include "ipopt_status.hpp"
 
 #include <Eigen/Core>
@@ -669,6 +670,10 @@ bool usable(Ipopt::ApplicationReturnStatus status) {
 
 class IpoptStepSolver final : public StepSolver {
  public:
+  ~IpoptStepSolver() override {
+    const std::lock_guard<std::recursive_mutex> lock(ipopt_mutex());  // MUMPS's termination
+    app_ = nullptr;
+  }
   IpoptStepSolver(Component component, const SolverOptions& options)
       : StepSolver(options),
         options_(options),
@@ -754,8 +759,11 @@ class IpoptStepSolver final : public StepSolver {
       set_integer("max_iter", options_.max_iterations - report.iterations);
       const double evaluation_before = nlp_->evaluation_seconds();
       const auto t0 = options_.measure_time ? Clock::now() : Clock::time_point{};
-      const Ipopt::ApplicationReturnStatus status =
-          optimized_ ? app_->ReOptimizeTNLP(tnlp_) : app_->OptimizeTNLP(tnlp_);
+      Ipopt::ApplicationReturnStatus status;
+      {
+        const std::lock_guard<std::recursive_mutex> lock(ipopt_mutex());
+        status = optimized_ ? app_->ReOptimizeTNLP(tnlp_) : app_->OptimizeTNLP(tnlp_);
+      }
       optimized_ = true;
       if (options_.measure_time) {
         ipopt_seconds += seconds_since(t0) - (nlp_->evaluation_seconds() - evaluation_before);

@@ -1,4 +1,5 @@
 #include "optimizer.hpp"
+#include "ipopt_lock.hpp"
 #include "ipopt_status.hpp"
 
 #include <ceres/ceres.h>
@@ -489,6 +490,8 @@ class LbfgsNlp final : public Ipopt::TNLP {
 Outcome run_ipopt(Evaluator& evaluator, const Eigen::VectorXd& x0,
                   const OptimizerOptions& options, const Bounds& bounds) {
   Outcome out;
+  // The whole life of the application, evaluations included (ipopt_lock.hpp).
+  const std::lock_guard<std::recursive_mutex> lock(ipopt_mutex());
   try {
     Ipopt::SmartPtr<Ipopt::IpoptApplication> app = new Ipopt::IpoptApplication();
     Ipopt::OptionsList& o = *app->Options();

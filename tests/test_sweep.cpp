@@ -496,10 +496,11 @@ std::string field(const std::string& line, int column) {
 }
 
 constexpr const char* kColumns =
-    "frames_requested,frames_completed,wall_seconds,newton_iterations,factorizations,unconverged_steps,"
+    "frames_requested,frames_completed,wall_seconds,parallel_runs,newton_iterations,factorizations,"
+    "unconverged_steps,"
     "position_error,orientation_error,energy_drift,momentum_drift,gradient_error,"
     "gradient_seconds,pareto,failed,reference,failure";
-constexpr int kPareto = 13;  // its column with one axis
+constexpr int kPareto = 14;  // its column with one axis
 
 // On the front: no other run both faster and more accurate; identical points do not dominate
 // each other; a failed run never is (even the fastest and most accurate).
