@@ -15,12 +15,18 @@
 //                  within tolerance, 1 otherwise)
 //   liedyn sweep SCENE.json --set PATH=V1,V2,… [--set …] [--rotations …] [--backends …]
 //                  --out DIR [--refine N] [--gradient-sample N] [--repeat N] [--quiet]
+//                  [-j N] [--shard I/N] [--resume]
 //                  (every combination of the settings, each measured for cost and accuracy
 //                  against the scene's analytic solution or a finer reference run; writes
-//                  DIR/sweep.csv and DIR/*_vs_time.png; exit 4 if a run failed)
+//                  DIR/sweep.csv, sweep.json and DIR/*_vs_time.png; exit 4 if a run failed;
+//                  problems/sweep_command.hpp)
+//   liedyn sweep-merge SHARD_DIR… --out DIR   (the shards of --shard joined)
 //   liedyn optimize SCENE.json --out DIR [--optimizer nlopt-lbfgs|ceres-lbfgs|ipopt-lbfgs]
-//                  [--max-iterations N] [--resume]   (exit 0 target reached, 3 stopped
-//                  short of it, 4 failed)
+//                  [--max-iterations N] [--resume] [--starts K [--seed S] [--spread σ] [-j N]]
+//                  (exit 0 target reached, 3 stopped short of it, 4 failed;
+//                  multi-start: problems/multistart.hpp)
+// Under mpirun (liedyn built with MPI), sweep and optimize --starts share their runs among
+// the ranks; rank 0 writes the outputs (problems/process_group.hpp).
 // simulate, bench, compare, gradcheck and optimize take [--set PATH=VALUE …]: values over the
 // scene file's (problems/scene_settings.hpp), e.g. --set integrator=trapezoidal.
 // Exit status: 0 success; 2 bad input (scene or options), nothing written; 3 some steps ended
@@ -196,6 +202,7 @@ int main(int argc, char** argv) {
                        "Starts at once (threads; default: the machine's cores)")
       ->check(CLI::Range(1, 1024));
 
+  std::vector<std::string> set_texts;
   liedyn::SweepCommand sweep_command;
   liedyn::SweepOptions& sweep_options = sweep_command.options;
   sweep_options.jobs = liedyn::default_jobs();
@@ -204,7 +211,7 @@ int main(int argc, char** argv) {
       "Run a scene over a grid of settings, each run measured for cost and for accuracy "
       "(against the scene's analytic solution or a finer reference run)");
   sweep->add_option("scene", scene_file, "Scene file (JSON)")->required();
-  sweep->add_option("--set", sweep_command.set_texts,
+  sweep->add_option("--set", set_texts,
                     "An axis of the grid: PATH=V1,V2,… (dotted path into the scene, e.g. "
                     "time_step=0.02,0.01 or solver.tolerance=1e-4,1e-8); repeatable");
   sweep
@@ -319,12 +326,18 @@ int main(int argc, char** argv) {
                        "lie, rotvec or quat", rotations)) {
         return 2;
       }
+      try {
+        for (const std::string& text : set_texts) sweep_options.axes.push_back(liedyn::parse_sweep_axis(text));
+      } catch (const std::invalid_argument& e) {
+        if (group.rank() == 0) std::cerr << "liedyn: " << e.what() << "\n";
+        return 2;
+      }
+      if (!backend_names.empty()) sweep_options.axes.push_back({"solver.backend", backend_names});
+      if (!rotation_names.empty()) sweep_options.axes.push_back({"solver.rotation", rotation_names});
       const liedyn::Scene base = liedyn::load_scene(scene_file);
       if (group.rank() == 0) print_warnings(base);
       liedyn::admit_memory(base, base.optimization ? 1 : 0, memory_limit);
       sweep_command.scene_file = scene_file;
-      sweep_command.backend_names = backend_names;
-      sweep_command.rotation_names = rotation_names;
       sweep_command.out = out_dir;
       sweep_command.quiet = quiet;
       return liedyn::run_sweep_command(sweep_command, group, std::cout);

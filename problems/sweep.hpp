@@ -137,8 +137,9 @@ struct SweepRun {
 struct SweepResult {
   std::string scene;
   // What makes two results parts of one sweep: the scene's content, the axes and the options
-  // that change the numbers (refinement, gradient sample, repeats), as compact JSON.
-  std::string identity;
+  // that change the numbers (refinement, gradient sample, repeats), as compact JSON ("null":
+  // not a run_sweep result).
+  std::string identity = "null";
   int grid_size = 0;  // grid points of the whole sweep
   SweepShare share;   // the points this result holds (merged: {0, 1})
   std::vector<std::string> axis_names;

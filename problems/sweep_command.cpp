@@ -84,16 +84,6 @@ SweepShare parse_shard(const std::string& text, const char* slurm_array_task_id)
 
 int run_sweep_command(const SweepCommand& command, ProcessGroup& group, std::ostream& out) {
   SweepOptions options = command.options;
-  for (const std::string& text : command.set_texts) {
-    try {
-      options.axes.push_back(parse_sweep_axis(text));
-    } catch (const std::invalid_argument& e) {
-      throw SceneError("--set", text, e.what());
-    }
-  }
-  if (!command.backend_names.empty()) options.axes.push_back({"solver.backend", command.backend_names});
-  if (!command.rotation_names.empty()) options.axes.push_back({"solver.rotation", command.rotation_names});
-
   const bool root = group.rank() == 0;
   std::filesystem::path dir = command.out;
   if (!command.shard.empty()) {

@@ -23,14 +23,12 @@ namespace liedyn {
 
 struct SweepCommand {
   std::string scene_file;
-  std::vector<std::string> set_texts;                    // --set PATH=V1,V2,…
-  std::vector<std::string> backend_names, rotation_names;  // --backends, --rotations
   std::filesystem::path out;
   bool quiet = false;
   bool resume = false;
   // "I/N", or "N" with I from $SLURM_ARRAY_TASK_ID; empty: the whole grid.
   std::string shard;
-  SweepOptions options;  // refinement, gradient sample, repeats, jobs
+  SweepOptions options;  // the axes, refinement, gradient sample, repeats, jobs
 };
 
 // Parses `--shard` ("I/N" or "N"): SceneError naming --shard (or SLURM_ARRAY_TASK_ID) when

@@ -521,7 +521,7 @@ TEST(SweepCsv, OneRowPerRunWithTheParetoFront) {
     EXPECT_EQ(field(csv[i + 1], kPareto), expected[i]) << csv[i + 1];
     EXPECT_EQ(field(csv[i + 1], kPareto + 1), i == 4 ? "1" : "0") << csv[i + 1];
   }
-  EXPECT_EQ(csv[1], "a,10,10,1,0,0,0,0.1,nan,nan,nan,nan,nan,1,0,time_step=0.0025,");
+  EXPECT_EQ(csv[1], "a,10,10,1,1,0,0,0,0.1,nan,nan,nan,nan,nan,1,0,time_step=0.0025,");
 }
 
 // The front is over the position error, else the orientation error when no run has a

@@ -26,44 +26,89 @@ state_dir=$2
 
 ctld_port=${SLURMCTLD_PORT:-6817}
 slurmd_port=${SLURMD_PORT:-6818}
-timeout=${LOCAL_CLUSTER_TIMEOUT:-60}
+wait_secs=${LOCAL_CLUSTER_TIMEOUT:-60}
 
 log() { echo "[local_cluster] $*" >&2; }
 
-# True if the pid in pid file $1 is alive and its command name is $2. Checking the
-# name guards against killing an unrelated process that reused a stale pid.
-pid_alive() {
-    local pidfile=$1 name=$2 pid
-    [[ -s $pidfile ]] || return 1
-    pid=$(<"$pidfile")
-    [[ $pid =~ ^[0-9]+$ ]] || return 1
-    [[ "$(cat "/proc/$pid/comm" 2>/dev/null)" == "$name" ]]
+# True if process $1 is running and its command name is $2. Checking the name guards
+# against signalling an unrelated process that reused a stale pid. A zombie counts as
+# gone: in containers whose pid 1 does not reap orphans, exited daemons stay zombies.
+proc_is() {
+    local comm state
+    [[ $1 =~ ^[0-9]+$ ]] || return 1
+    comm=$(cat "/proc/$1/comm" 2>/dev/null) || return 1
+    [[ $comm == "$2" ]] || return 1
+    state=$(awk '/^State:/ {print $2}' "/proc/$1/status" 2>/dev/null) || return 1
+    [[ $state != Z ]]
 }
 
-# SIGTERM the process from pid file $1 (if it is really $2), wait for it, SIGKILL as a
-# last resort, and remove the pid file. A missing/stale pid file is not an error, which
-# is what makes `stop` idempotent.
+# True if the pid in pid file $1 is a live process named $2.
+pid_alive() {
+    [[ -s $1 ]] && proc_is "$(<"$1")" "$2"
+}
+
+# Wait up to 5 s for daemon $2 to write pid file $1: the daemons fork into the background
+# and the parent returns before the child has written it.
+wait_pidfile() {
+    local i
+    for ((i = 0; i < 50; i++)); do
+        pid_alive "$1" "$2" && return 0
+        sleep 0.1
+    done
+    log "$2 did not start (no live process in $1)"
+    return 1
+}
+
+# SIGTERM the process from pid file $1 (if it is really $2), wait until it is gone,
+# SIGKILL as a last resort, and remove the pid file. The pid is read once up front: the
+# Slurm daemons delete their own pid file early in shutdown, before they have exited.
+# A missing or stale pid file is not an error, which is what makes `stop` idempotent.
 stop_pidfile() {
     local pidfile=$1 name=$2 pid i
     if pid_alive "$pidfile" "$name"; then
         pid=$(<"$pidfile")
         log "stopping $name (pid $pid)"
         kill -TERM "$pid" 2>/dev/null || true
-        for ((i = 0; i < 100; i++)); do
-            pid_alive "$pidfile" "$name" || break
+        for ((i = 0; i < 150; i++)); do
+            proc_is "$pid" "$name" || break
             sleep 0.1
         done
-        if pid_alive "$pidfile" "$name"; then
-            log "$name did not exit after SIGTERM; sending SIGKILL"
+        if proc_is "$pid" "$name"; then
+            log "$name did not exit 15 s after SIGTERM; sending SIGKILL"
             kill -KILL "$pid" 2>/dev/null || true
+            for ((i = 0; i < 50; i++)); do
+                proc_is "$pid" "$name" || break
+                sleep 0.1
+            done
         fi
     fi
     rm -f "$pidfile"
 }
 
+# Cancel jobs still queued or running (e.g. a test that failed mid-way), so that stopping
+# slurmd does not leave their processes behind: slurmstepd and the job outlive slurmd.
+cancel_jobs() {
+    if ! pid_alive "$state_dir/slurmctld.pid" slurmctld ||
+        ! pid_alive "$state_dir/slurmd.pid" slurmd; then
+        return 0
+    fi
+    export SLURM_CONF=$state_dir/slurm.conf
+    [[ -n $(squeue -h -o %i 2>/dev/null) ]] || return 0
+    log "cancelling unfinished jobs"
+    scancel --partition=debug 2>/dev/null || true
+    local i
+    for ((i = 0; i < 100; i++)); do
+        [[ -z $(squeue -h -o %i 2>/dev/null) ]] && return 0
+        sleep 0.2
+    done
+    log "jobs still listed after 20 s:"
+    squeue >&2 || true
+}
+
 do_stop() {
     [[ -d $state_dir ]] || return 0
-    # slurmd first, so slurmctld does not spend time marking the node as unresponsive.
+    cancel_jobs
+    # Reverse of the start order: slurmd, then slurmctld, then munged, which both use.
     stop_pidfile "$state_dir/slurmd.pid" slurmd
     stop_pidfile "$state_dir/slurmctld.pid" slurmctld
     # This pid file only exists if *we* started munged (see start_munge); a munged that
@@ -111,18 +156,26 @@ start_munge() {
         return 0
     fi
     # /run is a tmpfs normally populated by systemd-tmpfiles or the init script; neither
-    # runs here, so create the socket/pid directory ourselves.
-    install -d -o munge -g munge -m 0755 /run/munge /var/lib/munge /var/log/munge
+    # runs here, so create the socket/pid directory ourselves. The package creates the
+    # other two; recreate them only if missing, so as not to change their permissions.
+    install -d -o munge -g munge -m 0755 /run/munge
+    local d
+    for d in /var/lib/munge /var/log/munge; do
+        [[ -d $d ]] || install -d -o munge -g munge -m 0700 "$d"
+    done
     # A socket left behind by a killed munged makes the new one refuse to start.
     rm -f /run/munge/munge.socket.2 /run/munge/munge.socket.2.lock
     log "starting munged"
     # Run as the unprivileged munge user, the supported mode (no --force needed).
-    # munged daemonizes itself and writes its pid file, which `stop` uses.
+    # munged daemonizes itself and writes its pid file; once it answers, we copy that
+    # into STATE_DIR, which is what marks it as ours for `stop`.
     runuser -u munge -- /usr/sbin/munged --pid-file=/run/munge/munged.pid
-    cp /run/munge/munged.pid "$state_dir/munged.pid"
     local i
     for ((i = 0; i < 50; i++)); do
-        munge_works && return 0
+        if munge_works; then
+            cp /run/munge/munged.pid "$state_dir/munged.pid"
+            return 0
+        fi
         sleep 0.1
     done
     log "munged does not answer; log follows"
@@ -172,6 +225,9 @@ MailProg=/bin/true
 # Allocate individual CPUs (not whole nodes) so array tasks run side by side.
 SelectType=select/cons_tres
 SelectTypeParameters=CR_CPU
+# Start jobs freed-up CPUs allow within ~1 s rather than after the default 3 s batching
+# delay: array tasks beyond the CPU count otherwise wait an extra scheduler pass.
+SchedulerParameters=batch_sched_delay=0
 
 # A node that was down (e.g. across stop/start) rejoins as soon as slurmd registers.
 ReturnToService=2
@@ -213,24 +269,31 @@ do_start() {
     # Both daemons daemonize and write the pid files named in slurm.conf. If one fails,
     # clean up whatever did start so a failed `start` leaves nothing running.
     log "starting slurmctld"
-    if ! slurmctld -f "$SLURM_CONF"; then
+    if ! slurmctld -f "$SLURM_CONF" || ! wait_pidfile "$state_dir/slurmctld.pid" slurmctld; then
         dump_logs; do_stop; exit 1
     fi
     log "starting slurmd"
-    if ! slurmd -f "$SLURM_CONF"; then
+    if ! slurmd -f "$SLURM_CONF" || ! wait_pidfile "$state_dir/slurmd.pid" slurmd; then
         dump_logs; do_stop; exit 1
     fi
 
     local node state="" i
     node=$(hostname -s)
-    for ((i = 0; i < timeout * 2; i++)); do
+    for ((i = 0; i < wait_secs * 2; i++)); do
+        # A daemon can die after daemonizing (e.g. port already in use): fail fast.
+        if ! pid_alive "$state_dir/slurmctld.pid" slurmctld ||
+            ! pid_alive "$state_dir/slurmd.pid" slurmd; then
+            state="a daemon exited"
+            break
+        fi
+        # "idle" (not "idle*", not "unknown") means slurmd has registered with slurmctld.
         state=$(sinfo -h -N -n "$node" -o '%T' 2>/dev/null || true)
         [[ $state == idle ]] && break
         sleep 0.5
     done
     if [[ $state != idle ]]; then
-        log "node $node not idle after ${timeout}s (state: '${state:-no answer}')"
-        sinfo -N -l >&2 || true
+        log "node $node did not become idle (state: '${state:-no answer}', timeout ${wait_secs}s)"
+        timeout 10 sinfo -N -l >&2 || true
         dump_logs
         do_stop
         exit 1
