@@ -13,6 +13,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <nlohmann/json.hpp>
 #include <sstream>
 #include <stdexcept>
 #include <string>
@@ -599,8 +600,9 @@ TEST_F(SweepFiles, WritesTheCsvAndAPlotPerFiniteMetric) {
   EXPECT_EQ(listing(out), (std::vector<std::string>{"energy_drift_vs_time.png",
                                                     "orientation_error_vs_time.png",
                                                     "position_error_vs_time.png", "run.json",
-                                                    "sweep.csv"}));
+                                                    "sweep.csv", "sweep.json"}));
   EXPECT_EQ(test::read_file(out / "sweep.csv"), sweep_csv(r));
+  EXPECT_EQ(test::read_file(out / "sweep.json"), sweep_to_json(r).dump(1) + "\n");
   EXPECT_EQ(test::read_file(out / "position_error_vs_time.png").substr(1, 3), "PNG");
 
   r.runs[0].gradient_error = 0.1;  // one finite value is enough for a plot
