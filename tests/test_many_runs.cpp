@@ -119,6 +119,18 @@ TEST(ManySweeps, ThreadsGiveTheSerialResults) {
   EXPECT_EQ(threads.references[0].parallel_runs, 1);  // one reference: it ran alone
 }
 
+// Ipopt's MUMPS is not re-entrant: its runs take turns (solvers/ipopt_lock.hpp) while the
+// others go on; results as in a serial sweep (and clean under the sanitizers).
+TEST(ManySweeps, IpoptRunsOnThreadsTakeTurns) {
+  SweepOptions o;
+  o.axes = {parse_sweep_axis("time_step=0.02,0.01"), parse_sweep_axis("solver.backend=ipopt,newton,ipopt")};
+  const SweepResult serial = run_sweep(kBolt, "bolt.json", o);
+  o.jobs = 3;
+  const SweepResult threads = run_sweep(kBolt, "bolt.json", o);
+  expect_same_sweep(serial, threads);
+  for (const SweepRun& r : threads.runs) EXPECT_FALSE(r.failed) << r.failure;
+}
+
 TEST(ManySweeps, SharesMergeIntoTheWholeSweepInAnyOrder) {
   const SweepResult serial = run_sweep(kBolt, "bolt.json", grid(1));
   std::vector<SweepResult> parts;

@@ -221,13 +221,15 @@ class SweepResult:
 
 
 def sweep(scene: Scene, axes: dict, reference_refinement: int = 4, gradient_sample: int = 8,
-          repeats: int = 1) -> SweepResult:
+          repeats: int = 1, jobs: int = 1) -> SweepResult:
     """`liedyn sweep` without files: the scene run at every point of the grid
     {path: [values]} (e.g. {"integrator": ["backward_euler", "bdf2"], "time_step": [0.01,
     0.005]}; strings as typed on the command line, other values as JSON), errors measured
     against a reference run at the smallest h / reference_refinement or a declared closed form
     (problems/sweep.hpp). One record per run, in the command line's order; its settings as the
-    command line prints them."""
+    command line prints them. jobs: runs at once on threads (`liedyn sweep -j`; the results
+    are the serial run's but for the timings, whose `parallel_runs` column says how many runs
+    shared the machine)."""
     columns, notes = _sweep(scene, dict(axes), int(reference_refinement), int(gradient_sample),
-                            int(repeats))
+                            int(repeats), int(jobs))
     return SweepResult(runs=_records(columns), notes=list(notes))

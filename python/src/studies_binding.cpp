@@ -78,7 +78,7 @@ void bind_studies(py::module_& m) {
   m.def(
       "_sweep",
       [](const SceneHandle& scene, const py::dict& axes, int reference_refinement,
-         int gradient_sample, int repeats) {
+         int gradient_sample, int repeats, int jobs) {
         SweepOptions options;
         for (const auto& [path, values] : axes) {
           SweepAxis axis;
@@ -89,6 +89,7 @@ void bind_studies(py::module_& m) {
         options.reference_refinement = reference_refinement;
         options.gradient_sample = gradient_sample;
         options.repeats = repeats;
+        options.jobs = jobs;
         SweepResult result;
         {
           py::gil_scoped_release release;
@@ -102,6 +103,7 @@ void bind_studies(py::module_& m) {
         d["frames"] = column(runs, [](const SweepRun& r) { return r.frames; });
         d["frames_completed"] = column(runs, [](const SweepRun& r) { return r.frames_completed; });
         d["wall_seconds"] = column(runs, [](const SweepRun& r) { return r.wall_seconds; });
+        d["parallel_runs"] = column(runs, [](const SweepRun& r) { return r.parallel_runs; });
         d["newton_iterations"] = column(runs, [](const SweepRun& r) { return r.newton_iterations; });
         d["factorizations"] = column(runs, [](const SweepRun& r) { return r.factorizations; });
         d["unconverged_steps"] = column(runs, [](const SweepRun& r) { return r.unconverged_steps; });
@@ -115,7 +117,7 @@ void bind_studies(py::module_& m) {
         return py::make_tuple(d, result.notes);
       },
       py::arg("scene"), py::arg("axes"), py::arg("reference_refinement"),
-      py::arg("gradient_sample"), py::arg("repeats"), "Use liedyn.sweep.");
+      py::arg("gradient_sample"), py::arg("repeats"), py::arg("jobs"), "Use liedyn.sweep.");
 }
 
 }  // namespace liedyn::python

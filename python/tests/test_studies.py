@@ -54,3 +54,9 @@ def test_sweep_runs_the_grid_as_the_command_line(scenes, cli, tmp_path):
                                [float(r["orientation_error"]) for r in csv_rows], rtol=1e-8)
     with pytest.raises(liedyn.SceneError):
         liedyn.sweep(scene, {"integrator": ["midpoint"]})
+    # On two threads: the same numbers, the timings aside.
+    threads = liedyn.sweep(scene, {"integrator": ["backward_euler", "bdf2"], "time_step": [0.02, 0.01]},
+                           jobs=2).runs
+    np.testing.assert_array_equal(threads.orientation_error, runs.orientation_error)
+    np.testing.assert_array_equal(threads.newton_iterations, runs.newton_iterations)
+    assert list(threads.parallel_runs) == [2] * 4 and list(runs.parallel_runs) == [1] * 4
