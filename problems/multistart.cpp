@@ -11,7 +11,6 @@
 #include <random>
 #include <sstream>
 
-#include "input_file.hpp"
 #include "output.hpp"
 #include "output_folder.hpp"
 #include "parallel.hpp"
@@ -158,26 +157,15 @@ int run_multistart(const Scene& scene, const OptimizeOptions& options, std::ostr
   const bool root = group.rank() == 0;
   const std::filesystem::path checkpoint_file = options.out / "checkpoint.json";
   std::optional<OutputFolder> folder;
-  std::exception_ptr error;
-  std::string checkpoint_text;
-  if (root) {
-    try {
-      if (options.resume && !std::filesystem::is_regular_file(checkpoint_file)) {
-        throw SceneError(checkpoint_file.string(), "", "cannot resume: no checkpoint (not a regular file)");
-      }
-      folder.emplace(options.out, "optimize --starts " + scene.source, &std::cerr);
-      if (options.resume) checkpoint_text = read_input_file(checkpoint_file, std::uintmax_t(1) << 30, "checkpoint");
-    } catch (...) {
-      error = std::current_exception();
-    }
-  }
-  share_root_outcome(group, error);
+  const std::string checkpoint_text =
+      open_output_on_root(group, folder, options.out, "optimize --starts " + scene.source,
+                          options.resume ? checkpoint_file : std::filesystem::path());
   std::map<int, StartResult> finished;
   if (options.resume) {
     const std::string source = checkpoint_file.string();
     json j;
     try {
-      j = json::parse(group.broadcast(checkpoint_text));
+      j = json::parse(checkpoint_text);
       check_problem_identity(j.at("problem"), problem, source);
     } catch (const json::exception& e) {
       throw SceneError(source, "", std::string("not a multi-start checkpoint (") + e.what() + ")");

@@ -9,10 +9,14 @@
 // it writes the outputs.
 
 #include <exception>
+#include <filesystem>
 #include <memory>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>
+
+#include "output_folder.hpp"
 
 namespace liedyn {
 
@@ -51,9 +55,13 @@ struct RootFailed : std::runtime_error {
   RootFailed() : std::runtime_error("rank 0 could not start") {}
 };
 
-// A collective after rank 0 tried to start (lock its folder, read a checkpoint): rethrows
-// rank 0's error there and throws RootFailed on the other ranks; returns if rank 0 started.
-void share_root_outcome(ProcessGroup& group, const std::exception_ptr& root_error);
+// The start of a shared run (a collective): rank 0 locks the output folder `dir` into
+// `folder` (output_folder.hpp) and, when `checkpoint` is not empty, reads it (SceneError
+// naming it when it is missing or unreadable); every rank gets the checkpoint's text (empty
+// without one). When rank 0 cannot start, it throws its error and the others RootFailed.
+std::string open_output_on_root(ProcessGroup& group, std::optional<OutputFolder>& folder,
+                                const std::filesystem::path& dir, const std::string& command,
+                                const std::filesystem::path& checkpoint);
 
 // The MPI ranks of this process when mpirun (or srun) started it and liedyn was built with
 // MPI (problems/mpi_group.cpp, part of the liedyn executable only); null when it runs alone.

@@ -18,21 +18,23 @@ namespace {
 
 using ordered_json = nlohmann::ordered_json;
 
-// A sweep.json or checkpoint.json (untrusted: SceneError naming the file).
-SweepResult read_sweep_json(const std::filesystem::path& file) {
-  std::string text;
-  try {
-    text = read_input_file(file, std::uintmax_t(1) << 30, "sweep result");
-  } catch (const InputFileError& e) {
-    throw SceneError(file.string(), "", e.what());
-  }
+// A sweep.json or checkpoint.json's text (untrusted: SceneError naming `source`).
+SweepResult read_sweep_json(const std::string& text, const std::string& source) {
   ordered_json value;
   try {
     value = ordered_json::parse(text);
   } catch (const nlohmann::json::exception& e) {
-    throw SceneError(file.string(), "", std::string("is not JSON (") + e.what() + ")");
+    throw SceneError(source, "", std::string("is not JSON (") + e.what() + ")");
   }
-  return sweep_from_json(value, file.string());
+  return sweep_from_json(value, source);
+}
+
+SweepResult read_sweep_file(const std::filesystem::path& file) {
+  try {
+    return read_sweep_json(read_input_file(file, std::uintmax_t(1) << 30, "sweep result"), file.string());
+  } catch (const InputFileError& e) {
+    throw SceneError(file.string(), "", e.what());
+  }
 }
 
 int exit_status(const SweepResult& result) {
@@ -110,25 +112,9 @@ int run_sweep_command(const SweepCommand& command, ProcessGroup& group, std::ost
     options.resume_source = checkpoint_file.string();
   }
   options.before_runs = [&] {
-    std::exception_ptr error;
-    std::string text;
-    if (root) {
-      try {
-        if (command.resume && !std::filesystem::exists(checkpoint_file)) {
-          throw SceneError(checkpoint_file.string(), "", "cannot resume: no checkpoint here");
-        }
-        folder.emplace(dir, "sweep " + command.scene_file, &std::cerr);
-        if (command.resume) {
-          text = sweep_to_json(read_sweep_json(checkpoint_file)).dump();
-        }
-      } catch (...) {
-        error = std::current_exception();
-      }
-    }
-    share_root_outcome(group, error);
-    if (command.resume) {
-      checkpoint = sweep_from_json(ordered_json::parse(group.broadcast(text)), checkpoint_file.string());
-    }
+    const std::string text = open_output_on_root(group, folder, dir, "sweep " + command.scene_file,
+                                                 command.resume ? checkpoint_file : std::filesystem::path());
+    if (command.resume) checkpoint = read_sweep_json(text, checkpoint_file.string());
   };
 
   // Every rank's latest result; rank 0 checkpoints the union of them.
@@ -190,7 +176,7 @@ int run_sweep_merge(const std::vector<std::filesystem::path>& dirs,
   std::vector<std::string> sources;
   for (const std::filesystem::path& dir : dirs) {
     sources.push_back((dir / "sweep.json").string());
-    parts.push_back(read_sweep_json(dir / "sweep.json"));
+    parts.push_back(read_sweep_file(dir / "sweep.json"));
   }
   if (parts.empty()) throw SceneError("sweep-merge", "", "no shard folders given");
   const SweepResult merged = merge_sweeps(parts, sources);

@@ -59,27 +59,30 @@ wait_pidfile() {
     return 1
 }
 
+# Wait up to $3 tenths of a second for process $1 (named $2) to be gone; false if it is not.
+wait_gone() {
+    local i
+    for ((i = 0; i < $3; i++)); do
+        proc_is "$1" "$2" || return 0
+        sleep 0.1
+    done
+    ! proc_is "$1" "$2"
+}
+
 # SIGTERM the process from pid file $1 (if it is really $2), wait until it is gone,
 # SIGKILL as a last resort, and remove the pid file. The pid is read once up front: the
 # Slurm daemons delete their own pid file early in shutdown, before they have exited.
 # A missing or stale pid file is not an error, which is what makes `stop` idempotent.
 stop_pidfile() {
-    local pidfile=$1 name=$2 pid i
+    local pidfile=$1 name=$2 pid
     if pid_alive "$pidfile" "$name"; then
         pid=$(<"$pidfile")
         log "stopping $name (pid $pid)"
         kill -TERM "$pid" 2>/dev/null || true
-        for ((i = 0; i < 150; i++)); do
-            proc_is "$pid" "$name" || break
-            sleep 0.1
-        done
-        if proc_is "$pid" "$name"; then
+        if ! wait_gone "$pid" "$name" 150; then
             log "$name did not exit 15 s after SIGTERM; sending SIGKILL"
             kill -KILL "$pid" 2>/dev/null || true
-            for ((i = 0; i < 50; i++)); do
-                proc_is "$pid" "$name" || break
-                sleep 0.1
-            done
+            wait_gone "$pid" "$name" 50 || true
         fi
     fi
     rm -f "$pidfile"

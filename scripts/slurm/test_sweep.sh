@@ -45,7 +45,7 @@ env_line=$("$cluster" start "$dir")  # assigned first: a failed start stops the 
 eval "$env_line"
 
 scene="$root/problems/scenes/butterfly_bolt.json"
-grid=(--set time_step=0.02,0.01,0.005 --set integrator=backward_euler,bdf2)
+grid=(--set "time_step=0.02,0.01,0.005" --set "integrator=backward_euler,bdf2")
 mkdir -p "$dir/out"
 cd "$dir/out"
 # Three array tasks over six grid points; --wait returns when all have ended (non-zero if
