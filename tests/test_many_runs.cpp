@@ -92,14 +92,19 @@ TEST(ParallelFor, RunsEveryTaskOnceOnAnyNumberOfThreads) {
 }
 
 TEST(ParallelFor, RethrowsTheFirstErrorAndStartsNoFurtherTask) {
+  // One thread: the tasks after the failing one never start.
   std::atomic<int> started{0};
-  EXPECT_THROW(parallel_for(1000, 2,
-                            [&](int i) {
-                              ++started;
-                              if (i == 3) throw std::runtime_error("task 3");
-                            }),
-               std::runtime_error);
-  EXPECT_LT(started, 1000);  // stopped early (each thread may finish the task it holds)
+  const auto fail_at_3 = [&](int i) {
+    ++started;
+    if (i == 3) throw std::runtime_error("task 3");
+  };
+  EXPECT_THROW(parallel_for(1000, 1, fail_at_3), std::runtime_error);
+  EXPECT_EQ(started, 4);
+  // Several: the error still reaches the caller once every thread has stopped (how many
+  // tasks the others took before they saw it depends on timing).
+  started = 0;
+  EXPECT_THROW(parallel_for(1000, 4, fail_at_3), std::runtime_error);
+  EXPECT_GE(started, 4);
 }
 
 // ---------------------------------------------------------------------------------------
@@ -487,7 +492,12 @@ class ManyRunsMpi : public ManyRunsCli {
   Result mpirun(std::vector<std::string> args) {
     const std::string launcher = std::string(LIEDYN_MPIEXEC) +
                                  "' '--allow-run-as-root' '--oversubscribe' '-np' '2' '" + LIEDYN_CLI;
-    std::string command = "cd '" + dir_.string() + "' && '" + launcher + "'";
+    // Under the sanitizers, leak checking is off for the ranks: Open MPI's runtime keeps
+    // allocations past MPI_Finalize in components it has unloaded by then, which LeakSanitizer
+    // reports from an "<unknown module>" that no suppression can name. liedyn's own leaks are
+    // checked by the same sweeps and starts run without mpirun (ManyRunsCli).
+    std::string command = "cd '" + dir_.string() + "' && ASAN_OPTIONS=\"${ASAN_OPTIONS:+$ASAN_OPTIONS:}detect_leaks=0\" '" +
+                          launcher + "'";
     for (const std::string& a : args) command += " '" + a + "'";
     command += " > out.txt 2> err.txt";
     Result r;
