@@ -1,5 +1,6 @@
 // liedyn — command-line driver.
 //   liedyn simulate SCENE.json --out DIR [--allow-unconverged] [--quiet] [--ipopt-log FILE]
+//                  [--every N]   (trajectory.csv every N-th frame and the last)
 //   liedyn bench SCENE.json [--repeat N] [--json]     (cost per Newton iteration; no files)
 //   liedyn compare SCENE.json [--backends newton,ceres,ipopt] [--rotations lie,rotvec,quat]
 //                  [--csv | --json] [--repeat N] [--frames-csv FILE] [--condition-every N]
@@ -21,6 +22,8 @@
 //                  DIR/sweep.csv, sweep.json and DIR/*_vs_time.png; exit 4 if a run failed;
 //                  problems/sweep_command.hpp)
 //   liedyn sweep-merge SHARD_DIR… --out DIR   (the shards of --shard joined)
+//   liedyn view RUN_DIR   (RUN_DIR/view.html: the run animated in one offline page;
+//                  problems/view.hpp)
 //   liedyn optimize SCENE.json --out DIR [--optimizer nlopt-lbfgs|ceres-lbfgs|ipopt-lbfgs]
 //                  [--max-iterations N] [--resume] [--starts K [--seed S] [--spread σ] [-j N]]
 //                  (exit 0 target reached, 3 stopped short of it, 4 failed;
@@ -53,6 +56,7 @@
 #include "run.hpp"
 #include "scene_checks.hpp"
 #include "sweep_command.hpp"
+#include "view.hpp"
 
 #include <unistd.h>
 
@@ -99,6 +103,10 @@ int main(int argc, char** argv) {
   simulate->add_flag("--quiet", quiet, "No progress on stderr");
   std::string ipopt_log;
   simulate->add_option("--ipopt-log", ipopt_log, "Ipopt's log file (the ipopt back-end only)");
+  int every = 1;
+  simulate->add_option("--every", every,
+                       "Write every N-th frame (and the last) to trajectory.csv; frames.csv keeps every frame")
+      ->check(CLI::Range(1, 1000000000));
 
   int repeats = 5;
   bool json = false;
@@ -244,6 +252,11 @@ int main(int argc, char** argv) {
   sweep->add_flag("--resume", sweep_command.resume,
                   "Keep the runs of OUT/checkpoint.json and run the rest");
 
+  std::string view_dir;
+  CLI::App* view = app.add_subcommand(
+      "view", "Write RUN_DIR/view.html: one offline page that animates a run (three.js)");
+  view->add_option("run_dir", view_dir, "A run's output folder (liedyn simulate --out)")->required();
+
   std::vector<std::string> merge_dirs;
   CLI::App* sweep_merge = app.add_subcommand(
       "sweep-merge", "Join the shards of a sweep (--shard) into the outputs of one sweep");
@@ -312,6 +325,14 @@ int main(int argc, char** argv) {
         std::cerr << "liedyn: " << e.what() << "\n";
         return 2;
       }
+    }
+    if (view->parsed()) {
+      const liedyn::ViewSummary v = liedyn::write_view(view_dir);
+      std::cout << "view: " << v.frames << " frames, " << v.objects << " objects, "
+                << v.bytes / 1024 << " KiB\n"
+                << "open " << std::filesystem::absolute(view_dir / std::filesystem::path("view.html")).string()
+                << " in a browser (offline: everything is in the file)\n";
+      return 0;
     }
     if (sweep_merge->parsed()) {
       std::vector<std::filesystem::path> dirs(merge_dirs.begin(), merge_dirs.end());
@@ -395,7 +416,7 @@ int main(int argc, char** argv) {
       return 0;
     }
     const liedyn::SimulationSummary summary =
-        liedyn::simulate_scene(scene, out_dir, quiet ? nullptr : &std::cerr);
+        liedyn::simulate_scene(scene, out_dir, quiet ? nullptr : &std::cerr, every);
     std::cout << liedyn::format_summary(scene, summary);
     std::cout << "outputs      " << out_dir << "/trajectory.csv, " << out_dir << "/frames.csv\n";
     if (summary.failed) {

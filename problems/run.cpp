@@ -6,6 +6,7 @@
 #include <sstream>
 
 #include "../lib/so3.hpp"
+#include "shapes.hpp"
 
 namespace liedyn {
 
@@ -29,8 +30,10 @@ void FrameRecord::capture(const Simulator& sim, const StepReport* step_report) {
                                              : std::nullopt;
 }
 
-RunFiles::RunFiles(OutputFolder& out)
-    : trajectory_(out.add("trajectory.csv")), frames_(out.add("frames.csv")) {
+RunFiles::RunFiles(OutputFolder& out, const Scene& scene, int every)
+    : model_(scene.model), every_(every), trajectory_(out.add("trajectory.csv")), frames_(out.add("frames.csv")) {
+  if (every < 1) throw std::invalid_argument("RunFiles: every must be ≥ 1");
+  out.add("shapes.json") << scene_shapes(scene, every).dump(1) << '\n';
   trajectory_ << "frame,time,object,kind,index,x,y,z,qw,qx,qy,qz\n";
   frames_ << "frame,time,newton_iterations,gradient_norm,converged,kinetic_energy,"
              "potential_energy,angular_momentum_x,angular_momentum_y,angular_momentum_z,"
@@ -38,7 +41,13 @@ RunFiles::RunFiles(OutputFolder& out)
              "multiplier_updates,contact_pairs,min_rod_separation\n";
 }
 
-void RunFiles::add(const Model& model, const FrameRecord& r) {
+void RunFiles::finish(const FrameRecord& last) {
+  if (last.frame != last_trajectory_frame_) add_trajectory(last);
+}
+
+void RunFiles::add_trajectory(const FrameRecord& r) {
+  const Model& model = model_;
+  last_trajectory_frame_ = r.frame;
   const std::vector<Vector3>& x = r.state.points;
   const std::vector<Matrix3>& R = r.state.rotations;
   std::ostream& out = trajectory_;
@@ -66,7 +75,10 @@ void RunFiles::add(const Model& model, const FrameRecord& r) {
           << q.z() << '\n';
     }
   }
+}
 
+void RunFiles::add(const FrameRecord& r) {
+  if (r.frame % every_ == 0) add_trajectory(r);
   const StepReport* report = r.report ? &*r.report : nullptr;
   const Vector3& L = r.angular_momentum;
   frames_ << r.frame << ',' << r.time << ',';
@@ -87,15 +99,15 @@ void RunFiles::add(const Model& model, const FrameRecord& r) {
 }
 
 SimulationSummary simulate_into(const Scene& scene, OutputFolder* out, std::ostream* progress,
-                                const FrameObserver& observer) {
+                                const FrameObserver& observer, int trajectory_every) {
   using Clock = std::chrono::steady_clock;
   std::optional<RunFiles> files;
-  if (out) files.emplace(*out);
+  if (out) files.emplace(*out, scene, trajectory_every);
   FrameRecord frame_record;
   const auto record = [&](const Simulator& sim, const StepReport* report) {
     if (!files && !observer) return;
     frame_record.capture(sim, report);
-    if (files) files->add(scene.model, frame_record);
+    if (files) files->add(frame_record);
     if (observer) observer(frame_record);
   };
 
@@ -149,13 +161,14 @@ SimulationSummary simulate_into(const Scene& scene, OutputFolder* out, std::ostr
   summary.solve_seconds = std::chrono::duration<double>(solving).count();
   summary.output_seconds = std::chrono::duration<double>(writing).count();
   summary.final_energy = sim.kinetic_energy() + sim.potential_energy();
+  if (files) files->finish(frame_record);  // the last frame recorded (the failed step's: none)
   return summary;
 }
 
 SimulationSummary simulate_scene(const Scene& scene, const std::filesystem::path& out_dir,
-                                 std::ostream* progress) {
+                                 std::ostream* progress, int trajectory_every) {
   OutputFolder out(out_dir, "simulate " + scene.source, progress);
-  SimulationSummary summary = simulate_into(scene, &out, progress);
+  SimulationSummary summary = simulate_into(scene, &out, progress, nullptr, trajectory_every);
   // Committed even after a failed step: the frames up to it are valid and are kept.
   const auto start = std::chrono::steady_clock::now();
   out.commit();

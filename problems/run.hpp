@@ -52,16 +52,23 @@ struct FrameRecord {
   void capture(const Simulator& sim, const StepReport* step_report);
 };
 
-// trajectory.csv and frames.csv of one run, added to an OutputFolder's current unit with their
-// header lines; then a row (or a block of rows) per frame. The one writer of both files, for
-// `liedyn simulate`, `optimize`'s final run and Python's Trajectory.to_csv.
+// trajectory.csv, frames.csv and shapes.json (problems/shapes.hpp) of one run, added to an
+// OutputFolder's current unit; then a row (or a block of rows) per frame. trajectory.csv
+// holds frames 0, every, 2·every, … and the last one (finish); frames.csv every frame. The
+// one writer of these files, for `liedyn simulate`, `optimize`'s final run and Python's
+// Trajectory.to_csv.
 class RunFiles {
  public:
-  explicit RunFiles(OutputFolder& out);
-  // Every body's row, then every rod's node rows and edge rows (the model names them).
-  void add(const Model& model, const FrameRecord& record);
+  RunFiles(OutputFolder& out, const Scene& scene, int every = 1);
+  void add(const FrameRecord& record);
+  // The last frame's trajectory rows, if `every` skipped them.
+  void finish(const FrameRecord& last);
 
  private:
+  void add_trajectory(const FrameRecord& record);
+  const Model& model_;
+  int every_;
+  int last_trajectory_frame_ = -1;
   std::ostream& trajectory_;
   std::ostream& frames_;
 };
@@ -70,17 +77,17 @@ class RunFiles {
 // collects of a run besides the files (the Python module's arrays).
 using FrameObserver = std::function<void(const FrameRecord&)>;
 
-// Simulates the scene, adding trajectory.csv and frames.csv to `out`'s current unit (the
-// caller commits it, with whatever else belongs to the run; null: no files). Progress goes to
-// `progress` (if non-null) for runs longer than a second. The frames up to a failed step are
-// written (and observed).
+// Simulates the scene, adding its RunFiles to `out`'s current unit (the caller commits it,
+// with whatever else belongs to the run; null: no files), the trajectory every
+// `trajectory_every` frames. Progress goes to `progress` (if non-null) for runs longer than a
+// second. The frames up to a failed step are written (and observed).
 SimulationSummary simulate_into(const Scene& scene, OutputFolder* out, std::ostream* progress,
-                                const FrameObserver& observer = nullptr);
+                                const FrameObserver& observer = nullptr, int trajectory_every = 1);
 
 // simulate_into a locked OutputFolder at `out_dir` (created if missing), committed at the
 // end. Throws std::runtime_error on I/O errors (the folder's previous outputs then stay).
 SimulationSummary simulate_scene(const Scene& scene, const std::filesystem::path& out_dir,
-                                 std::ostream* progress);
+                                 std::ostream* progress, int trajectory_every = 1);
 
 // "step k (t = … s) failed: <status> after n <backend> iterations, gradient norm g (message)":
 // why step k did not update the state (every command that runs a scene says it this way).

@@ -11,6 +11,7 @@ packages=(
   libfcl-dev
   pybind11-dev python3-dev python3-numpy python3-pytest python3-scipy python3-torch
   libopenmpi-dev openmpi-bin
+  libjs-three chromium
 )
 missing=()
 for p in "${packages[@]}"; do

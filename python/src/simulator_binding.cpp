@@ -202,8 +202,9 @@ struct Recording {
       }
     }
     OutputFolder folder(out, "python Trajectory.to_csv " + scene.scene.source, nullptr);
-    RunFiles files(folder);
-    for (const FrameRecord& record : frames) files.add(model, record);
+    RunFiles files(folder, scene.scene);
+    for (const FrameRecord& record : frames) files.add(record);
+    if (!frames.empty()) files.finish(frames.back());
     folder.commit();
   }
 };
