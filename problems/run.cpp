@@ -2,6 +2,7 @@
 
 #include <chrono>
 #include <iomanip>
+#include <nlohmann/json.hpp>
 #include <ostream>
 #include <sstream>
 
