@@ -138,7 +138,7 @@ TEST_F(Cli, ButterflyBoltWritesTrajectoryAndFrames) {
 
   const fs::path out = dir_ / "results/bolt";
   // Only the two outputs: no temporary file is left behind.
-  EXPECT_EQ(listing(out), (std::set<std::string>{"frames.csv", "run.json", "trajectory.csv"}));
+  EXPECT_EQ(listing(out), (std::set<std::string>{"frames.csv", "run.json", "shapes.json", "trajectory.csv"}));
 
   const Csv trajectory = read_csv(out / "trajectory.csv");
   EXPECT_EQ(trajectory.header, kTrajectoryHeader);
@@ -194,7 +194,7 @@ TEST_F(Cli, SuccessfulRunReplacesEarlierOutputs) {
   EXPECT_EQ(read_csv(dir_ / "out/frames.csv").rows.size(), 4u);
   EXPECT_EQ(liedyn::test::read_file(dir_ / "out/notes.txt"), "mine\n");
   EXPECT_EQ(listing(dir_ / "out"),
-            (std::set<std::string>{"frames.csv", "notes.txt", "run.json", "trajectory.csv"}));
+            (std::set<std::string>{"frames.csv", "notes.txt", "run.json", "shapes.json", "trajectory.csv"}));
 }
 
 TEST_F(Cli, BadSceneExits2AndWritesNothing) {
@@ -588,7 +588,7 @@ TEST_F(Cli, UnconvergedStepsExit3) {
   // The outputs are written all the same, and complete.
   EXPECT_EQ(read_csv(dir_ / "out/trajectory.csv").rows.size(), 21u);
   expect_flagged_unconverged(dir_ / "out/frames.csv");
-  EXPECT_EQ(listing(dir_ / "out"), (std::set<std::string>{"frames.csv", "run.json", "trajectory.csv"}));
+  EXPECT_EQ(listing(dir_ / "out"), (std::set<std::string>{"frames.csv", "run.json", "shapes.json", "trajectory.csv"}));
 }
 
 TEST_F(Cli, AllowUnconvergedExits0) {
@@ -611,7 +611,7 @@ const char* const kRunawayScene = R"({
 TEST_F(Cli, FailedStepExits4AndKeepsEarlierFrames) {
   const Result r = simulate(kRunawayScene, "out");
   ASSERT_EQ(r.exit_code, 4) << r.out << r.err;
-  EXPECT_EQ(listing(dir_ / "out"), (std::set<std::string>{"frames.csv", "run.json", "trajectory.csv"}));
+  EXPECT_EQ(listing(dir_ / "out"), (std::set<std::string>{"frames.csv", "run.json", "shapes.json", "trajectory.csv"}));
 
   const Csv trajectory = read_csv(dir_ / "out/trajectory.csv");
   const Csv frames = read_csv(dir_ / "out/frames.csv");

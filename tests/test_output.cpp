@@ -336,7 +336,7 @@ TEST_F(OutputTest, ATerminatingSignalRemovesTheStagedFilesAndExits128PlusSignal)
     ASSERT_TRUE(WIFEXITED(status)) << "signal " << signal;
     EXPECT_EQ(WEXITSTATUS(status), 128 + signal);
     EXPECT_EQ(listing(dir_ / "out"),
-              (std::set<std::string>{"frames.csv", "run.json", "trajectory.csv"}))
+              (std::set<std::string>{"frames.csv", "run.json", "shapes.json", "trajectory.csv"}))
         << "signal " << signal;
     EXPECT_EQ(read_file(dir_ / "out/trajectory.csv"), before);
   }

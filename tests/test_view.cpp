@@ -80,12 +80,12 @@ TEST(Tessellate, SurfacesAreClosedFaceOutwardsAndHoldTheirVolume) {
 constexpr const char* kShapesScene = R"({
   "time_step": 0.01, "frames": 10, "gravity": [0, 0, -9.81],
   "bodies": [
-    { "name": "ball", "mass": 1, "position": [0, 0, 1],
+    { "name": "ball", "mass": 1, "inertia": [0.004, 0.004, 0.004], "position": [0, 0, 1],
       "contact": { "shape": { "type": "sphere", "radius": 0.1 }, "sample_spacing": 0.05, "stiffness": 1e4 } },
-    { "name": "brick", "mass": 1, "position": [1, 0, 1],
+    { "name": "brick", "mass": 1, "inertia": [0.004, 0.004, 0.004], "position": [1, 0, 1],
       "contact": { "shape": { "type": "box", "half_extents": [0.1, 0.2, 0.3], "rounding": 0.01 },
                    "sample_spacing": 0.05, "stiffness": 1e4 } },
-    { "name": "link", "mass": 1, "position": [2, 0, 1],
+    { "name": "link", "mass": 1, "inertia": [0.004, 0.004, 0.004], "position": [2, 0, 1],
       "contact": { "shape": { "type": "link", "half_length": 0.1, "major_radius": 0.1, "minor_radius": 0.02 },
                    "sample_spacing": 0.02, "stiffness": 1e4 } },
     { "name": "bare", "mass": 2, "inertia": [0.02, 0.02, 0.02], "position": [3, 0, 1] } ],
