@@ -53,7 +53,9 @@ StartResult start_from_json(const json& j, int starts, int size, double loss_sca
     s.start = j.at("start").get<int>();
     s.result.evaluations = j.at("evaluations").get<int>();
     s.result.iterations = j.at("iterations").get<int>();
-    s.result.best_loss = j.at("best_loss").get<double>();
+    // A start whose every evaluation failed has no loss: +∞, which JSON writes as null.
+    const json& best_loss = j.at("best_loss");
+    s.result.best_loss = best_loss.is_null() ? std::numeric_limits<double>::infinity() : best_loss.get<double>();
     s.result.status = j.at("status").get<std::string>();
     s.result.message = j.at("message").get<std::string>();
     s.result.seconds = j.at("seconds").get<double>();
@@ -176,9 +178,11 @@ int run_multistart(const Scene& scene, const OptimizeOptions& options, std::ostr
       const std::string where = "finished[" + std::to_string(i) + "]";
       StartResult s = start_from_json(rows[i], options.starts, n, loss_scale, target, source, where);
       // Trust no stored number: the best loss must be the loss at the best point.
+      // (A failed start has no loss to check; its best point is never the run's result.)
       const double loss = std::isfinite(s.result.best_loss) ? sim.evaluate(s.result.best_x, nullptr).loss
                                                             : s.result.best_loss;
-      if (!(std::abs(loss - s.result.best_loss) <= 1e-9 * std::max(std::abs(loss), loss_scale))) {
+      if (std::isfinite(loss) &&
+          !(std::abs(loss - s.result.best_loss) <= 1e-9 * std::max(std::abs(loss), loss_scale))) {
         throw SceneError(source, where + ".best_loss",
                          "is " + format_number(s.result.best_loss, 17) + ", but the loss at its best point is " +
                              format_number(loss, 17) + " (the checkpoint was edited or is stale)");
@@ -202,10 +206,17 @@ int run_multistart(const Scene& scene, const OptimizeOptions& options, std::ostr
   };
   const auto take_messages = [&](bool wait) {
     for (const ProcessGroup::Message& m : group.receive(wait)) {
-      const json rows = json::parse(m.text);
-      for (std::size_t i = 0; i < rows.size(); ++i) {
-        StartResult s = start_from_json(rows[i], options.starts, n, loss_scale, target,
-                                        "rank " + std::to_string(m.rank), "finished");
+      std::vector<StartResult> results;
+      try {
+        const json rows = json::parse(m.text);
+        for (std::size_t i = 0; i < rows.size(); ++i) {
+          results.push_back(start_from_json(rows[i], options.starts, n, loss_scale, target,
+                                            "rank " + std::to_string(m.rank), "finished"));
+        }
+      } catch (const std::exception& e) {  // not bad input: a fault between ranks (abort them all)
+        throw std::runtime_error("rank " + std::to_string(m.rank) + " sent a result rank 0 cannot read: " + e.what());
+      }
+      for (StartResult& s : results) {
         if (finished.count(s.start) == 0) report(s);
         finished[s.start] = std::move(s);
       }

@@ -28,7 +28,13 @@ void parallel_for(int count, int jobs, const std::function<void(int)>& task) {
     }
   };
   std::vector<std::thread> helpers;
-  for (int t = 1; t < std::min(jobs, count); ++t) helpers.emplace_back(work);
+  try {
+    for (int t = 1; t < std::min(jobs, count); ++t) helpers.emplace_back(work);
+  } catch (...) {  // no thread to be had (std::system_error): stop the started ones first
+    stop = true;
+    for (std::thread& t : helpers) t.join();
+    throw;
+  }
   work();
   for (std::thread& t : helpers) t.join();
   if (first_error) std::rethrow_exception(first_error);

@@ -31,9 +31,18 @@ void FrameRecord::capture(const Simulator& sim, const StepReport* step_report) {
                                              : std::nullopt;
 }
 
-RunFiles::RunFiles(OutputFolder& out, const Scene& scene, int every)
-    : model_(scene.model), every_(every), trajectory_(out.add("trajectory.csv")), frames_(out.add("frames.csv")) {
+namespace {
+int checked_every(int every) {
   if (every < 1) throw std::invalid_argument("RunFiles: every must be ≥ 1");
+  return every;
+}
+}  // namespace
+
+RunFiles::RunFiles(OutputFolder& out, const Scene& scene, int every)
+    : model_(scene.model),
+      every_(checked_every(every)),  // before any file is added
+      trajectory_(out.add("trajectory.csv")),
+      frames_(out.add("frames.csv")) {
   out.add("shapes.json") << scene_shapes(scene, every).dump(1) << '\n';
   trajectory_ << "frame,time,object,kind,index,x,y,z,qw,qx,qy,qz\n";
   frames_ << "frame,time,newton_iterations,gradient_norm,converged,kinetic_energy,"

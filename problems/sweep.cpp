@@ -7,6 +7,7 @@
 #include <map>
 #include <mutex>
 #include <optional>
+#include <set>
 #include <nlohmann/json.hpp>
 #include <ostream>
 #include <sstream>
@@ -304,8 +305,9 @@ std::vector<std::pair<std::string, std::string>> reference_overrides(
         const double h_ref = h / refinement;
         overrides.emplace_back("time_step", number(h_ref));
         if (!first.model.static_equilibrium) {
-          overrides.emplace_back(
-              "frames", std::to_string(static_cast<int>(std::ceil(duration / h_ref - 1e-9))));
+          // As a number, not cast to int first: a grid whose reference would take more
+          // steps than a scene may is refused by the scene's own check, naming it.
+          overrides.emplace_back("frames", number(std::ceil(duration / h_ref - 1e-9)));
         }
         break;
       }
@@ -423,8 +425,6 @@ SweepResult run_sweep(const std::string& scene_text, const std::string& source,
     }
   }
 
-  if (options.before_runs) options.before_runs();
-
   // Groups of runs that share a reference: the same values on every model axis.
   // In grid order of their first run.
   std::vector<std::pair<std::string, std::vector<std::size_t>>> groups;
@@ -459,6 +459,8 @@ SweepResult run_sweep(const std::string& scene_text, const std::string& source,
     for (const std::size_t i : members) reference_of[i] = references.size();
     references.push_back({make_scene(base, source + " reference", ref_paths, ref_values), {}, {}});
   }
+  // Every scene parses, references included: only now may the driver create its folder.
+  if (options.before_runs) options.before_runs();
   if (analytic) {
     result.notes.push_back(std::string("errors against the scene's analytic solution \"") +
                            to_string(base_scene.analytic) + "\" (problems/analytic.hpp)");
@@ -641,8 +643,13 @@ namespace {
 
 using ordered_json = nlohmann::ordered_json;
 
-// NaN (a metric not defined) as null: JSON has no NaN.
-ordered_json number_or_null(double x) { return std::isnan(x) ? ordered_json(nullptr) : ordered_json(x); }
+// JSON has no NaN or infinity: NaN (a metric not defined) as null, ±∞ (a run that blew up)
+// as the strings "inf" and "-inf".
+ordered_json number_or_null(double x) {
+  if (std::isnan(x)) return nullptr;
+  if (std::isinf(x)) return x > 0 ? "inf" : "-inf";
+  return x;
+}
 
 ordered_json run_to_json(const SweepRun& r) {
   return {{"index", r.index},
@@ -685,10 +692,13 @@ class FieldReader {
       throw SceneError(source_, field(key), "has the wrong type");
     }
   }
-  double number(const char* key) const {  // null: NaN
+  double number(const char* key) const {  // as number_or_null writes it
     const ordered_json& v = at(key);
     if (v.is_null()) return SweepRun::kNaN;
-    if (!v.is_number()) throw SceneError(source_, field(key), "must be a number or null");
+    if (v == "inf" || v == "-inf") {
+      return v == "inf" ? std::numeric_limits<double>::infinity() : -std::numeric_limits<double>::infinity();
+    }
+    if (!v.is_number()) throw SceneError(source_, field(key), "must be a number, null, \"inf\" or \"-inf\"");
     return v.get<double>();
   }
   std::string field(const char* key) const { return where_.empty() ? key : where_ + "." + key; }
@@ -764,11 +774,12 @@ SweepResult sweep_from_json(const ordered_json& value, const std::string& source
     std::vector<SweepRun>& out = std::string(key) == "runs" ? result.runs : result.references;
     for (std::size_t i = 0; i < rows.size(); ++i) {
       out.push_back(run_from_json(rows[i], source, std::string(key) + "[" + std::to_string(i) + "]"));
-      if (std::string(key) == "runs" &&
-          (out.back().index >= result.grid_size ||
-           out.back().settings.size() != result.axis_names.size())) {
+      const bool run = std::string(key) == "runs";
+      if (run ? out.back().index >= result.grid_size || out.back().settings.size() != result.axis_names.size()
+              : out.back().settings.size() != 1) {
         throw SceneError(source, std::string(key) + "[" + std::to_string(i) + "]",
-                         "is not a grid point of this sweep (index or settings)");
+                         run ? "is not a grid point of this sweep (index or settings)"
+                             : "is not a reference (its settings are one label)");
       }
     }
   }
@@ -779,7 +790,7 @@ SweepResult merge_sweeps(const std::vector<SweepResult>& parts, const std::vecto
                          bool complete) {
   if (parts.empty()) throw std::invalid_argument("merge_sweeps: no parts");
   const SweepResult& first = parts.front();
-  std::vector<int> shares(first.share.count, 0);
+  std::set<int> shares;
   SweepResult merged = first;
   merged.share = {};
   merged.runs.clear();
@@ -795,7 +806,7 @@ SweepResult merge_sweeps(const std::vector<SweepResult>& parts, const std::vecto
       throw SceneError(source, "share", "has count " + std::to_string(part.share.count) + ", " +
                                             sources.front() + " " + std::to_string(first.share.count));
     }
-    if (shares[part.share.index]++ > 0) {
+    if (!shares.insert(part.share.index).second) {
       throw SceneError(source, "share", "index " + std::to_string(part.share.index) + " is given twice");
     }
     for (const SweepRun& r : part.runs) {
@@ -805,10 +816,20 @@ SweepResult merge_sweeps(const std::vector<SweepResult>& parts, const std::vecto
     }
     for (const SweepRun& r : part.references) references.emplace(r.index, r);
   }
-  for (int i = 0; i < first.share.count && complete; ++i) {
-    if (shares[i] == 0) {
+  if (complete) {
+    int missing = 0;  // the first share absent (the set is ordered)
+    for (const int s : shares) missing += s == missing ? 1 : 0;
+    if (missing < first.share.count) {
       throw SceneError(sources.front(), "share",
-                       "share " + std::to_string(i) + " of " + std::to_string(first.share.count) + " is missing");
+                       "share " + std::to_string(missing) + " of " + std::to_string(first.share.count) + " is missing");
+    }
+    for (int i = 0; i < first.grid_size; ++i) {
+      if (runs.count(i) == 0) {
+        throw SceneError(sources[static_cast<std::size_t>(std::find_if(parts.begin(), parts.end(), [&](const SweepResult& part) {
+                                                            return i % part.share.count == part.share.index;
+                                                          }) - parts.begin())],
+                         "runs", "grid point " + std::to_string(i) + " is missing (an unfinished shard?)");
+      }
     }
   }
   for (const auto& [index, run] : references) merged.references.push_back(run);

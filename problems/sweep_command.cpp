@@ -111,17 +111,33 @@ int run_sweep_command(const SweepCommand& command, ProcessGroup& group, std::ost
     options.resume = &checkpoint;
     options.resume_source = checkpoint_file.string();
   }
+  // Every rank's latest result; rank 0 checkpoints the union of them.
+  std::vector<std::optional<SweepResult>> latest(group.size());
+  const auto share_of_rank = [&](int r) { return group.size() > 1 ? SweepShare{r, group.size()} : options.share; };
+  const auto in_share = [](const SweepRun& run, const SweepShare& share) { return run.index % share.count == share.index; };
   options.before_runs = [&] {
     const std::string text = open_output_on_root(group, folder, dir, "sweep " + command.scene_file,
                                                  command.resume ? checkpoint_file : std::filesystem::path());
-    if (command.resume) checkpoint = read_sweep_json(text, checkpoint_file.string());
+    if (!command.resume) return;
+    checkpoint = read_sweep_json(text, checkpoint_file.string());
+    // What the checkpoint holds of a rank's share stands until that rank reports.
+    for (int r = 0; r < group.size(); ++r) {
+      SweepResult part = checkpoint;
+      part.share = share_of_rank(r);
+      part.runs.clear();
+      for (const SweepRun& run : checkpoint.runs) {
+        if (in_share(run, part.share)) part.runs.push_back(run);
+      }
+      latest[r] = std::move(part);
+    }
   };
-
-  // Every rank's latest result; rank 0 checkpoints the union of them.
-  std::vector<std::optional<SweepResult>> latest(group.size());
   const auto take_messages = [&](bool wait) {
     for (ProcessGroup::Message& m : group.receive(wait)) {
-      latest.at(m.rank) = sweep_from_json(ordered_json::parse(m.text), "rank " + std::to_string(m.rank));
+      try {
+        latest.at(m.rank) = sweep_from_json(ordered_json::parse(m.text), "rank " + std::to_string(m.rank));
+      } catch (const std::exception& e) {  // not bad input: a fault between ranks (abort them all)
+        throw std::runtime_error("rank " + std::to_string(m.rank) + " sent a result rank 0 cannot read: " + e.what());
+      }
     }
   };
   const auto union_of_ranks = [&](bool complete) {  // complete: every rank's final result
@@ -156,9 +172,14 @@ int run_sweep_command(const SweepCommand& command, ProcessGroup& group, std::ost
   take_messages(true);
   result = union_of_ranks(group.size() > 1);
   if (command.resume) {
-    out << "resumed from " << checkpoint_file.string() << ": kept " << checkpoint.runs.size()
-        << " of " << result.runs.size() << " runs\n";
+    const auto kept = std::count_if(checkpoint.runs.begin(), checkpoint.runs.end(), [&](const SweepRun& run) {
+      return group.size() > 1 || in_share(run, options.share);
+    });
+    out << "resumed from " << checkpoint_file.string() << ": kept " << kept << " of " << result.runs.size()
+        << " runs\n";
   }
+  // The checkpoint, finished, goes with the outputs (one unit).
+  folder->add("checkpoint.json") << sweep_to_json(result).dump(1) << "\n";
   write_sweep(result, *folder);
   out << format_sweep(result);
   out << "outputs: " << dir.string() << "/sweep.csv, sweep.json and the *_vs_time.png plots\n";

@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <bit>
 #include <cctype>
+#include <cmath>
+#include <cstdint>
 #include <cstring>
 #include <map>
 #include <nlohmann/json.hpp>
@@ -67,16 +69,25 @@ class Lines {
     ++number_;
     return true;
   }
-  [[noreturn]] void fail(const std::string& reason) const {
-    throw SceneError(source_, "line " + std::to_string(number_), reason);
+  int line() const { return number_; }
+  [[noreturn]] void fail(const std::string& reason, int line = 0) const {
+    throw SceneError(source_, "line " + std::to_string(line > 0 ? line : number_), reason);
   }
-  double number(const std::string& field, const char* what) const {
+  double number(const std::string& field, const char* what, int line = 0) const {
     char* end = nullptr;
     const double value = std::strtod(field.c_str(), &end);
     if (field.empty() || end != field.c_str() + field.size()) {
-      fail(std::string(what) + " \"" + field + "\" is not a number");
+      fail(std::string(what) + " \"" + field + "\" is not a number", line);
     }
     return value;
+  }
+  // A frame number: a whole number from 0 to 2³¹ − 1.
+  int frame(const std::string& field, int line = 0) const {
+    const double value = number(field, "frame", line);
+    if (!(value >= 0.0 && value <= 2147483647.0 && value == std::floor(value))) {
+      fail("frame \"" + field + "\" is not a frame number", line);
+    }
+    return static_cast<int>(value);
   }
 
  private:
@@ -91,20 +102,36 @@ struct Row {
   int index;
 };
 
+// Far more rows per frame than any scene has (a rod of 10⁶ edges): an edited shapes.json
+// must not make us allocate for ever.
+constexpr std::size_t kMaxRowsPerFrame = 10'000'000;
+
 std::vector<Row> expected_rows(const ordered_json& shapes, const std::string& source) {
   std::vector<Row> rows;
   try {
+    if (!shapes.is_object()) throw SceneError(source, "", "must be an object");
+    if (shapes.contains("title") && !shapes["title"].is_string()) {
+      throw SceneError(source, "title", "must be a string");
+    }
+    if (shapes.contains("time_step") && !shapes["time_step"].is_number()) {
+      throw SceneError(source, "time_step", "must be a number");
+    }
     for (const ordered_json& b : shapes.at("bodies")) rows.push_back({b.at("name").get<std::string>(), "body", 0});
     for (const ordered_json& r : shapes.at("rods")) {
       const std::string name = r.at("name").get<std::string>();
-      const int nodes = r.at("nodes").get<int>();
-      if (nodes < 2) throw SceneError(source, "rods", "a rod has at least 2 nodes");
+      const std::int64_t nodes = r.at("nodes").get<std::int64_t>();
+      if (nodes < 2 || rows.size() + 2 * std::size_t(nodes) > kMaxRowsPerFrame) {
+        throw SceneError(source, "rods", "rod " + name + " has " + std::to_string(nodes) +
+                                             " nodes (at least 2, and at most " +
+                                             std::to_string(kMaxRowsPerFrame / 2) + " in all)");
+      }
       for (int i = 0; i < nodes; ++i) rows.push_back({name, "node", i});
       for (int j = 0; j + 1 < nodes; ++j) rows.push_back({name, "edge", j});
     }
   } catch (const nlohmann::json::exception& e) {
     throw SceneError(source, "", std::string("is not a run's shapes.json (") + e.what() + ")");
   }
+  if (rows.empty()) throw SceneError(source, "bodies", "no body and no rod: nothing to show");
   return rows;
 }
 
@@ -211,7 +238,7 @@ ViewSummary write_view(const std::filesystem::path& run_dir, const ViewOptions& 
                  expected.kind + " " + std::to_string(expected.index) + " (not the same run?)");
     }
     if (row == 0) {
-      frame_numbers.push_back(static_cast<int>(lines.number(f[0], "frame")));
+      frame_numbers.push_back(lines.frame(f[0]));
       times.push_back(lines.number(f[1], "time"));
     }
     // Bodies: position and orientation; nodes: position; edges: the frame (their midpoint
@@ -236,12 +263,13 @@ ViewSummary write_view(const std::filesystem::path& run_dir, const ViewOptions& 
                                                        {"potential_energy", "potential_energy"},
                                                        {"newton_iterations", "iterations"},
                                                        {"max_penetration", "max_penetration"}};
-    std::map<int, std::vector<std::string>> by_frame;
+    std::map<int, std::pair<int, std::vector<std::string>>> by_frame;  // frame: line, fields
     while (frames.next(line)) {
       if (line.empty()) continue;
       std::vector<std::string> f = csv_fields(line);
       if (f.size() != names.size()) frames.fail("has " + std::to_string(f.size()) + " fields, the header " + std::to_string(names.size()));
-      by_frame[static_cast<int>(frames.number(f[0], "frame"))] = std::move(f);
+      const int frame = frames.frame(f[0]);  // before f is moved
+      by_frame[frame] = {frames.line(), std::move(f)};
     }
     for (std::size_t c = 0; c < names.size(); ++c) {
       const auto key = wanted.find(names[c]);
@@ -249,7 +277,9 @@ ViewSummary write_view(const std::filesystem::path& run_dir, const ViewOptions& 
       ordered_json values = ordered_json::array();
       for (const int k : frame_numbers) {
         const auto it = by_frame.find(k);
-        values.push_back(it == by_frame.end() ? ordered_json(nullptr) : ordered_json(frames.number(it->second[c], names[c].c_str())));
+        values.push_back(it == by_frame.end() ? ordered_json(nullptr)
+                                              : ordered_json(frames.number(it->second.second[c], names[c].c_str(),
+                                                                           it->second.first)));
       }
       series[key->second] = values;
     }

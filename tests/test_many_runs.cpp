@@ -12,6 +12,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <map>
 #include <nlohmann/json.hpp>
 #include <set>
@@ -166,6 +167,9 @@ TEST(ManySweeps, SharesMergeIntoTheWholeSweepInAnyOrder) {
   other.repeats = 2;
   other.share = {1, 3};
   refused({parts[0], parts[1], run_sweep(kBolt, "bolt.json", other)}, "identity", "another sweep");
+  SweepResult emptied = parts[1];
+  emptied.runs.clear();  // a shard interrupted before its runs (or edited)
+  refused({parts[0], emptied, parts[2]}, "runs", "grid point 0 is missing");
   SweepResult tampered = parts[1];
   tampered.runs[0].index = 1;  // not share 0's grid point
   refused({parts[0], tampered, parts[2]}, "runs", "grid point 1 is not this share's");
@@ -206,6 +210,22 @@ TEST(ManySweeps, JsonRoundTripsEveryFieldAndRefusesBadInput) {
       EXPECT_EQ(e.field(), c.field) << e.what();
     }
   }
+  nlohmann::ordered_json no_label = j;
+  no_label["references"][0]["settings"] = nlohmann::ordered_json::array();
+  try {
+    sweep_from_json(no_label, "x.json");
+    ADD_FAILURE() << "accepted a reference without its label";
+  } catch (const SceneError& e) {
+    EXPECT_EQ(e.field(), "references[0]") << e.what();
+  }
+  // ±∞ (a run that blew up) goes through as a string: JSON has no infinity.
+  SweepResult blown = r;
+  blown.runs[0].energy_drift = std::numeric_limits<double>::infinity();
+  blown.runs[1].position_error = -std::numeric_limits<double>::infinity();
+  const SweepResult blown_back = sweep_from_json(nlohmann::ordered_json::parse(sweep_to_json(blown).dump()), "x.json");
+  EXPECT_EQ(blown_back.runs[0].energy_drift, std::numeric_limits<double>::infinity());
+  EXPECT_EQ(blown_back.runs[1].position_error, -std::numeric_limits<double>::infinity());
+
   nlohmann::ordered_json missing = j;
   missing["runs"][0].erase("failure");
   try {
@@ -392,6 +412,16 @@ TEST_F(ManyRunsCli, SweepOnThreadsWritesTheSerialCsv) {
   EXPECT_FALSE(fs::exists(dir_ / "zero"));
 }
 
+TEST_F(ManyRunsCli, AReferenceThatCannotBeBuiltStopsTheSweepBeforeItCreatesAnything) {
+  // h / 1000 over the bolt's 1 s: 10¹¹ reference steps, more than a scene may take.
+  const Result r = run({"sweep", "bolt.json", "--set", "time_step=0.01,0.00000001", "--refine", "1000",
+                        "--out", "out", "--quiet"});
+  EXPECT_EQ(r.exit_code, 2) << r.out << r.err;
+  EXPECT_NE(r.err.find("reference"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("frames"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(dir_ / "out"));
+}
+
 TEST_F(ManyRunsCli, ShardsMergeIntoTheSerialSweep) {
   ASSERT_EQ(sweep({"-j", "1", "--out", "serial"}).exit_code, 0);
   const Result zero = sweep({"--shard", "0/2", "--out", "shards"});
@@ -473,6 +503,20 @@ TEST_F(ManyRunsCli, MultiStartIsDeterministicAndResumable) {
   EXPECT_NE(resumed.out.find("start 3/4"), std::string::npos) << resumed.out;
   EXPECT_EQ(starts(dir_ / "serial" / "starts.csv"), serial);
 
+  // A start that failed at every evaluation (no loss: null in the checkpoint) resumes too.
+  const std::vector<std::string> wild_args{
+      "optimize", std::string(LIEDYN_SOURCE_DIR) + "/problems/scenes/optimization/die_throw.json", "--starts", "3",
+      "--max-iterations", "1", "--spread", "1e4", "--out", "wild"};
+  const Result wild = run(wild_args);
+  ASSERT_NE(wild.exit_code, 2) << wild.err;
+  const std::string wild_checkpoint = test::read_file(dir_ / "wild" / "checkpoint.json");
+  EXPECT_NE(wild_checkpoint.find("\"best_loss\":null"), std::string::npos) << wild_checkpoint;
+  std::vector<std::string> wild_resume = wild_args;
+  wild_resume.push_back("--resume");
+  const Result wild_again = run(wild_resume);
+  EXPECT_NE(wild_again.exit_code, 2) << wild_again.err;
+  EXPECT_NE(wild_again.out.find("3 of 3 starts finished"), std::string::npos) << wild_again.out;
+
   // An edited best loss, or other start settings: exit 2 naming the field.
   checkpoint["finished"][1]["best_loss"] = 1e-12;
   std::ofstream(dir_ / "serial" / "checkpoint.json") << checkpoint.dump();
@@ -525,6 +569,23 @@ TEST_F(ManyRunsMpi, TwoRanksGiveTheSerialSweepAndStarts) {
   EXPECT_NE(csv.find(",2,"), std::string::npos);
   // One table, from rank 0.
   EXPECT_EQ(r.out.find("sweep of"), r.out.rfind("sweep of")) << r.out;
+
+  // Resumed over the ranks from a checkpoint holding runs 2 and 3: the final checkpoint, like
+  // sweep.json, holds all six (none of the kept rows lost along the way).
+  nlohmann::ordered_json checkpoint = nlohmann::ordered_json::parse(test::read_file(dir_ / "ranks" / "checkpoint.json"));
+  nlohmann::ordered_json kept = nlohmann::ordered_json::array();
+  for (const auto& run : checkpoint["runs"]) {
+    if (run["index"] == 2 || run["index"] == 3) kept.push_back(run);
+  }
+  checkpoint["runs"] = kept;
+  std::ofstream(dir_ / "ranks" / "checkpoint.json") << checkpoint.dump();
+  std::vector<std::string> resumed = ranks;
+  resumed.push_back("--resume");
+  const Result again = mpirun(resumed);
+  ASSERT_EQ(again.exit_code, 0) << again.out << again.err;
+  EXPECT_NE(again.out.find("kept 2 of 6 runs"), std::string::npos) << again.out;
+  EXPECT_EQ(nlohmann::ordered_json::parse(test::read_file(dir_ / "ranks" / "checkpoint.json"))["runs"].size(), 6u);
+  EXPECT_EQ(results(dir_ / "ranks" / "sweep.csv"), results(dir_ / "serial" / "sweep.csv"));
 
   ASSERT_EQ(optimize({"--starts", "4", "-j", "1", "--out", "starts_serial"}).exit_code, 0);
   const Result s = mpirun({"optimize", std::string(LIEDYN_SOURCE_DIR) + "/problems/scenes/optimization/die_throw.json",

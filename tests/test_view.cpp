@@ -237,6 +237,17 @@ TEST_F(ViewCli, RunsThatDoNotHangTogetherAreRefusedNamingTheFileAndLine) {
   r = run({"view", "out"});
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_NE(r.err.find("ends within a frame"), std::string::npos) << r.err;
+  // shapes.json edited into nonsense: errors naming it, never a crash.
+  for (const auto& [text, field] : std::vector<std::pair<std::string, std::string>>{
+           {R"({"bodies": [], "rods": []})", "bodies"},
+           {R"({"title": 3, "bodies": [], "rods": []})", "title"},
+           {R"({"bodies": [], "rods": [{"name": "r", "nodes": 2000000000, "radius": 1}]})", "rods"}}) {
+    std::ofstream(dir_ / "out" / "shapes.json") << text;
+    r = run({"view", "out"});
+    EXPECT_EQ(r.exit_code, 2) << text;
+    EXPECT_NE(r.err.find("shapes.json: " + field + ":"), std::string::npos) << r.err;
+  }
+  std::ofstream(dir_ / "out" / "shapes.json") << shapes;
   // No run here at all.
   r = run({"view", "nowhere"});
   EXPECT_EQ(r.exit_code, 2);
