@@ -11,6 +11,7 @@
 #include <random>
 #include <sstream>
 
+#include "json_reader.hpp"
 #include "output.hpp"
 #include "output_folder.hpp"
 #include "parallel.hpp"
@@ -48,26 +49,24 @@ json to_json(const StartResult& s) {
 // One start's result from a checkpoint or a rank's message; SceneError naming `where`.
 StartResult start_from_json(const json& j, int starts, int size, double loss_scale,
                             double target, const std::string& source, const std::string& where) {
+  scene_json::ObjectReader r(j, where, source,
+                             {"start", "evaluations", "iterations", "best_loss", "status", "message", "seconds", "best"});
   StartResult s;
-  try {
-    s.start = j.at("start").get<int>();
-    s.result.evaluations = j.at("evaluations").get<int>();
-    s.result.iterations = j.at("iterations").get<int>();
-    // A start whose every evaluation failed has no loss: +∞, which JSON writes as null.
-    const json& best_loss = j.at("best_loss");
-    s.result.best_loss = best_loss.is_null() ? std::numeric_limits<double>::infinity() : best_loss.get<double>();
-    s.result.status = j.at("status").get<std::string>();
-    s.result.message = j.at("message").get<std::string>();
-    s.result.seconds = j.at("seconds").get<double>();
-    const std::vector<double> best = j.at("best").get<std::vector<double>>();
-    s.result.best_x = Eigen::Map<const Eigen::VectorXd>(best.data(), static_cast<Eigen::Index>(best.size()));
-  } catch (const json::exception& e) {
-    throw SceneError(source, where, std::string("is not a start's result (") + e.what() + ")");
+  s.start = r.integer("start", 0, starts - 1);
+  s.result.evaluations = r.integer("evaluations", 0);
+  s.result.iterations = r.integer("iterations", 0);
+  // A start whose every evaluation failed has no loss: +∞, which JSON writes as null.
+  s.result.best_loss = r.get("best_loss").is_null() ? std::numeric_limits<double>::infinity() : r.number("best_loss");
+  s.result.status = r.string("status");
+  s.result.message = r.string("message");
+  s.result.seconds = r.number("seconds");
+  const json& best = r.array("best");
+  if (static_cast<int>(best.size()) != size) {
+    r.fail(r.field("best"), "must be " + std::to_string(size) + " numbers (the problem's parameters)");
   }
-  if (s.start < 0 || s.start >= starts) throw SceneError(source, where + ".start", "is not a start of this run");
-  if (s.result.best_x.size() != size || !s.result.best_x.allFinite()) {
-    throw SceneError(source, where + ".best", "must be " + std::to_string(size) + " finite numbers");
-  }
+  s.result.best_x.resize(size);
+  for (int i = 0; i < size; ++i) s.result.best_x(i) = r.to_number(best[i], r.field("best") + "[" + std::to_string(i) + "]");
+  r.finish();
   s.result.best_normalized_loss = s.result.best_loss / loss_scale;
   s.result.reached_target = target > 0.0 && s.result.best_normalized_loss <= target;
   return s;

@@ -2,7 +2,6 @@
 
 #include <iostream>
 
-#include "input_file.hpp"
 #include "scene.hpp"
 
 namespace liedyn {
@@ -24,13 +23,7 @@ std::string open_output_on_root(ProcessGroup& group, std::optional<OutputFolder>
         throw SceneError(checkpoint.string(), "", "cannot resume: no checkpoint (not a regular file)");
       }
       folder.emplace(dir, command, &std::cerr);
-      if (!checkpoint.empty()) {
-        try {
-          text = read_input_file(checkpoint, std::uintmax_t(1) << 30, "checkpoint");
-        } catch (const InputFileError& e) {
-          throw SceneError(checkpoint.string(), "", e.what());
-        }
-      }
+      if (!checkpoint.empty()) text = read_named_input(checkpoint, std::uintmax_t(1) << 30, "checkpoint");
     } catch (...) {
       error = std::current_exception();
     }

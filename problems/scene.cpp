@@ -1174,12 +1174,17 @@ Scene parse_scene(const std::string& json_text, const std::string& source) {
   return scene;
 }
 
-std::string read_scene_file(const std::filesystem::path& file) {
+std::string read_named_input(const std::filesystem::path& file, std::uintmax_t max_bytes,
+                             const std::string& kind) {
   try {
-    return read_input_file(file, kMaxSceneFileBytes, "scene file");
+    return read_input_file(file, max_bytes, kind);
   } catch (const InputFileError& e) {
     throw SceneError(file.string(), "", e.what());
   }
+}
+
+std::string read_scene_file(const std::filesystem::path& file) {
+  return read_named_input(file, kMaxSceneFileBytes, "scene file");
 }
 
 Scene load_scene(const std::filesystem::path& file) {

@@ -2,6 +2,7 @@
 // Scene files (JSON) → Model + solver options. The schema is documented in
 // docs/scene-format.md; every field is checked and unknown keys are rejected.
 
+#include <cstdint>
 #include <filesystem>
 #include <optional>
 #include <stdexcept>
@@ -67,6 +68,12 @@ Scene parse_scene(const std::string& json_text, const std::string& source);
 
 // The text of a scene file. Throws SceneError (unreadable file, a directory).
 std::string read_scene_file(const std::filesystem::path& file);
+
+// The text of any file liedyn reads beside a scene (a checkpoint, sweep.json, a run's CSV),
+// checked as problems/input_file.hpp does, at most `max_bytes`; SceneError naming the file and
+// why it was not read.
+std::string read_named_input(const std::filesystem::path& file, std::uintmax_t max_bytes,
+                             const std::string& kind);
 
 // Reads and parses a scene file. Throws SceneError (also for an unreadable file).
 Scene load_scene(const std::filesystem::path& file);

@@ -16,6 +16,7 @@
 #include "../solvers/gradient_check.hpp"
 #include "analytic.hpp"
 #include "bench.hpp"
+#include "json_reader.hpp"
 #include "optimization.hpp"
 #include "parallel.hpp"
 #include "output.hpp"
@@ -672,64 +673,58 @@ ordered_json run_to_json(const SweepRun& r) {
           {"failure", r.failure}};
 }
 
-// Reads fields of one JSON object, naming `where`.field in its errors.
-class FieldReader {
- public:
-  FieldReader(const ordered_json& object, std::string source, std::string where)
-      : object_(object), source_(std::move(source)), where_(std::move(where)) {
-    if (!object_.is_object()) throw SceneError(source_, where_, "must be an object");
-  }
-  const ordered_json& at(const char* key) const {
-    const auto it = object_.find(key);
-    if (it == object_.end()) throw SceneError(source_, field(key), "is missing");
-    return *it;
-  }
-  template <typename T>
-  T get(const char* key) const {
-    try {
-      return at(key).get<T>();
-    } catch (const nlohmann::json::exception&) {
-      throw SceneError(source_, field(key), "has the wrong type");
-    }
-  }
-  double number(const char* key) const {  // as number_or_null writes it
-    const ordered_json& v = at(key);
-    if (v.is_null()) return SweepRun::kNaN;
-    if (v == "inf" || v == "-inf") {
-      return v == "inf" ? std::numeric_limits<double>::infinity() : -std::numeric_limits<double>::infinity();
-    }
-    if (!v.is_number()) throw SceneError(source_, field(key), "must be a number, null, \"inf\" or \"-inf\"");
-    return v.get<double>();
-  }
-  std::string field(const char* key) const { return where_.empty() ? key : where_ + "." + key; }
+using scene_json::ObjectReader;
 
- private:
-  const ordered_json& object_;
-  std::string source_, where_;
-};
+// A metric as number_or_null writes it.
+double metric(ObjectReader& r, const std::string& key) {
+  const scene_json::json& v = r.get(key);
+  if (v.is_null()) return SweepRun::kNaN;
+  if (v == "inf") return std::numeric_limits<double>::infinity();
+  if (v == "-inf") return -std::numeric_limits<double>::infinity();
+  return r.to_number(v, r.field(key));
+}
 
-SweepRun run_from_json(const ordered_json& value, const std::string& source, const std::string& where) {
-  const FieldReader f(value, source, where);
+std::vector<std::string> strings(ObjectReader& r, const std::string& key) {
+  std::vector<std::string> out;
+  const scene_json::json& values = r.array(key);
+  for (std::size_t i = 0; i < values.size(); ++i) {
+    if (!values[i].is_string()) r.fail(r.field(key) + "[" + std::to_string(i) + "]", "must be a string");
+    out.push_back(values[i].get<std::string>());
+  }
+  return out;
+}
+
+bool flag(ObjectReader& r, const std::string& key) {
+  if (!r.has(key)) r.fail(r.field(key), "is required but missing");
+  return r.boolean(key, false);
+}
+
+SweepRun run_from_json(const scene_json::json& value, const std::string& source, const std::string& path) {
+  ObjectReader f(value, path, source,
+                 {"index", "settings", "frames", "frames_completed", "wall_seconds", "parallel_runs",
+                  "newton_iterations", "factorizations", "unconverged_steps", "position_error",
+                  "orientation_error", "energy_drift", "momentum_drift", "gradient_error",
+                  "gradient_seconds", "reference", "failed", "failure"});
   SweepRun r;
-  r.index = f.get<int>("index");
-  r.settings = f.get<std::vector<std::string>>("settings");
-  r.frames = f.get<int>("frames");
-  r.frames_completed = f.get<int>("frames_completed");
-  r.wall_seconds = f.number("wall_seconds");
-  r.parallel_runs = f.get<int>("parallel_runs");
-  r.newton_iterations = f.get<long>("newton_iterations");
-  r.factorizations = f.get<long>("factorizations");
-  r.unconverged_steps = f.get<int>("unconverged_steps");
-  r.position_error = f.number("position_error");
-  r.orientation_error = f.number("orientation_error");
-  r.energy_drift = f.number("energy_drift");
-  r.momentum_drift = f.number("momentum_drift");
-  r.gradient_error = f.number("gradient_error");
-  r.gradient_seconds = f.number("gradient_seconds");
-  r.reference = f.get<std::string>("reference");
-  r.failed = f.get<bool>("failed");
-  r.failure = f.get<std::string>("failure");
-  if (r.index < 0) throw SceneError(source, f.field("index"), "must be ≥ 0");
+  r.index = f.integer("index", 0);
+  r.settings = strings(f, "settings");
+  r.frames = f.integer("frames", 0);
+  r.frames_completed = f.integer("frames_completed", 0);
+  r.wall_seconds = metric(f, "wall_seconds");
+  r.parallel_runs = f.integer("parallel_runs", 1);
+  r.newton_iterations = f.integer("newton_iterations", 0);
+  r.factorizations = f.integer("factorizations", 0);
+  r.unconverged_steps = f.integer("unconverged_steps", 0);
+  r.position_error = metric(f, "position_error");
+  r.orientation_error = metric(f, "orientation_error");
+  r.energy_drift = metric(f, "energy_drift");
+  r.momentum_drift = metric(f, "momentum_drift");
+  r.gradient_error = metric(f, "gradient_error");
+  r.gradient_seconds = metric(f, "gradient_seconds");
+  r.reference = f.string("reference");
+  r.failed = flag(f, "failed");
+  r.failure = f.string("failure");
+  f.finish();
   return r;
 }
 
@@ -753,36 +748,37 @@ ordered_json sweep_to_json(const SweepResult& result) {
 }
 
 SweepResult sweep_from_json(const ordered_json& value, const std::string& source) {
-  const FieldReader f(value, source, "");
-  if (f.get<std::string>("format") != kSweepFormat) {
-    throw SceneError(source, "format", std::string("is not \"") + kSweepFormat + "\"");
+  const scene_json::json plain = value;  // the scene files' reader, with its field paths
+  ObjectReader f(plain, "", source,
+                 {"format", "scene", "identity", "grid_size", "share", "axis_names", "notes", "references", "runs"});
+  if (f.string("format") != kSweepFormat) {
+    f.fail("format", std::string("is not \"") + kSweepFormat + "\"");
   }
   SweepResult result;
-  result.scene = f.get<std::string>("scene");
-  result.identity = f.at("identity").dump();
-  result.grid_size = f.get<int>("grid_size");
-  const FieldReader share(f.at("share"), source, "share");
-  result.share = {share.get<int>("index"), share.get<int>("count")};
-  if (result.share.count < 1 || result.share.index < 0 || result.share.index >= result.share.count) {
-    throw SceneError(source, "share", "must have 0 ≤ index < count");
-  }
-  result.axis_names = f.get<std::vector<std::string>>("axis_names");
-  result.notes = f.get<std::vector<std::string>>("notes");
+  result.scene = f.string("scene");
+  f.get("identity");
+  result.identity = value.at("identity").dump();  // in the order written (the reader's json sorts keys)
+  result.grid_size = f.integer("grid_size", 0);
+  ObjectReader share(f.get("share"), "share", source, {"index", "count"});
+  result.share = {share.integer("index", 0), share.integer("count", 1)};
+  if (result.share.index >= result.share.count) f.fail("share", "must have 0 ≤ index < count");
+  result.axis_names = strings(f, "axis_names");
+  result.notes = strings(f, "notes");
   for (const char* key : {"references", "runs"}) {
-    const ordered_json& rows = f.at(key);
-    if (!rows.is_array()) throw SceneError(source, key, "must be an array");
-    std::vector<SweepRun>& out = std::string(key) == "runs" ? result.runs : result.references;
+    const bool run = std::string(key) == "runs";
+    const scene_json::json& rows = f.array(key);
+    std::vector<SweepRun>& out = run ? result.runs : result.references;
     for (std::size_t i = 0; i < rows.size(); ++i) {
-      out.push_back(run_from_json(rows[i], source, std::string(key) + "[" + std::to_string(i) + "]"));
-      const bool run = std::string(key) == "runs";
+      const std::string path = std::string(key) + "[" + std::to_string(i) + "]";
+      out.push_back(run_from_json(rows[i], source, path));
       if (run ? out.back().index >= result.grid_size || out.back().settings.size() != result.axis_names.size()
               : out.back().settings.size() != 1) {
-        throw SceneError(source, std::string(key) + "[" + std::to_string(i) + "]",
-                         run ? "is not a grid point of this sweep (index or settings)"
-                             : "is not a reference (its settings are one label)");
+        f.fail(path, run ? "is not a grid point of this sweep (index or settings)"
+                         : "is not a reference (its settings are one label)");
       }
     }
   }
+  f.finish();
   return result;
 }
 

@@ -1,13 +1,13 @@
 #include "sweep_command.hpp"
 
 #include <algorithm>
+#include <chrono>
 #include <cstdlib>
 #include <iostream>
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <optional>
 
-#include "input_file.hpp"
 #include "output_folder.hpp"
 #include "scene.hpp"
 
@@ -30,11 +30,7 @@ SweepResult read_sweep_json(const std::string& text, const std::string& source) 
 }
 
 SweepResult read_sweep_file(const std::filesystem::path& file) {
-  try {
-    return read_sweep_json(read_input_file(file, std::uintmax_t(1) << 30, "sweep result"), file.string());
-  } catch (const InputFileError& e) {
-    throw SceneError(file.string(), "", e.what());
-  }
+  return read_sweep_json(read_named_input(file, std::uintmax_t(1) << 30, "sweep result"), file.string());
 }
 
 int exit_status(const SweepResult& result) {
@@ -152,6 +148,7 @@ int run_sweep_command(const SweepCommand& command, ProcessGroup& group, std::ost
     if (group.size() == 1) merged.share = parts.front().share;  // a shard stays one
     return merged;
   };
+  auto last_checkpoint = std::chrono::steady_clock::time_point{};
   options.on_finished = [&](const SweepResult& so_far) {
     if (!root) {
       group.send(sweep_to_json(so_far).dump(), false);
@@ -159,6 +156,11 @@ int run_sweep_command(const SweepCommand& command, ProcessGroup& group, std::ost
     }
     latest[0] = so_far;
     take_messages(false);
+    // A checkpoint is a commit (an fsync per file): at most one a second, however short the
+    // runs; the last one goes with the outputs.
+    const auto now = std::chrono::steady_clock::now();
+    if (now - last_checkpoint < std::chrono::seconds(1)) return;
+    last_checkpoint = now;
     folder->add("checkpoint.json") << sweep_to_json(union_of_ranks(false)).dump(1) << "\n";
     folder->commit();
   };

@@ -6,8 +6,9 @@
 // Output folders (problems/output_folder.hpp, each locked by the process that writes it):
 //   OUT/                     sweep.csv, sweep.json, *_vs_time.png, checkpoint.json
 //   OUT/shard-I-of-N/        the same for the grid points of shard I (--shard I/N)
-// checkpoint.json is sweep.json of the runs finished so far, replaced after every finished
-// run (a unit of its own); --resume keeps its runs and runs the rest. Under MPI rank 0 writes
+// checkpoint.json is sweep.json of the runs finished so far, replaced as runs finish (a unit
+// of its own, at most once a second) and written whole with the outputs; --resume keeps its
+// runs and runs the rest. Under MPI rank 0 writes
 // everything; the other ranks' runs reach its checkpoint as rank 0 finishes its own runs.
 
 #include <filesystem>

@@ -12,7 +12,6 @@
 #include <string>
 #include <vector>
 
-#include "input_file.hpp"
 #include "output_folder.hpp"
 #include "scene.hpp"
 #include "view_template.hpp"  // kViewTemplate: problems/viewer/view_template.html, generated
@@ -24,11 +23,7 @@ using ordered_json = nlohmann::ordered_json;
 constexpr std::uintmax_t kMaxInput = std::uintmax_t(4) << 30;  // 4 GiB: a long rod run
 
 std::string read(const std::filesystem::path& file, const char* kind) {
-  try {
-    return read_input_file(file, kMaxInput, kind);
-  } catch (const InputFileError& e) {
-    throw SceneError(file.string(), "", e.what());
-  }
+  return read_named_input(file, kMaxInput, kind);
 }
 
 // The fields of one CSV line (RFC 4180 quoting, as csv_field writes).

@@ -233,7 +233,7 @@ TEST(ManySweeps, JsonRoundTripsEveryFieldAndRefusesBadInput) {
     ADD_FAILURE() << "accepted";
   } catch (const SceneError& e) {
     EXPECT_EQ(e.field(), "runs[0].failure");
-    EXPECT_EQ(e.reason(), "is missing");
+    EXPECT_EQ(e.reason(), "is required but missing");
   }
 }
 
