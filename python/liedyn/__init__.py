@@ -88,15 +88,16 @@ class Trajectory:
         """Steps whose solve stopped short of the tolerance (their state was still updated)."""
         return int(np.count_nonzero(~self.converged))
 
-    def to_csv(self, out: Union[str, PathLike]) -> None:
-        """Writes trajectory.csv and frames.csv into the folder `out` (created if missing), as
-        one unit and exactly as `liedyn simulate` writes them (the same writer). Only
+    def to_csv(self, out: Union[str, PathLike], every: int = 1) -> None:
+        """Writes trajectory.csv, frames.csv and shapes.json into the folder `out` (created if
+        missing), as one unit and exactly as `liedyn simulate --every` writes them (the same
+        writer): trajectory.csv holds frames 0, every, 2·every, … and the last. Only
         simulate's trajectories have every column: a DifferentiableProblem's trajectory
         raises ValueError."""
         if self._recording is None:
             raise ValueError("to_csv: this trajectory records positions and rotations only (a "
                              "DifferentiableProblem's run); use liedyn.simulate for the files")
-        self._recording.write_csv(self.scene, str(out))
+        self._recording.write_csv(self.scene, str(out), int(every))
 
 
 def _trajectory(scene: Scene, arrays: dict) -> Trajectory:
@@ -105,12 +106,14 @@ def _trajectory(scene: Scene, arrays: dict) -> Trajectory:
 
 
 def simulate(scene: Scene, frames: Optional[int] = None,
-             out: Union[str, PathLike, None] = None) -> Trajectory:
+             out: Union[str, PathLike, None] = None, every: int = 1) -> Trajectory:
     """Runs a scene as `liedyn simulate` does and returns its Trajectory.
 
     frames: how many steps (default: the scene's own `frames`).
-    out: a folder to write trajectory.csv and frames.csv into as well, as one unit, exactly
-        as the command line writes them.
+    out: a folder to write trajectory.csv, frames.csv and shapes.json into as well, as one
+        unit, exactly as the command line writes them (`liedyn view out` then draws the run).
+    every: trajectory.csv holds every `every`-th frame and the last (`--every`); frames.csv and
+        the returned arrays hold every frame.
 
     A step that cannot update the state raises SimulationFailed, whose `trajectory` holds the
     frames before it (and `out`, if given, has them too). Steps that stop short of the
@@ -118,7 +121,7 @@ def simulate(scene: Scene, frames: Optional[int] = None,
     """
     if frames is not None:
         scene = scene.with_settings({"frames": int(frames)})
-    arrays = _simulate(scene, None if out is None else str(out))
+    arrays = _simulate(scene, None if out is None else str(out), int(every))
     trajectory = _trajectory(scene, arrays)
     if arrays["failure"] is not None:
         error = SimulationFailed(arrays["failure"])

@@ -19,6 +19,11 @@ namespace liedyn::python {
 
 namespace {
 
+// --every's range, as ValueError.
+void checked_every(int every) {
+  if (every < 1) throw py::value_error("every must be >= 1, got " + std::to_string(every));
+}
+
 // A Simulator with the scene it runs (for pickling and for the step failure messages).
 class SimulatorHandle {
  public:
@@ -191,8 +196,10 @@ struct Recording {
     return d;
   }
 
-  // trajectory.csv and frames.csv in `out`, one unit (as `liedyn simulate` writes them).
-  void write_csv(const SceneHandle& scene, const std::filesystem::path& out) const {
+  // trajectory.csv (every `every`-th frame and the last), frames.csv and shapes.json in `out`,
+  // one unit (as `liedyn simulate --every` writes them).
+  void write_csv(const SceneHandle& scene, const std::filesystem::path& out, int every) const {
+    checked_every(every);
     const Model& model = scene.scene.model;
     for (const FrameRecord& record : frames) {
       const auto rods = static_cast<int>(model.rods.size());
@@ -202,7 +209,7 @@ struct Recording {
       }
     }
     OutputFolder folder(out, "python Trajectory.to_csv " + scene.scene.source, nullptr);
-    RunFiles files(folder, scene.scene);
+    RunFiles files(folder, scene.scene, every);
     for (const FrameRecord& record : frames) files.add(record);
     if (!frames.empty()) files.finish(frames.back());
     folder.commit();
@@ -404,12 +411,13 @@ edges (rod_points / rod_rotations give a rod's rows). One Simulator per thread.)
 
   py::class_<Recording, std::shared_ptr<Recording>>(m, "_Recording",
                                                      "A run's frames as recorded (Trajectory.to_csv).")
-      .def("write_csv", &Recording::write_csv, py::arg("scene"), py::arg("out"),
+      .def("write_csv", &Recording::write_csv, py::arg("scene"), py::arg("out"), py::arg("every") = 1,
            py::call_guard<py::gil_scoped_release>());
 
   m.def(
       "_simulate",
-      [](const SceneHandle& scene, std::optional<std::filesystem::path> out) {
+      [](const SceneHandle& scene, std::optional<std::filesystem::path> out, int every) {
+        checked_every(every);
         auto recording = std::make_shared<Recording>();
         SimulationSummary summary;
         {
@@ -419,7 +427,7 @@ edges (rod_points / rod_rotations give a rod's rows). One Simulator per thread.)
           };
           if (out) {
             OutputFolder folder(*out, "python simulate " + scene.scene.source, nullptr);
-            summary = simulate_into(scene.scene, &folder, nullptr, observe);
+            summary = simulate_into(scene.scene, &folder, nullptr, observe, every);
             folder.commit();  // also after a failed step: its frames are valid
           } else {
             summary = simulate_into(scene.scene, nullptr, nullptr, observe);
@@ -432,10 +440,10 @@ edges (rod_points / rod_rotations give a rod's rows). One Simulator per thread.)
         d["solve_seconds"] = summary.solve_seconds;
         return d;
       },
-      py::arg("scene"), py::arg("out") = py::none(),
+      py::arg("scene"), py::arg("out") = py::none(), py::arg("every") = 1,
       "The command line's run (problems/run.hpp) with every frame recorded (arrays, and the "
       "recording for Trajectory.to_csv); with `out`, trajectory.csv and frames.csv written "
-      "there as one unit, as `liedyn simulate` writes them. Use liedyn.simulate.");
+      "there as one unit, as `liedyn simulate --every` writes them. Use liedyn.simulate.");
 }
 
 }  // namespace liedyn::python

@@ -122,6 +122,31 @@ def test_simulate_matches_the_command_line_to_the_last_digit(scenes, cli, tmp_pa
         np.testing.assert_array_equal(sim.quaternions(), run.quaternions[-1])
 
 
+def test_every_writes_the_command_lines_files_and_the_viewer_reads_them(scenes, cli, tmp_path):
+    scene = liedyn.Scene.from_file(scenes / "rod_pendulum.json").with_settings({"frames": 23})
+    run = liedyn.simulate(scene, out=tmp_path / "py", every=5)
+    run.to_csv(tmp_path / "to_csv", every=5)
+    result = cli("simulate", scenes / "rod_pendulum.json", "--set", "frames=23", "--every", "5",
+                 "--out", tmp_path / "cli", "--quiet")
+    assert result.returncode == 0, result.stderr
+    for file in ["trajectory.csv", "frames.csv", "shapes.json"]:
+        assert (tmp_path / "py" / file).read_text() == (tmp_path / "cli" / file).read_text()
+        assert (tmp_path / "to_csv" / file).read_text() == (tmp_path / "cli" / file).read_text()
+    # Frames 0, 5, …, 20 and the last; the arrays keep every frame.
+    written = sorted({int(r["frame"]) for r in read_csv(tmp_path / "py" / "trajectory.csv")})
+    assert written == [0, 5, 10, 15, 20, 23]
+    assert run.positions.shape[0] == 24
+    view = cli("view", tmp_path / "py")
+    assert view.returncode == 0, view.stderr
+    assert "6 frames" in view.stdout
+    for bad in [0, -3]:
+        with pytest.raises(ValueError, match="every must be >= 1"):
+            liedyn.simulate(scene, out=tmp_path / "bad", every=bad)
+        with pytest.raises(ValueError, match="every must be >= 1"):
+            run.to_csv(tmp_path / "bad", every=bad)
+    assert not (tmp_path / "bad").exists()
+
+
 def test_to_csv_writes_every_column_of_a_contact_run_and_refuses_a_problem_run(scenes, cli, tmp_path):
     # Rods that touch each other: frames.csv's min_rod_separation column is filled.
     name = "contact/rod_coil.json"
