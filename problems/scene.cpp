@@ -444,7 +444,7 @@ constexpr int kMaxContactSamples = 1000000;
 // link | mesh, its parameters, pose ("position", "orientation"; a plane may give its "normal"
 // instead) and "inside".
 Collider parse_collider(const json& value, const std::string& path, const std::string& source,
-                        int& budget) {
+                        const std::filesystem::path& folder, int& budget) {
   ObjectReader c(value, path, source, {"name", "position", "orientation", "inside"},
                  {"type",
                   {{"plane", {"normal"}},
@@ -513,7 +513,7 @@ Collider parse_collider(const json& value, const std::string& path, const std::s
     // A closed OBJ mesh ("file", relative to the scene file's folder, times "scale") sampled on
     // a grid of "cell_size" over its bounding box grown by "padding" (lib/mesh_sdf.hpp).
     std::filesystem::path file = c.string("file");
-    if (file.is_relative()) file = std::filesystem::path(source).parent_path() / file;
+    if (file.is_relative()) file = folder / file;
     const double scale = c.number("scale", 1.0);
     if (!(scale > 0.0)) c.fail(c.field("scale"), "must be positive");
     const double cell_size = c.number("cell_size");
@@ -553,7 +553,7 @@ void require_body_shape(const ObjectReader& r, const Collider& solid, const std:
 // to touch with its "sample_spacing") or of a rod (every free node, and its edges against
 // other rods' and, with "self_contact", its own; radius defaults to the rod's). Units and
 // defaults: lib/contact.hpp, lib/body_contact.hpp, lib/edge_contact.hpp.
-ContactMaterial parse_contact(ObjectReader& owner, double default_radius,
+ContactMaterial parse_contact(ObjectReader& owner, const std::filesystem::path& folder, double default_radius,
                               std::vector<Vector3>* points, std::shared_ptr<const Collider>* shape,
                               int& budget, RodSpec* rod = nullptr) {
   // A body's contact gives its samples and its shape; a rod's samples are its nodes.
@@ -623,7 +623,7 @@ ContactMaterial parse_contact(ObjectReader& owner, double default_radius,
       // A tube is read against what is left of the budget, on a copy: it is refused right
       // after as a body's shape (its "type" named), not for its points (with no budget).
       int tube_points = budget;
-      Collider solid = parse_collider(c.get("shape"), c.field("shape"), owner.source(), tube_points);
+      Collider solid = parse_collider(c.get("shape"), c.field("shape"), owner.source(), folder, tube_points);
       require_body_shape(c, solid, c.field("shape"));
       if (c.has("sample_spacing")) {
         try {
@@ -779,7 +779,7 @@ RodSpec parse_rod(const json& value, const std::string& path, const std::string&
   }
   if (r.has("contact")) {
     int no_samples = 0;  // a rod's samples are its nodes
-    rod.contact = parse_contact(r, rod.radius, nullptr, nullptr, no_samples, &rod);
+    rod.contact = parse_contact(r, {}, rod.radius, nullptr, nullptr, no_samples, &rod);
   }
   if (r.has("prescribed_motions")) {
     const json& motions = r.array("prescribed_motions");
@@ -804,7 +804,7 @@ Enum named_value(ObjectReader& reader, const std::string& key, const std::string
   return *parsed;
 }
 
-Scene parse(const json& root, const std::string& source) {
+Scene parse(const json& root, const std::string& source, const std::filesystem::path& folder) {
   Scene scene;
   scene.source = source;
   ObjectReader top(root, "", source,
@@ -908,7 +908,7 @@ Scene parse(const json& root, const std::string& source) {
     body.linear_velocity = b.vector<3>("linear_velocity", Vector3::Zero());
     body.angular_velocity = b.vector<3>("angular_velocity", Vector3::Zero());
     if (b.has("contact")) {
-      body.contact = parse_contact(b, 0.0, &body.contact_points, &body.shape, contact_budget);
+      body.contact = parse_contact(b, folder, 0.0, &body.contact_points, &body.shape, contact_budget);
     }
     if (b.has("kinematic")) {
       for (const char* key : {"mass", "inertia", "density", "linear_velocity", "angular_velocity"}) {
@@ -955,7 +955,7 @@ Scene parse(const json& root, const std::string& source) {
     for (std::size_t i = 0; i < colliders.size(); ++i) {
       const std::string path = item_path("colliders", i);
       if (!colliders[i].is_object() || !colliders[i].contains("kinematic")) {
-        scene.model.colliders.push_back(parse_collider(colliders[i], path, source, contact_budget));
+        scene.model.colliders.push_back(parse_collider(colliders[i], path, source, folder, contact_budget));
         continue;
       }
       // A moving collider is a kinematic body with that shape and no samples (appended after
@@ -964,7 +964,7 @@ Scene parse(const json& root, const std::string& source) {
       // an inside-out one included (validate_body_shape is for the bodies' own shapes).
       json fixed = colliders[i];
       fixed.erase("kinematic");
-      Collider solid = parse_collider(fixed, path, source, contact_budget);
+      Collider solid = parse_collider(fixed, path, source, folder, contact_budget);
       json motion_part = json::object();  // what the collider reader above did not read
       for (const char* key : {"name", "kinematic"}) {
         if (colliders[i].contains(key)) motion_part[key] = colliders[i][key];
@@ -1153,7 +1153,7 @@ std::string identity_of(json root) {
 
 }  // namespace
 
-Scene parse_scene(const std::string& json_text, const std::string& source) {
+Scene parse_scene(const std::string& json_text, const std::string& source, const std::filesystem::path& folder) {
   // The JSON parser would stop at a NUL byte and ignore what follows.
   if (const std::size_t nul = json_text.find('\0'); nul != std::string::npos) {
     throw SceneError(source, "", "contains a NUL byte at offset " + std::to_string(nul) +
@@ -1169,7 +1169,7 @@ Scene parse_scene(const std::string& json_text, const std::string& source) {
   } catch (const json::exception& e) {
     throw SceneError(source, "", std::string("invalid JSON: ") + e.what());
   }
-  Scene scene = parse(root, source);
+  Scene scene = parse(root, source, folder.empty() ? std::filesystem::path(source).parent_path() : folder);
   scene.identity = identity_of(root);
   return scene;
 }
@@ -1188,7 +1188,7 @@ std::string read_scene_file(const std::filesystem::path& file) {
 }
 
 Scene load_scene(const std::filesystem::path& file) {
-  return parse_scene(read_scene_file(file), file.string());
+  return parse_scene(read_scene_file(file), file.string(), file.parent_path());
 }
 
 }  // namespace liedyn

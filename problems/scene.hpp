@@ -63,8 +63,11 @@ struct Scene {
   AnalyticSolution analytic = AnalyticSolution::kNone;
 };
 
-// Parses and validates JSON text; `source` names it in error messages.
-Scene parse_scene(const std::string& json_text, const std::string& source);
+// Parses and validates JSON text; `source` names it in error messages. Relative file names in
+// it (meshes) are read from `folder`, by default the folder of `source` taken as a path (give
+// it when `source` is a label: "scene.json [settings]").
+Scene parse_scene(const std::string& json_text, const std::string& source,
+                  const std::filesystem::path& folder = {});
 
 // The text of a scene file. Throws SceneError (unreadable file, a directory).
 std::string read_scene_file(const std::filesystem::path& file);

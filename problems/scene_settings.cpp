@@ -64,7 +64,7 @@ Scene load_scene(const std::filesystem::path& file, const std::vector<std::strin
   try {
     root = json::parse(text);
   } catch (const json::exception&) {
-    return parse_scene(text, file.string());  // its message says where the JSON breaks
+    return parse_scene(text, file.string(), file.parent_path());  // its message says where the JSON breaks
   }
   std::string label;
   for (const std::string& setting : settings) {
@@ -74,7 +74,7 @@ Scene load_scene(const std::filesystem::path& file, const std::vector<std::strin
     set_scene_path(root, path, parse_setting_value(value), file.string());
     label += (label.empty() ? "" : " ") + setting;
   }
-  return parse_scene(root.dump(), file.string() + " [" + label + "]");
+  return parse_scene(root.dump(), file.string() + " [" + label + "]", file.parent_path());
 }
 
 }  // namespace liedyn

@@ -96,7 +96,7 @@ GridScene make_scene(const json& base, const std::string& source,
   GridScene g;
   g.settings = values;
   g.label = describe(paths, values);
-  g.scene = parse_scene(root.dump(), source + " [" + g.label + "]");
+  g.scene = parse_scene(root.dump(), source + " [" + g.label + "]", std::filesystem::path(source).parent_path());
   return g;
 }
 

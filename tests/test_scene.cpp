@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "problems/scene.hpp"
+#include "problems/scene_settings.hpp"
 
 namespace liedyn {
 namespace {
@@ -224,6 +225,24 @@ TEST(SceneParse, NearlyUnitQuaternionIsNormalised) {
   EXPECT_LT((R.transpose() * R - Matrix3::Identity()).norm(), 1e-14);
   EXPECT_NEAR(R.determinant(), 1.0, 1e-14);
   EXPECT_TRUE((R * Vector3::UnitX()).isApprox(Vector3::UnitY(), 1e-12)) << R;
+}
+
+// A relative mesh path is read from the scene file's folder, also when --set values (with a
+// '/' in them) label the scene: the label is not a path.
+TEST(SceneParse, RelativeMeshPathsAreReadFromTheSceneFolderWhateverTheSettings) {
+  const std::filesystem::path file =
+      std::filesystem::path(LIEDYN_SOURCE_DIR) / "problems/scenes/contact/mesh_slab.json";
+  const Scene s = load_scene(file, {"colliders.0.file=meshes/slab.obj", "frames=3"});
+  EXPECT_EQ(s.source, file.string() + " [colliders.0.file=meshes/slab.obj frames=3]");
+  ASSERT_EQ(s.model.colliders.size(), 1u);
+  // A file that is not beside the scene is named as the scene's folder's.
+  try {
+    load_scene(file, {"colliders.0.file=meshes/none.obj"});
+    FAIL() << "a missing mesh loaded";
+  } catch (const SceneError& e) {
+    EXPECT_NE(std::string(e.what()).find((file.parent_path() / "meshes/none.obj").string()), std::string::npos)
+        << e.what();
+  }
 }
 
 TEST(SceneParse, LoadsTheButterflyBoltExample) {

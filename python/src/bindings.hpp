@@ -26,10 +26,13 @@ namespace py = pybind11;
 struct SceneHandle {
   std::string json;
   Scene scene;
+  std::filesystem::path folder;  // where its relative mesh paths are read from
 };
 
-// Parses JSON text (SceneError on bad input).
-SceneHandle parse_scene_handle(const std::string& json, const std::string& source);
+// Parses JSON text (SceneError on bad input); relative mesh paths from `folder`, by default
+// the folder of `source` taken as a path.
+SceneHandle parse_scene_handle(const std::string& json, const std::string& source,
+                               const std::filesystem::path& folder = {});
 
 void bind_scene(py::module_& m);
 void bind_simulator(py::module_& m);

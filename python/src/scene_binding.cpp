@@ -11,8 +11,10 @@
 
 namespace liedyn::python {
 
-SceneHandle parse_scene_handle(const std::string& json, const std::string& source) {
-  return SceneHandle{json, parse_scene(json, source)};
+SceneHandle parse_scene_handle(const std::string& json, const std::string& source,
+                               const std::filesystem::path& folder) {
+  const std::filesystem::path from = folder.empty() ? std::filesystem::path(source).parent_path() : folder;
+  return SceneHandle{json, parse_scene(json, source, from), from};
 }
 
 namespace {
@@ -56,8 +58,10 @@ with_settings. A scene is immutable and pickles through its JSON text.)doc")
           py::arg("path"),
           "Reads and validates a scene file (JSON). Relative mesh paths are resolved against "
           "the file's folder.")
-      .def_static("from_json", &parse_scene_handle, py::arg("text"),
-                  py::arg("source") = "<json>",
+      .def_static(
+          "from_json",
+          [](const std::string& text, const std::string& source) { return parse_scene_handle(text, source); },
+          py::arg("text"), py::arg("source") = "<json>",
                   "Parses and validates scene JSON text. `source` names it in error messages; "
                   "relative mesh paths are resolved against its folder.")
       .def_static(
@@ -83,7 +87,7 @@ with_settings. A scene is immutable and pickles through its JSON text.)doc")
               set_scene_path(root, path, nlohmann::json::parse(text), s.scene.source);
               label += (label.empty() ? "" : " ") + path + "=" + text;
             }
-            return parse_scene_handle(root.dump(), s.scene.source + " [" + label + "]");
+            return parse_scene_handle(root.dump(), s.scene.source + " [" + label + "]", s.folder);
           },
           py::arg("settings"),
           "A new scene with values at dotted paths of the JSON document, as the command "
@@ -120,9 +124,10 @@ with_settings. A scene is immutable and pickles through its JSON text.)doc")
                     std::to_string(s.scene.frames) + " frames>";
            })
       .def(py::pickle(
-          [](const SceneHandle& s) { return py::make_tuple(s.json, s.scene.source); },
+          [](const SceneHandle& s) { return py::make_tuple(s.json, s.scene.source, s.folder.string()); },
           [](const py::tuple& t) {
-            return parse_scene_handle(t[0].cast<std::string>(), t[1].cast<std::string>());
+            return parse_scene_handle(t[0].cast<std::string>(), t[1].cast<std::string>(),
+                                      std::filesystem::path(t[2].cast<std::string>()));
           }));
 }
 

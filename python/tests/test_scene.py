@@ -97,3 +97,13 @@ def test_scene_pickles_through_its_json(scenes):
     assert copy.identity == scene.identity
     assert copy.source == scene.source
     assert copy.has_optimization
+
+
+def test_relative_mesh_paths_follow_the_scene_file_through_settings_and_pickles(scenes):
+    scene = liedyn.Scene.from_file(scenes / "contact" / "mesh_slab.json")
+    # A setting whose value has a '/' labels the scene; the mesh is still read beside the file.
+    moved = scene.with_settings({"colliders.0.file": "meshes/slab.obj", "frames": 2})
+    again = pickle.loads(pickle.dumps(moved)).with_settings({"frames": 3})
+    assert again.frames == 3
+    with pytest.raises(liedyn.SceneError, match="meshes/none.obj"):
+        moved.with_settings({"colliders.0.file": "meshes/none.obj"})
