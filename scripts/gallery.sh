@@ -16,8 +16,9 @@
 # Each run: `liedyn simulate SCENE --out TMP --every N` with about a hundred written frames
 # (the picture needs the last one; the others only set the camera, which frames the whole
 # run), then `liedyn view TMP` and a 480x360 screenshot of
-# view.html#frame=last&paused&hide=panel,ui,title in headless Chromium. Simulation and
-# drawing are deterministic, so a picture is rewritten only when its bytes change.
+# view.html#frame=last&paused&hide=panel,ui,title (and a scene's `framing` below) in headless
+# Chromium. Simulation and drawing are deterministic (a second run of all scenes rewrote no
+# byte), and a picture is only copied when its bytes change.
 set -euo pipefail
 
 root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
