@@ -4,6 +4,7 @@
 // loaded and drawn by headless Chromium.
 
 #include <gtest/gtest.h>
+#include <sys/wait.h>
 
 #include <algorithm>
 #include <cctype>
@@ -275,19 +276,85 @@ TEST_F(ViewCli, InlinedTextCannotCloseItsScriptElement) {
   }
 }
 
-// The page in a real browser: it loads the poses, reports them, and draws (pixels that are
-// not the background). scripts/viewer/check_view.sh runs Debian's Chromium headless.
-TEST_F(ViewCli, ChromiumLoadsThePageAndDrawsTheScene) {
-  if (std::system("command -v chromium > /dev/null 2>&1") != 0) {
-    GTEST_SKIP() << "chromium is not installed (scripts/install-deps.sh installs it)";
+// The page in a real browser: scripts/viewer/check_view.sh runs Debian's Chromium headless on
+// a page (with its fragment) and writes its report to check.txt; `options` go before the page,
+// `counts` (expected frames and objects) after the picture.
+class ViewCliChromium : public ViewCli {
+ protected:
+  void SetUp() override {
+    ViewCli::SetUp();
+    if (std::system("command -v chromium > /dev/null 2>&1") != 0) {
+      GTEST_SKIP() << "chromium is not installed (scripts/install-deps.sh installs it)";
+    }
   }
+  // check_view.sh's exit status; its output in `report`.
+  int check(const std::string& options, const std::string& page, std::string& report,
+            const std::string& counts = "") {
+    const std::string command = "bash '" + std::string(LIEDYN_SOURCE_DIR) + "/scripts/viewer/check_view.sh' " +
+                                options + " '" + (dir_ / page).string() + "' '" + (dir_ / "shot.png").string() +
+                                "' " + counts + " > '" + (dir_ / "check.txt").string() + "' 2>&1";
+    const int status = std::system(command.c_str());
+    report = test::read_file(dir_ / "check.txt");
+    return status == -1 || !WIFEXITED(status) ? -1 : WEXITSTATUS(status);
+  }
+};
+
+// It loads the poses, reports them, and draws (pixels that are not the background).
+TEST_F(ViewCliChromium, LoadsThePageAndDrawsTheScene) {
   ASSERT_EQ(run({"simulate", "scene.json", "--out", "out", "--quiet"}).exit_code, 0);
   ASSERT_EQ(run({"view", "out"}).exit_code, 0);
-  const std::string command = "bash '" + std::string(LIEDYN_SOURCE_DIR) + "/scripts/viewer/check_view.sh' '" +
-                              (dir_ / "out" / "view.html").string() + "' '" + (dir_ / "shot.png").string() +
-                              "' 11 8 > '" + (dir_ / "check.txt").string() + "' 2>&1";
-  const int status = std::system(command.c_str());
-  EXPECT_EQ(status, 0) << test::read_file(dir_ / "check.txt");
+  std::string report;
+  EXPECT_EQ(check("", "out/view.html", report, "11 8"), 0) << report;
+  EXPECT_NE(report.find("page drew frame 0 (t = 0 s)"), std::string::npos) << report;
+}
+
+// The fragment chooses the frame to show (by number or time; with --every 4 the written frames
+// are 0, 4, 8 and 10) and the page says when it has drawn it; bad options are warned about and
+// ignored, never an error.
+TEST_F(ViewCliChromium, TheFragmentChoosesTheFrameAndBadOptionsAreIgnored) {
+  ASSERT_EQ(run({"simulate", "scene.json", "--out", "out", "--every", "4", "--quiet"}).exit_code, 0);
+  ASSERT_EQ(run({"view", "out"}).exit_code, 0);
+  std::string report;
+  EXPECT_EQ(check("--size 480x360 --drawn 10", "out/view.html#frame=last&paused&hide=panel,ui", report), 0)
+      << report;
+  EXPECT_NE(report.find("screenshot 480x360"), std::string::npos) << report;
+  EXPECT_EQ(report.find("page warning"), std::string::npos) << report;
+  EXPECT_EQ(check("--drawn 8", "out/view.html#t=0.075&paused&edges&camera=30,60&fit=frame&zoom=0.5", report), 0) << report;
+  // Frame 5 was not written: the nearest that was, with a warning.
+  EXPECT_EQ(check("--drawn 4", "out/view.html#frame=5&paused", report), 0) << report;
+  EXPECT_NE(report.find("page warning: #frame=5: frame 5 was not written: showing frame 4"), std::string::npos)
+      << report;
+  // Each bad option warned about; the page still opens, at frame 0, and draws.
+  EXPECT_EQ(check("--drawn 0",
+                  "out/view.html#frame=11&t=x&paused=maybe&hide=panel,menu&camera=0,90&fit=all&zoom=0&colour=red",
+                  report),
+            0)
+      << report;
+  for (const char* warning : {"#frame=11: the run has frames 0 to 10; ignored", "#t=x: expected a time",
+                              "#paused=maybe: expected no value, 1 or 0", "\"menu\" is none of panel, ui, title",
+                              "#camera=0,90: expected AZ,EL", "#fit=all: expected run or frame", "#zoom=0: expected a number > 0",
+                              "#colour=red: unknown option"}) {
+    EXPECT_NE(report.find(warning), std::string::npos) << warning << "\n" << report;
+  }
+}
+
+// The first view holds the whole run: a solid placed off its body's origin (its shape's
+// "position") and a collider of finite size on the other side, nothing cut off at the edges.
+// (Bounded about the body's origin instead, the ball would stick out on the right.)
+TEST_F(ViewCliChromium, TheFirstViewHoldsOffsetSolidsAndFiniteColliders) {
+  std::ofstream(dir_ / "apart.json") << R"({
+    "time_step": 0.01, "frames": 4, "gravity": [0, 0, 0],
+    "bodies": [ { "name": "weight", "mass": 1, "inertia": [0.1, 0.1, 0.1], "position": [0, 0, 0],
+                  "contact": { "shape": { "type": "sphere", "radius": 1, "position": [1.8, 0, 0] },
+                               "sample_spacing": 0.5, "stiffness": 1e4 } } ],
+    "colliders": [ { "name": "post", "type": "sphere", "radius": 0.5, "position": [-3, 0, 0] } ] })";
+  const Result sim = run({"simulate", "apart.json", "--out", "out", "--quiet"});
+  ASSERT_EQ(sim.exit_code, 0) << sim.err;
+  ASSERT_EQ(run({"view", "out"}).exit_code, 0);
+  std::string report;
+  EXPECT_EQ(check("--clear-edges --drawn 4", "out/view.html#frame=last&paused&hide=panel,ui,title", report), 0)
+      << report;
+  EXPECT_NE(report.find("nothing drawn within 2 pixels of the edges"), std::string::npos) << report;
 }
 
 }  // namespace

@@ -1,13 +1,23 @@
 #!/usr/bin/env bash
 # Check a `liedyn view` page (view.html) in headless Chromium:
 #   (a) the page logged "liedyn-view: loaded F frames, O objects" (with the expected F and O,
-#       when given),
+#       when given) and "liedyn-view: drawn frame K (t = T s)" (with the expected K, --drawn),
 #   (b) no JS error was logged ("Uncaught ..." or the page's own "liedyn-view error: ..."),
 #   (c) the screenshot is not blank: more than 1% of its pixels differ from the top-left one
-#       (the page keeps its overlays clear of that corner, so it is the canvas background).
+#       (the page keeps its overlays clear of that corner, so it is the canvas background;
+#       --sparse-ok waives this for a page that draws little, e.g. a body as a triad of lines);
+#       with --clear-edges, also nothing is cut off: the outermost two pixels all round are
+#       background (for a scene without planes, and its overlays hidden: hide=panel,ui,title).
+# The page's warnings ("liedyn-view: warning: ...", e.g. a bad fragment option) are printed as
+# "check_view: page warning: ...", and do not fail the check.
 #
-# Usage: scripts/viewer/check_view.sh VIEW_HTML OUT_PNG [EXPECTED_FRAMES [EXPECTED_OBJECTS]]
-#   VIEW_HTML may end in a URL fragment with the page's options, e.g. view.html#frame=100&paused
+# Usage: scripts/viewer/check_view.sh [--size WxH] [--drawn K] [--clear-edges] [--sparse-ok]
+#                                      VIEW_HTML OUT_PNG
+#                                      [EXPECTED_FRAMES [EXPECTED_OBJECTS]]
+#   VIEW_HTML may end in a URL fragment with the page's options (view_template.html's header),
+#   e.g. view.html#frame=last&paused&hide=panel,ui
+#   --size: the window, and so the screenshot, in CSS pixels (default 800x600)
+#   --drawn: the frame number the page must report drawn (e.g. the run's last)
 # Needs: apt-get install -y --no-install-recommends chromium   (and python3, standard library)
 # Exit status: 0 all checks passed, 1 a check failed, 2 usage or setup error.
 #
@@ -20,7 +30,27 @@ set -euo pipefail
 die() { echo "check_view: $*" >&2; exit 2; }
 fail() { echo "check_view: FAIL: $*" >&2; failed=1; }
 
-[[ $# -ge 2 && $# -le 4 ]] || die "usage: $0 VIEW_HTML OUT_PNG [EXPECTED_FRAMES [EXPECTED_OBJECTS]]"
+usage="usage: $0 [--size WxH] [--drawn K] [--clear-edges] [--sparse-ok] VIEW_HTML OUT_PNG [EXPECTED_FRAMES [EXPECTED_OBJECTS]]"
+size=800,600
+want_drawn=
+clear_edges=0
+sparse_ok=0
+while [[ $# -gt 0 && $1 == --* ]]; do
+  case $1 in
+    --size) [[ $# -ge 2 && ${2:-} =~ ^([0-9]+)x([0-9]+)$ ]] || die "--size: expected WxH, e.g. 480x360"
+            size=${BASH_REMATCH[1]},${BASH_REMATCH[2]}
+            shift 2 ;;
+    --drawn) [[ $# -ge 2 && ${2:-} =~ ^[0-9]+$ ]] || die "--drawn: expected a frame number"
+             want_drawn=$2
+             shift 2 ;;
+    --clear-edges) clear_edges=1
+                   shift ;;
+    --sparse-ok) sparse_ok=1
+                 shift ;;
+    *) die "$usage" ;;
+  esac
+done
+[[ $# -ge 2 && $# -le 4 ]] || die "$usage"
 view=${1%%#*}
 fragment=${1#"$view"}  # "" or "#..."
 png=$2
@@ -48,7 +78,7 @@ start=$(date +%s%N)
 status=0
 timeout 300 "$chrome" --headless --no-sandbox --disable-gpu --use-gl=swiftshader \
   --enable-unsafe-swiftshader --allow-file-access-from-files --user-data-dir="$profile" \
-  --enable-logging=stderr --v=0 --virtual-time-budget=5000 --window-size=800,600 \
+  --enable-logging=stderr --v=0 --virtual-time-budget=5000 --window-size="$size" \
   --hide-scrollbars --screenshot="$png_abs" "$url" >"$log" 2>&1 || status=$?
 ms=$((($(date +%s%N) - start) / 1000000))
 printf 'check_view: chromium took %d.%03d s (exit status %d)\n' $((ms / 1000)) $((ms % 1000)) "$status"
@@ -68,6 +98,17 @@ else
   [[ -z $want_objects || $objects == "$want_objects" ]] || fail "expected $want_objects objects, the page has $objects"
 fi
 
+drawn=$(grep -oE '"liedyn-view: drawn frame [0-9]+ [^"]*"' <<<"$console" | head -n 1 || true)
+if [[ -z $drawn ]]; then
+  fail 'no console line "liedyn-view: drawn frame K (t = T s)"'
+else
+  read -r drawn_frame drawn_rest < <(sed -E 's/"liedyn-view: drawn frame ([0-9]+) (.*)"/\1 \2/' <<<"$drawn")
+  echo "check_view: page drew frame $drawn_frame $drawn_rest"
+  [[ -z $want_drawn || $drawn_frame == "$want_drawn" ]] || fail "expected frame $want_drawn drawn, the page drew $drawn_frame"
+fi
+grep -oE '"liedyn-view: warning: .*", source:' <<<"$console" |
+  sed -E 's/^"liedyn-view: warning: (.*)", source:$/check_view: page warning: \1/' || true
+
 # (b) JS errors
 errors=$(grep -E '"(Uncaught|liedyn-view error)' <<<"$console" | sed -E 's/^\[[^]]*\] /  /' || true)
 [[ -z $errors ]] || fail "JS errors logged:"$'\n'"$errors"
@@ -76,7 +117,7 @@ errors=$(grep -E '"(Uncaught|liedyn-view error)' <<<"$console" | sed -E 's/^\[[^
 if [[ ! -s $png_abs ]]; then
   fail "no screenshot written to $png_abs"
 else
-  python3 - "$png_abs" <<'PY' || failed=1
+  python3 - "$png_abs" "$clear_edges" "$sparse_ok" <<'PY' || failed=1
 # A PNG reader on the standard library only (zlib): 8-bit RGB or RGBA, not interlaced, which
 # is what Chromium writes.
 import struct, sys, zlib
@@ -132,8 +173,15 @@ differing = sum(1 for line in rows for i in range(0, stride, bpp) if line[i:i + 
 share = differing / (width * height)
 print(f"check_view: screenshot {width}x{height}, {100 * share:.1f}% of pixels differ from the "
       f"background rgb{tuple(background)}")
-if share <= 0.01:
+if share <= 0.01 and sys.argv[3] != "1":
     sys.exit("check_view: FAIL: the screenshot is blank (<= 1% of pixels differ from the background)")
+if sys.argv[2] == "1":
+    edge = [(x, y) for y in range(height) for x in range(width)
+            if min(x, y, width - 1 - x, height - 1 - y) < 2 and rows[y][bpp * x:bpp * x + 3] != background]
+    if edge:
+        sys.exit(f"check_view: FAIL: {len(edge)} pixels of the outermost two rows and columns are not "
+                 f"background (the scene is cut off), e.g. at x, y = {edge[0]}")
+    print("check_view: nothing drawn within 2 pixels of the edges")
 PY
 fi
 
