@@ -24,6 +24,8 @@
 //   liedyn sweep-merge SHARD_DIR… --out DIR   (the shards of --shard joined)
 //   liedyn view RUN_DIR   (RUN_DIR/view.html: the run animated in one offline page;
 //                  problems/view.hpp)
+//   liedyn plot DIR [--out OUT]   (PNGs of a run's frames.csv, an optimisation's history.csv
+//                  and starts.csv, written into OUT, default DIR; problems/run_plots.hpp)
 //   liedyn optimize SCENE.json --out DIR [--optimizer nlopt-lbfgs|ceres-lbfgs|ipopt-lbfgs]
 //                  [--max-iterations N] [--resume] [--starts K [--seed S] [--spread σ] [-j N]]
 //                  (exit 0 target reached, 3 stopped short of it, 4 failed;
@@ -56,6 +58,7 @@
 #include "run.hpp"
 #include "scene_checks.hpp"
 #include "sweep_command.hpp"
+#include "run_plots.hpp"
 #include "view.hpp"
 
 #include <unistd.h>
@@ -257,6 +260,15 @@ int main(int argc, char** argv) {
       "view", "Write RUN_DIR/view.html: one offline page that animates a run (three.js)");
   view->add_option("run_dir", view_dir, "A run's output folder (liedyn simulate --out)")->required();
 
+  std::string plot_dir, plot_out;
+  CLI::App* plot = app.add_subcommand(
+      "plot",
+      "PNG plots of an output folder: a run's energy, iterations, gradient norms, "
+      "penetration and momentum; an optimisation's loss");
+  plot->add_option("dir", plot_dir, "An output folder (liedyn simulate or optimize --out)")
+      ->required();
+  plot->add_option("--out", plot_out, "Where to write the PNGs (default: the folder itself)");
+
   std::vector<std::string> merge_dirs;
   CLI::App* sweep_merge = app.add_subcommand(
       "sweep-merge", "Join the shards of a sweep (--shard) into the outputs of one sweep");
@@ -332,6 +344,10 @@ int main(int argc, char** argv) {
                 << v.bytes / 1024 << " KiB\n"
                 << "open " << std::filesystem::absolute(view_dir / std::filesystem::path("view.html")).string()
                 << " in a browser (offline: everything is in the file)\n";
+      return 0;
+    }
+    if (plot->parsed()) {
+      liedyn::write_plots(plot_dir, plot_out.empty() ? plot_dir : plot_out, std::cout);
       return 0;
     }
     if (sweep_merge->parsed()) {

@@ -20,6 +20,7 @@
 #include "output.hpp"
 #include "process_group.hpp"
 #include "run.hpp"
+#include "run_plots.hpp"
 
 namespace liedyn {
 
@@ -689,7 +690,14 @@ int run_optimize(const Scene& scene, const OptimizeOptions& options, std::ostrea
 
   const Eigen::VectorXd& best =
       checkpoint.best.size() == start.size() ? checkpoint.best : result.best_x;
-  // The best γ and its trajectory, replaced together.
+  // The best γ, its trajectory and the plot of the loss that led there, replaced together.
+  std::vector<double> iterations, losses;
+  for (const HistoryRow& h : checkpoint.history) {
+    iterations.push_back(h.iteration);
+    losses.push_back(h.loss);
+  }
+  write_png(loss_plot(iterations, losses, checkpoint.loss_scale, options.out),
+            folder.add("loss.png"), (options.out / "loss.png").string());
   write_best_run(folder, scene, sim, best);
 
   out << "optimizer " << to_string(optimizer.optimizer) << ": " << result.status

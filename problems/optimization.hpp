@@ -71,8 +71,9 @@ void check_problem_identity(const nlohmann::json& stored, const nlohmann::json& 
                             const std::string& source);
 // The scene's optimiser settings with the command line's overrides, validated.
 OptimizerOptions resolve_optimizer(const Scene& scene, const OptimizeOptions& options);
-// One unit of `folder`: parameters.csv (name,value of `best`) with trajectory.csv and
-// frames.csv of its forward simulation; committed.
+// Adds parameters.csv (name,value of `best`) with trajectory.csv and frames.csv of its forward
+// simulation to `folder`'s current unit (with what the caller added: run_optimize's loss.png)
+// and commits it.
 void write_best_run(OutputFolder& folder, const Scene& scene, const DifferentiableSimulation& sim,
                     const Eigen::VectorXd& best);
 
@@ -84,8 +85,9 @@ void write_best_run(OutputFolder& folder, const Scene& scene, const Differentiab
 //                         optimiser settings), the best parameters so far and the history
 // and at the end one unit replaces out/parameters.csv (name,value of the best γ) with
 // out/trajectory.csv and out/frames.csv (its forward simulation, the format of `liedyn
-// simulate`). With resume, a checkpoint of another problem, or whose best loss is not the
-// loss re-evaluated at its best point, is refused (SceneError: exit 2); otherwise the
+// simulate`) and out/loss.png (the loss at each evaluation, problems/run_plots.hpp). With
+// resume, a checkpoint of another problem, or whose best loss is not the loss re-evaluated
+// at its best point, is refused (SceneError: exit 2); otherwise the
 // optimisation restarts from the checkpoint's best parameters (the L-BFGS memory is not
 // kept) and appends to its history. Returns 0 when the target was reached, 3 when it stopped
 // otherwise (iterations, round-off, back-end convergence), 4 on failure. With starts > 1 (or

@@ -90,28 +90,38 @@ std::vector<RecordedRun::Row> expected_rows(const ordered_json& shapes, const st
   return rows;
 }
 
-FramesTable read_frames_table(const std::filesystem::path& file) {
-  FramesTable table;
+}  // namespace
+
+CsvTable read_csv_table(const std::filesystem::path& file, const std::string& what,
+                        const std::string& first_column) {
+  CsvTable table;
   table.source = file.string();
-  Lines lines(read_named_input(file, kMaxInput, "frames.csv"), table.source);
+  Lines lines(read_named_input(file, kMaxInput, what), table.source);
   std::string line;
   if (!lines.next(line)) lines.fail("is empty (no header)");
   table.names = csv_fields(line);
-  if (table.names.empty() || table.names[0] != "frame") lines.fail("is not frames.csv's header (no frame column first)");
+  if (table.names[0] != first_column) {
+    lines.fail("is not " + what + "'s header (no " + first_column + " column first)");
+  }
   while (lines.next(line)) {
     if (line.empty()) continue;
     std::vector<std::string> f = csv_fields(line);
     if (f.size() != table.names.size()) {
       lines.fail("has " + std::to_string(f.size()) + " fields, the header " + std::to_string(table.names.size()));
     }
-    table.frames.push_back(frame_at(f[0], table.source, lines.line()));
     table.lines.push_back(lines.line());
     table.rows.push_back(std::move(f));
   }
   return table;
 }
 
-}  // namespace
+FramesTable read_frames_table(const std::filesystem::path& file) {
+  FramesTable table{read_csv_table(file, "frames.csv", "frame"), {}};
+  for (std::size_t r = 0; r < table.rows.size(); ++r) {
+    table.frames.push_back(frame_at(table.rows[r][0], table.source, table.lines[r]));
+  }
+  return table;
+}
 
 std::vector<std::string> csv_fields(const std::string& line) {
   std::vector<std::string> fields(1);
@@ -138,17 +148,22 @@ std::vector<std::string> csv_fields(const std::string& line) {
   return fields;
 }
 
-bool FramesTable::has(const std::string& column) const {
+bool CsvTable::has(const std::string& column) const {
   for (const std::string& name : names) {
     if (name == column) return true;
   }
   return false;
 }
 
-std::vector<double> FramesTable::numbers(const std::string& column) const {
+std::size_t CsvTable::column(const std::string& name) const {
   std::size_t c = 0;
-  while (c < names.size() && names[c] != column) ++c;
-  if (c == names.size()) throw SceneError(source, column, "is not a column of this file");
+  while (c < names.size() && names[c] != name) ++c;
+  if (c == names.size()) throw SceneError(source, name, "is not a column of this file");
+  return c;
+}
+
+std::vector<double> CsvTable::numbers(const std::string& column) const {
+  const std::size_t c = this->column(column);
   std::vector<double> values;
   values.reserve(rows.size());
   for (std::size_t r = 0; r < rows.size(); ++r) {

@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <filesystem>
@@ -18,12 +19,14 @@
 #include <string>
 #include <vector>
 
+#include "png_image.hpp"
 #include "problems/plot.hpp"
 
 namespace liedyn {
 namespace {
 
 namespace fs = std::filesystem;
+using test::Image;
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 constexpr double kInf = std::numeric_limits<double>::infinity();
@@ -97,39 +100,6 @@ TEST(ParetoFront, MatchesTheDefinitionOnRandomSets) {
     EXPECT_EQ(pareto_front(set), expected) << "trial " << trial;
   }
 }
-
-// A PNG read back with Cairo.
-class Image {
- public:
-  explicit Image(const fs::path& file)
-      : surface_(cairo_image_surface_create_from_png(file.c_str()), cairo_surface_destroy) {}
-  cairo_status_t status() const { return cairo_surface_status(surface_.get()); }
-  int width() const { return cairo_image_surface_get_width(surface_.get()); }
-  int height() const { return cairo_image_surface_get_height(surface_.get()); }
-  // 0xAARRGGBB.
-  std::uint32_t pixel(int x, int y) const {
-    const unsigned char* row = cairo_image_surface_get_data(surface_.get()) +
-                               static_cast<std::ptrdiff_t>(y) *
-                                   cairo_image_surface_get_stride(surface_.get());
-    return reinterpret_cast<const std::uint32_t*>(row)[x];
-  }
-  // Pixels in [x0, x1) × [y0, y1) (fractions of the size) for which `test(r, g, b)` holds.
-  int count(double x0, double x1, double y0, double y1,
-            const std::function<bool(int, int, int)>& test) const {
-    cairo_surface_flush(surface_.get());
-    int n = 0;
-    for (int y = static_cast<int>(y0 * height()); y < static_cast<int>(y1 * height()); ++y) {
-      for (int x = static_cast<int>(x0 * width()); x < static_cast<int>(x1 * width()); ++x) {
-        const std::uint32_t p = pixel(x, y);
-        n += test((p >> 16) & 0xff, (p >> 8) & 0xff, p & 0xff) ? 1 : 0;
-      }
-    }
-    return n;
-  }
-
- private:
-  std::unique_ptr<cairo_surface_t, decltype(&cairo_surface_destroy)> surface_;
-};
 
 bool non_white(int r, int g, int b) { return r < 240 || g < 240 || b < 240; }
 bool blue(int r, int, int b) { return b > r + 80; }  // series 0's markers
@@ -275,6 +245,227 @@ TEST_F(Plot, AnUnwritablePathThrowsNamingTheFileAndLeavesNoTemporary) {
   EXPECT_NE(message(sweep(), tiny, 10).find(tiny.string()), std::string::npos);
   EXPECT_FALSE(fs::exists(tiny));
   EXPECT_EQ(temporaries(), 0);
+}
+
+// ---- Line plots.
+
+bool orange(int r, int g, int b) { return r > 180 && g > 60 && g < 150 && b < 60; }  // series 1
+
+// A pixel of neutral grey from lo to hi (crisp lines in the frame's and the grid's colours).
+bool grey(std::uint32_t pixel, int lo, int hi) {
+  const int r = (pixel >> 16) & 0xff, g = (pixel >> 8) & 0xff, b = pixel & 0xff;
+  return r == g && g == b && r >= lo && r <= hi;
+}
+
+// The plot area of a rendered plot: its frame is the one long run of crisp dark grey
+// (0.25·255 ≈ 64) pixels along each side.
+struct Area {
+  int left = -1, top = -1, right = -1, bottom = -1;
+};
+Area area_of(const Image& image) {
+  const auto frame = [&](int x, int y) { return grey(image.pixel(x, y), 60, 68); };
+  const auto column = [&](int x) {
+    int n = 0;
+    for (int y = image.height() / 3; y < 2 * image.height() / 3; ++y) n += frame(x, y) ? 1 : 0;
+    return n > image.height() / 4;
+  };
+  const auto row = [&](int y) {
+    int n = 0;
+    for (int x = image.width() / 3; x < 2 * image.width() / 3; ++x) n += frame(x, y) ? 1 : 0;
+    return n > image.width() / 4;
+  };
+  Area a;
+  for (int x = 0; x < image.width(); ++x) {
+    if (column(x)) (a.left < 0 ? a.left : a.right) = x;
+  }
+  for (int y = 0; y < image.height(); ++y) {
+    if (row(y)) (a.top < 0 ? a.top : a.bottom) = y;
+  }
+  return a;
+}
+
+// Pixels in [x0, x1) × [y0, y1) (pixels) for which `test` holds.
+int count_pixels(const Image& image, double x0, double x1, double y0, double y1,
+                 const std::function<bool(int, int, int)>& test) {
+  return image.count(x0 / image.width(), x1 / image.width(), y0 / image.height(),
+                     y1 / image.height(), test);
+}
+
+// Where a data x falls on a linear axis over [lo, hi] padded by 5 % (plot.hpp).
+double pixel_x(const Area& a, double x, double lo, double hi) {
+  const double pad = 0.05 * (hi - lo);
+  return a.left + (x - (lo - pad)) / (hi - lo + 2 * pad) * (a.right - a.left);
+}
+
+LinePlot line_plot(const std::vector<double>& x) {
+  LinePlot plot;
+  plot.title = "line plot";
+  plot.x_label = "time [s]";
+  plot.y_label = "value";
+  plot.log_x = plot.log_y = false;
+  plot.x = x;
+  return plot;
+}
+
+std::vector<double> range(int n) {
+  std::vector<double> x;
+  for (int i = 0; i < n; ++i) x.push_back(i);
+  return x;
+}
+
+TEST_F(Plot, LinesRiseAndFallWhereTheirValuesDo) {
+  // Series 0 (blue) rises, series 1 (orange) falls: each in its own half of the left and the
+  // right of the area. An axis drawn flipped, or a series not drawn, would show elsewhere.
+  LinePlot plot = line_plot(range(21));
+  LineSeries rising{"rising", range(21)}, falling{"falling", {}};
+  for (const double x : plot.x) falling.y.push_back(20 - x);
+  plot.series = {rising, falling};
+  const fs::path file = dir_ / "lines.png";
+  write_png(plot, file, 640, 480);
+  const Image image(file);
+  ASSERT_EQ(image.status(), CAIRO_STATUS_SUCCESS);
+  EXPECT_EQ(image.width(), 640);
+  EXPECT_EQ(image.height(), 480);
+  const Area a = area_of(image);
+  ASSERT_GT(a.left, 0);
+  ASSERT_GT(a.right, a.left + 300);
+  ASSERT_GT(a.bottom, a.top + 200);
+  const double w = a.right - a.left, h = a.bottom - a.top;
+  // Left fifth (x ≈ 1 … 4) and right fifth (x ≈ 16 … 19), each split into upper and lower
+  // halves; the legend's corner boxes stay within the outer 15 % of the height.
+  const double left0 = a.left + 0.1 * w, left1 = a.left + 0.25 * w;
+  const double right0 = a.left + 0.75 * w, right1 = a.left + 0.9 * w;
+  const double upper0 = a.top + 0.15 * h, middle = a.top + 0.5 * h, lower1 = a.bottom - 0.15 * h;
+  EXPECT_GT(count_pixels(image, left0, left1, middle, lower1, blue), 100);
+  EXPECT_EQ(count_pixels(image, left0, left1, upper0, middle, blue), 0);
+  EXPECT_GT(count_pixels(image, right0, right1, upper0, middle, blue), 100);
+  EXPECT_EQ(count_pixels(image, right0, right1, middle, lower1, blue), 0);
+  EXPECT_GT(count_pixels(image, left0, left1, upper0, middle, orange), 40);  // dashed
+  EXPECT_EQ(count_pixels(image, left0, left1, middle, lower1, orange), 0);
+  EXPECT_GT(count_pixels(image, right0, right1, middle, lower1, orange), 40);
+  EXPECT_EQ(count_pixels(image, right0, right1, upper0, middle, orange), 0);
+  EXPECT_EQ(image.count(0, 0.5, 0.9, 1, red), 0) << "no note: every point is drawn";
+  EXPECT_EQ(temporaries(), 0);
+}
+
+TEST_F(Plot, NaNsAreGapsInTheLineAndNotReported) {
+  // y = x for x = 0 … 99 but NaN at 40 … 59 and at 79 and 81: a gap from 39 to 60 and the
+  // lone point 80, which gets a marker (100 points are too dense for markers otherwise).
+  LinePlot plot = line_plot(range(100));
+  LineSeries series{"y", range(100)};
+  for (int i = 40; i < 60; ++i) series.y[i] = kNaN;
+  series.y[79] = series.y[81] = kNaN;
+  plot.series = {series};
+  const fs::path file = dir_ / "gaps.png";
+  write_png(plot, file);
+  const Image image(file);
+  ASSERT_EQ(image.status(), CAIRO_STATUS_SUCCESS);
+  const Area a = area_of(image);
+  ASSERT_GT(a.right, a.left + 300);
+  const auto blue_between = [&](double x0, double x1) {
+    return count_pixels(image, pixel_x(a, x0, 0, 99), pixel_x(a, x1, 0, 99), a.top + 1, a.bottom,
+                        blue);
+  };
+  EXPECT_GT(blue_between(10, 30), 100);
+  EXPECT_EQ(blue_between(40, 59), 0) << "a segment across the gap";
+  EXPECT_GT(blue_between(61, 77), 100);
+  EXPECT_EQ(blue_between(78.3, 79.2), 0) << "a segment to the lone point";
+  EXPECT_GT(blue_between(79.8, 80.2), 10) << "the lone point's marker";
+  EXPECT_EQ(blue_between(80.8, 81.7), 0) << "a segment from the lone point";
+  EXPECT_EQ(image.count(0, 0.5, 0.9, 1, red), 0) << "gaps are not points that were not drawn";
+}
+
+TEST_F(Plot, ValuesALogAxisCannotShowAreReportedNotDrawn) {
+  // 0 and −1 on a log axis, and +∞: reported in the note, and the line broken around them.
+  LinePlot plot = line_plot(range(7));
+  plot.log_y = true;
+  plot.series = {{"y", {1, 10, 0, -1, kInf, 100, 1000}}};
+  const fs::path log_file = dir_ / "log.png";
+  write_png(plot, log_file);
+  const Image log_image(log_file);
+  ASSERT_EQ(log_image.status(), CAIRO_STATUS_SUCCESS);
+  const Area a = area_of(log_image);
+  ASSERT_GT(a.right, a.left + 300);
+  const auto blue_between = [&](const Image& image, double x0, double x1) {
+    return count_pixels(image, pixel_x(a, x0, 0, 6), pixel_x(a, x1, 0, 6), a.top + 1, a.bottom,
+                        blue);
+  };
+  EXPECT_GT(log_image.count(0, 0.5, 0.9, 1, red), 10) << "the note";
+  EXPECT_GT(blue_between(log_image, 0.2, 0.8), 20);
+  EXPECT_EQ(blue_between(log_image, 1.2, 4.8), 0);
+  EXPECT_GT(blue_between(log_image, 5.2, 5.8), 20);
+
+  // On a linear axis only +∞ is left out (still noted); 1 → 10 → 0 → −1 is drawn.
+  plot.log_y = false;
+  const fs::path linear_file = dir_ / "linear_line.png";
+  write_png(plot, linear_file);
+  const Image linear_image(linear_file);
+  EXPECT_GT(linear_image.count(0, 0.5, 0.9, 1, red), 10);
+  EXPECT_GT(blue_between(linear_image, 1.2, 2.8), 20);
+}
+
+TEST_F(Plot, WholeAxesHaveTicksAtWholeNumbersOnly) {
+  // x = 0, 1, 2 spans 2.2 after padding: steps of 0.2 on a plain axis, of 1 on a whole one.
+  // Counted as the vertical grid lines (0.86·255 ≈ 219 grey) crossing a row of the area.
+  const auto grid_lines = [&](bool whole) {
+    LinePlot plot = line_plot(range(3));
+    plot.whole_x = whole;
+    plot.series = {{"y", {0, 0, 0}}};  // a line across the middle, clear of the rows counted
+    const fs::path file = dir_ / (whole ? "whole.png" : "fractional.png");
+    write_png(plot, file);
+    const Image image(file);
+    const Area a = area_of(image);
+    int most = 0;  // rows on a horizontal grid line are grey throughout: the most crossings
+    for (int y = a.top + 5; y < a.top + (a.bottom - a.top) / 3; ++y) {
+      int lines = 0;
+      bool previous = false;
+      for (int x = a.left + 1; x < a.right; ++x) {
+        const bool line = grey(image.pixel(x, y), 215, 224);
+        lines += line && !previous ? 1 : 0;
+        previous = line;
+      }
+      most = std::max(most, lines);
+    }
+    return most;
+  };
+  EXPECT_EQ(grid_lines(true), 3);
+  EXPECT_GT(grid_lines(false), 5);
+}
+
+TEST_F(Plot, ARightAxisShowsTheScaledValues) {
+  LinePlot plot = line_plot(range(10));
+  plot.log_y = true;
+  plot.series = {{"loss", {1, 0.5, 0.2, 0.1, 0.05, 0.02, 0.01, 5e-3, 2e-3, 1e-3}}};
+  const fs::path without = dir_ / "without.png";
+  write_png(plot, without);
+  plot.right_label = "normalized loss";
+  plot.right_factor = 1e3;
+  const fs::path with = dir_ / "with.png";
+  write_png(plot, with);
+  // Labels and their axis title right of the area; the area narrower for them.
+  const Image plain(without), right(with);
+  const Area a = area_of(plain), b = area_of(right);
+  EXPECT_LT(b.right, a.right - 20);
+  EXPECT_GT(count_pixels(right, b.right + 8, right.width(), b.top, b.bottom, non_white), 200);
+  EXPECT_LT(count_pixels(plain, a.right + 8, plain.width(), a.top, a.bottom, non_white), 20);
+}
+
+TEST_F(Plot, LinePlotsThatMakeNoSenseAreRefused) {
+  LinePlot plot = line_plot(range(3));
+  plot.series = {{"short", {1, 2}}};
+  const fs::path file = dir_ / "refused.png";
+  EXPECT_THROW(write_png(plot, file), std::invalid_argument);
+  plot.series = {{"y", {1, 2, 3}}};
+  plot.right_label = "scaled";
+  plot.right_factor = 0;
+  EXPECT_THROW(write_png(plot, file), std::invalid_argument);
+  EXPECT_FALSE(fs::exists(file));
+  EXPECT_EQ(temporaries(), 0);
+  // Nothing at all to draw is a plot saying so, not an error.
+  plot.right_label.clear();
+  plot.x.clear();
+  plot.series = {{"y", {}}};
+  EXPECT_NO_THROW(write_png(plot, file));
 }
 
 }  // namespace
