@@ -16,6 +16,7 @@
 #include "output_folder.hpp"
 #include "parallel.hpp"
 #include "process_group.hpp"
+#include "run_plots.hpp"
 
 namespace liedyn {
 namespace {
@@ -221,11 +222,18 @@ int run_multistart(const Scene& scene, const OptimizeOptions& options, std::ostr
       }
     }
   };
-  const auto write_checkpoint = [&] {
+  // The last checkpoint also draws starts.png (problems/run_plots.hpp) from its starts.csv.
+  const auto write_checkpoint = [&](bool last) {
     json rows = json::array();
     for (const auto& [k, s] : finished) rows.push_back(to_json(s));
     folder->add("checkpoint.json") << json{{"problem", problem}, {"loss_scale", loss_scale}, {"finished", rows}}.dump() << '\n';
-    folder->add("starts.csv") << starts_csv(finished);
+    const std::string csv = starts_csv(finished);
+    folder->add("starts.csv") << csv;
+    if (last) {
+      const std::filesystem::path file = options.out / "starts.png";
+      write_png(starts_plot(parse_csv_table(csv, (options.out / "starts.csv").string(), "starts.csv", "start"), options.out),
+                folder->add("starts.png"), file.string());
+    }
     folder->commit();
   };
   const auto messages_of_mine = [&] {
@@ -248,14 +256,14 @@ int run_multistart(const Scene& scene, const OptimizeOptions& options, std::ostr
     report(s);
     finished[k] = std::move(s);
     take_messages(false);
-    write_checkpoint();
+    write_checkpoint(false);
   });
   if (!root) {
     group.send(messages_of_mine(), true);
     return 0;
   }
   take_messages(true);
-  write_checkpoint();
+  write_checkpoint(true);
 
   const StartResult* best = best_of(finished);
   if (best == nullptr) {
@@ -271,7 +279,7 @@ int run_multistart(const Scene& scene, const OptimizeOptions& options, std::ostr
       << "best: start " << best->start << ", " << best->result.status << ", best loss "
       << std::setprecision(6) << best->result.best_loss << ", normalized "
       << best->result.best_normalized_loss << "\n"
-      << "outputs in " << options.out.string() << " (starts.csv, parameters.csv of the best start)\n";
+      << "outputs in " << options.out.string() << " (starts.csv and starts.png, parameters.csv of the best start)\n";
   const bool all_failed = std::all_of(finished.begin(), finished.end(),
                                       [](const auto& f) { return f.second.result.status == "failed"; });
   if (all_failed) return 4;

@@ -20,6 +20,7 @@
 //                        reached_target,seconds,message — the finished starts, by start
 //   out/checkpoint.json  the problem (problem_identity with starts, seed and spread), the loss
 //                        scale and every finished start's result with its best γ
+//   out/starts.png       (the last unit only) each start's best loss (problems/run_plots.hpp)
 // and at the end one unit replaces parameters.csv, trajectory.csv and frames.csv of the best
 // start's best γ. With resume the checkpoint's finished starts are kept (each one's best loss
 // re-evaluated at its best γ: an edited or stale checkpoint is refused, SceneError) and the

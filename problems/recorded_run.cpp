@@ -94,9 +94,14 @@ std::vector<RecordedRun::Row> expected_rows(const ordered_json& shapes, const st
 
 CsvTable read_csv_table(const std::filesystem::path& file, const std::string& what,
                         const std::string& first_column) {
+  return parse_csv_table(read_named_input(file, kMaxInput, what), file.string(), what, first_column);
+}
+
+CsvTable parse_csv_table(std::string text, const std::string& source, const std::string& what,
+                         const std::string& first_column) {
   CsvTable table;
-  table.source = file.string();
-  Lines lines(read_named_input(file, kMaxInput, what), table.source);
+  table.source = source;
+  Lines lines(std::move(text), table.source);
   std::string line;
   if (!lines.next(line)) lines.fail("is empty (no header)");
   table.names = csv_fields(line);

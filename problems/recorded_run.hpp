@@ -43,6 +43,9 @@ struct FramesTable : CsvTable {
 // messages ("history.csv"). Empty lines are skipped.
 CsvTable read_csv_table(const std::filesystem::path& file, const std::string& what,
                         const std::string& first_column);
+// The same of CSV text (a file about to be written), `source` naming it in messages.
+CsvTable parse_csv_table(std::string text, const std::string& source, const std::string& what,
+                         const std::string& first_column);
 // A frames.csv alone, without the trajectory (`liedyn plot` needs no more).
 FramesTable read_frames_table(const std::filesystem::path& file);
 

@@ -50,6 +50,8 @@ struct RunPlot {
   std::vector<RunSeries> series;
   bool log_y = false, whole_y = false;
   bool per_step = false;  // a value of each step's solve: frame 0, the initial state, has none
+  // A series that is 0 in every row is left out: the run had nothing to measure (no contact).
+  bool zero_is_absent = false;
 };
 
 const std::vector<RunPlot>& run_plots() {
@@ -76,7 +78,8 @@ const std::vector<RunPlot>& run_plots() {
        .title = "penetration and rod separation",
        .y_label = "distance [m]",
        .series = {{{"max_penetration"}, "max penetration"},
-                  {{"min_rod_separation"}, "min rod separation"}}},
+                  {{"min_rod_separation"}, "min rod separation"}},
+       .zero_is_absent = true},
       {.file = "momentum.png",
        .title = "angular momentum about the origin",
        .y_label = "angular momentum [kg·m²/s]",
@@ -123,7 +126,8 @@ void add_run_plots(const FramesTable& frames, const std::string& name, std::vect
         }
         for (std::size_t i = 0; i < rows.size(); ++i) y[i] += column(c)[rows[i]];
       }
-      if (present && std::any_of(y.begin(), y.end(), [](double v) { return !std::isnan(v); })) {
+      const auto measured = [&](double v) { return !std::isnan(v) && !(spec.zero_is_absent && v == 0.0); };
+      if (present && std::any_of(y.begin(), y.end(), measured)) {
         plot.series.push_back({series.name, y});
       } else {
         for (const std::string& c : series.columns) {
@@ -138,7 +142,8 @@ void add_run_plots(const FramesTable& frames, const std::string& name, std::vect
           spec.file + ": " + frames.source +
           (frames.rows.empty() ? " holds no frame" : " holds no step (only the initial state)"));
     } else {
-      skipped.push_back(spec.file + ": " + frames.source + " has no values in " + absent);
+      skipped.push_back(spec.file + ": " + frames.source + " has no values in " + absent +
+                        (spec.zero_is_absent ? " (or only zeros: nothing touched)" : ""));
     }
   }
 }
@@ -191,14 +196,15 @@ void add_history_plots(const fs::path& dir, std::vector<Png>& pngs) {
   pngs.emplace_back("loss_gradient_norm.png", gradient);
 }
 
-void add_starts_plot(const fs::path& dir, std::vector<Png>& pngs) {
-  const CsvTable starts = read_csv_table(dir / "starts.csv", "starts.csv", "start");
+}  // namespace
+
+ScatterPlot starts_plot(const CsvTable& starts, const fs::path& folder) {
   const std::vector<double> start = starts.numbers("start");
   const std::vector<double> best = starts.numbers("best_loss");
   const std::vector<double> reached = starts.numbers("reached_target");
   const std::size_t status = starts.column("status");
   ScatterPlot plot;
-  plot.title = "best loss of each start: " + folder_name(dir);
+  plot.title = "best loss of each start: " + folder_name(folder);
   plot.x_label = "start";
   plot.y_label = "best loss";
   plot.log_x = false;
@@ -220,10 +226,8 @@ void add_starts_plot(const fs::path& dir, std::vector<Png>& pngs) {
     }
     plot.series_names.push_back(outcomes[o]);
   }
-  pngs.emplace_back("starts.png", plot);
+  return plot;
 }
-
-}  // namespace
 
 LinePlot loss_plot(const std::vector<double>& iteration, const std::vector<double>& loss,
                    std::optional<double> loss_scale, const fs::path& folder) {
@@ -253,7 +257,7 @@ void write_plots(const fs::path& dir, const fs::path& out, std::ostream& report)
                      "holds no frames.csv, history.csv or starts.csv: nothing to plot");
   }
   if (history) add_history_plots(dir, pngs);
-  if (starts) add_starts_plot(dir, pngs);
+  if (starts) pngs.emplace_back("starts.png", starts_plot(read_csv_table(dir / "starts.csv", "starts.csv", "start"), dir));
   if (frames) add_run_plots(read_frames_table(dir / "frames.csv"), folder_name(dir), pngs, skipped);
   if (pngs.empty()) {
     std::string reasons;

@@ -42,6 +42,7 @@
 #include <vector>
 
 #include "plot.hpp"
+#include "recorded_run.hpp"
 
 namespace liedyn {
 
@@ -50,6 +51,10 @@ namespace liedyn {
 // is known. `liedyn optimize` writes it with its final unit.
 LinePlot loss_plot(const std::vector<double>& iteration, const std::vector<double>& loss,
                    std::optional<double> loss_scale, const std::filesystem::path& folder);
+
+// starts.png's plot of a multi-start's starts.csv (`starts`), titled with the output folder's
+// name. `liedyn optimize --starts` writes it with its last starts.csv.
+ScatterPlot starts_plot(const CsvTable& starts, const std::filesystem::path& folder);
 
 // Writes the plots of `dir`'s files into `out` (see above); prints one line per file written
 // or plot skipped to `report`.

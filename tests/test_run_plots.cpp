@@ -49,10 +49,11 @@ class PlotCli : public test::CliFixture {
   }
 };
 
+// A run without contact: its penetration is 0 throughout, and not plotted.
 const std::vector<std::string> kRunPlots = {"energy.png", "iterations.png", "gradient_norm.png",
-                                            "penetration.png", "momentum.png"};
+                                            "momentum.png"};
 
-TEST_F(PlotCli, ASimulatedRunGetsItsFivePlots) {
+TEST_F(PlotCli, ASimulatedRunGetsItsPlots) {
   const Result sim =
       run({"simulate", scene("pendulum.json"), "--set", "frames=100", "--out", "out", "--quiet"});
   ASSERT_EQ(sim.exit_code, 0) << sim.err;
@@ -62,7 +63,11 @@ TEST_F(PlotCli, ASimulatedRunGetsItsFivePlots) {
     expect_plot(dir_ / "out" / png);
     EXPECT_NE(r.out.find("wrote out/" + png + "\n"), std::string::npos) << r.out;
   }
-  EXPECT_EQ(r.out.find("skipped"), std::string::npos) << r.out;
+  EXPECT_FALSE(fs::exists(dir_ / "out" / "penetration.png"));
+  EXPECT_NE(r.out.find("skipped penetration.png: out/frames.csv has no values in max_penetration, "
+                       "min_rod_separation (or only zeros: nothing touched)"),
+            std::string::npos)
+      << r.out;
   // One unit of the folder: run.json names the plots as the plot run's, the run's files as
   // the simulation's.
   const nlohmann::json manifest = nlohmann::json::parse(test::read_file(dir_ / "out" / "run.json"));
@@ -194,6 +199,11 @@ TEST_F(PlotCli, AnOptimizationWritesItsLossPlotAndGetsItsOwnPlots) {
   const Result m = run(
       {"optimize", die, "--out", "starts", "--max-iterations", "2", "--starts", "2", "-j", "1"});
   ASSERT_LE(m.exit_code, 3) << m.out << m.err;
+  // optimize --starts draws it itself, with its last starts.csv (one unit: the same run).
+  expect_plot(dir_ / "starts" / "starts.png");
+  const nlohmann::json starts_manifest = nlohmann::json::parse(test::read_file(dir_ / "starts" / "run.json"));
+  EXPECT_EQ(starts_manifest["files"]["starts.png"]["run"], starts_manifest["files"]["starts.csv"]["run"]);
+  fs::remove(dir_ / "starts" / "starts.png");
   const Result s = run({"plot", "starts"});
   ASSERT_EQ(s.exit_code, 0) << s.err;
   expect_plot(dir_ / "starts" / "starts.png");
