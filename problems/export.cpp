@@ -39,6 +39,11 @@ void append_float(std::string& out, float x) {
   out.append(text, end);
 }
 
+std::string shortest(double x) {
+  char text[32];
+  return std::string(text, std::to_chars(text, text + sizeof text, x).ptr);
+}
+
 std::string one_line(const std::string& text) {
   std::string out = text;
   for (char& c : out) {
@@ -101,10 +106,8 @@ std::vector<std::string> write_obj(const ExportJob& job, OutputFolder& folder) {
   for (std::size_t k = 0; k < job.frames.size(); ++k) {
     const std::size_t f = job.frames[k];
     text = "# liedyn export of " + title + ": frame " + std::to_string(run.frame_numbers[f]) + " (" +
-           std::to_string(k + 1) + " of " + std::to_string(job.frames.size()) + "), time ";
-    char time[32];
-    std::snprintf(time, sizeof time, "%.17g", run.times[f]);
-    text += std::string(time) + " s; world coordinates, m\n";
+           std::to_string(k + 1) + " of " + std::to_string(job.frames.size()) + "), time " + shortest(run.times[f]) +
+           " s; world coordinates, m\n";
     text += colliders;
     std::size_t base = collider_vertices;
     for (const ExportGeometry::Body& body : g.bodies) {

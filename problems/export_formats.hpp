@@ -28,8 +28,9 @@ std::vector<std::string> write_vtk(const ExportJob& job, OutputFolder& folder); 
 // Shared by the text formats.
 // "frame_NNNNNN.<extension>", N the run's frame number (6 digits at least).
 std::string frame_file_name(int frame_number, const char* extension);
-// x in the shortest text that reads back as the same float (std::to_chars).
+// x in the shortest text that reads back as the same float, or double (std::to_chars).
 void append_float(std::string& out, float x);
+std::string shortest(double x);
 // Text from the run (a title, an object name) made safe for a one-line comment: control
 // characters become spaces.
 std::string one_line(const std::string& text);

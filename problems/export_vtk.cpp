@@ -1,8 +1,6 @@
 // VTK XML PolyData series for ParaView (problems/export.hpp): "VTK File Formats", XML
 // PolyData (version 0.1, ASCII data arrays: a layout every VTK since 5 reads) and the
 // Collection (.pvd) file that orders the pieces in time.
-#include <cstdio>
-
 #include "export_formats.hpp"
 
 namespace liedyn {
@@ -189,9 +187,7 @@ std::vector<std::string> write_vtk(const ExportJob& job, OutputFolder& folder) {
     piece_header(out, now.size(), cells.lines.size(), cells.triangles.size());
     out += "      <FieldData>\n        <DataArray type=\"Float64\" Name=\"TimeValue\" NumberOfTuples=\"1\" "
            "format=\"ascii\">\n          ";
-    char time[32];
-    std::snprintf(time, sizeof time, "%.17g", run.times[f]);
-    out += std::string(time) + "\n        </DataArray>\n      </FieldData>\n";
+    out += shortest(run.times[f]) + "\n        </DataArray>\n      </FieldData>\n";
     out += penetration ? "      <PointData Scalars=\"penetration\" Vectors=\"velocity\">\n"
                        : "      <PointData Scalars=\"object_id\" Vectors=\"velocity\">\n";
     ArrayWriter a(out);
@@ -240,9 +236,7 @@ std::vector<std::string> write_vtk(const ExportJob& job, OutputFolder& folder) {
   }
   pvd += "<VTKFile type=\"Collection\" version=\"0.1\" byte_order=\"LittleEndian\">\n  <Collection>\n";
   for (std::size_t k = 0; k < frames; ++k) {
-    char time[32];
-    std::snprintf(time, sizeof time, "%.17g", run.times[job.frames[k]]);
-    pvd += "    <DataSet timestep=\"" + std::string(time) + "\" group=\"\" part=\"0\" file=\"" + names[k] + "\"/>\n";
+    pvd += "    <DataSet timestep=\"" + shortest(run.times[job.frames[k]]) + "\" group=\"\" part=\"0\" file=\"" + names[k] + "\"/>\n";
   }
   pvd += "  </Collection>\n</VTKFile>\n";
   if (!g.colliders.empty()) {

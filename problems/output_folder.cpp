@@ -201,6 +201,11 @@ void OutputFolder::finish(const std::string& name) {
     if (s.name == name && s.file) {
       s.file->finish((dir_ / s.name).string());
       s.file.reset();  // its buffer
+      // And its slot among the files a signal removes (there are 256): a signal now leaves
+      // it in the staging folder, which the next run into the folder removes (a staging
+      // folder without COMMIT, settle_leftovers).
+      internal::release_removal(s.cleanup_slot);
+      s.cleanup_slot = -1;
       return;
     }
   }

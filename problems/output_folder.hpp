@@ -52,9 +52,11 @@ class OutputFolder {
   // name. Throws std::runtime_error if it cannot be created.
   std::ostream& add(const std::string& name);
   // Writes out, fsyncs and closes the unit's file `name` now rather than at commit(): a unit
-  // of thousands of files (an export's frames) must not hold a descriptor and a buffer for
-  // each until then. Its stream must not be written again. Throws std::runtime_error if a
-  // write failed, std::logic_error if `name` is not a file of the unit.
+  // of thousands of files (an export's frames) must not hold a descriptor, a buffer and one
+  // of the 256 slots of files removed on SIGINT/SIGTERM (output.hpp) for each until then. A
+  // signal after this leaves the file in the staging folder, for the next run into the
+  // folder to remove (step 4 above). Its stream must not be written again. Throws
+  // std::runtime_error if a write failed, std::logic_error if `name` is not a file of the unit.
   void finish(const std::string& name);
   // Which files of earlier units this unit replaces even where it has no file of that name
   // (an export of every 10th frame replaces an export of every frame): of the files the

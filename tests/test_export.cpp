@@ -92,26 +92,33 @@ struct VtkPiece {
   explicit VtkPiece(const fs::path& file) {
     const std::string text = test::read_file(file);
     std::smatch m;
-    EXPECT_TRUE(std::regex_search(text, m, std::regex(R"(<VTKFile type="PolyData" version="0\.1" byte_order="LittleEndian")")))
+    EXPECT_TRUE(std::regex_search(text, m, std::regex(R"re(<VTKFile type="PolyData" version="0\.1" byte_order="LittleEndian")re")))
         << file;
     EXPECT_TRUE(std::regex_search(text, m, std::regex("<Piece ([^>]*)>"))) << file;
     const std::string attributes = m[1];
-    for (std::sregex_iterator it(attributes.begin(), attributes.end(), std::regex(R"((\w+)="([^"]*)\")")), end; it != end;
-         ++it) {
+    const std::regex attribute(R"re((\w+)="([^"]*)")re");
+    for (std::sregex_iterator it(attributes.begin(), attributes.end(), attribute), end; it != end; ++it) {
       piece[(*it)[1]] = (*it)[2];
     }
-    const std::regex array(R"(<DataArray ([^>]*)>([^<]*)</DataArray>)");
-    const std::size_t points_at = text.find("<Points>");
-    for (std::sregex_iterator it(text.begin(), text.end(), array), end; it != end; ++it) {
-      const std::string head = (*it)[1];
+    // Scanned by hand: std::regex recurses per character, too deep for long arrays.
+    // Lines and Polys each have a "connectivity" and "offsets": keyed "Lines/connectivity" ….
+    const std::size_t points_at = text.find("<Points>"), lines_at = text.find("<Lines>"), polys_at = text.find("<Polys>");
+    for (std::size_t at = text.find("<DataArray "); at != std::string::npos; at = text.find("<DataArray ", at + 1)) {
+      const std::size_t body = text.find('>', at) + 1, close = text.find("</DataArray>", body);
+      const std::string head = text.substr(at, body - at);
       std::smatch name, components_of;
-      std::string key = std::regex_search(head, name, std::regex(R"(Name="([^"]*)\")")) ? std::string(name[1]) : "";
-      if (key.empty() && static_cast<std::size_t>(it->position()) > points_at) key = "Points";
+      std::string key = std::regex_search(head, name, std::regex(R"re(Name="([^"]*)")re")) ? std::string(name[1]) : "";
+      if (key.empty() && at > points_at) key = "Points";
+      if (polys_at != std::string::npos && at > polys_at) {
+        key = "Polys/" + key;
+      } else if (lines_at != std::string::npos && at > lines_at) {
+        key = "Lines/" + key;
+      }
       std::vector<double> values;
-      std::istringstream in((*it)[2].str());
+      std::istringstream in(text.substr(body, close - body));
       for (double v; in >> v;) values.push_back(v);
       arrays[key] = values;
-      components[key] = std::regex_search(head, components_of, std::regex(R"(NumberOfComponents="(\d+)\")"))
+      components[key] = std::regex_search(head, components_of, std::regex(R"re(NumberOfComponents="(\d+)")re"))
                             ? std::stoi(components_of[1])
                             : 1;
     }
@@ -127,7 +134,7 @@ struct VtkPiece {
 std::vector<std::pair<double, std::string>> pvd_entries(const fs::path& file) {
   const std::string text = test::read_file(file);
   std::vector<std::pair<double, std::string>> out;
-  const std::regex entry(R"(<DataSet timestep="([^"]*)" group="" part="0" file="([^"]*)"/>)");
+  const std::regex entry(R"re(<DataSet timestep="([^"]*)" group="" part="0" file="([^"]*)"/>)re");
   for (std::sregex_iterator it(text.begin(), text.end(), entry), end; it != end; ++it) {
     out.emplace_back(std::stod((*it)[1]), (*it)[2]);
   }
@@ -316,7 +323,9 @@ TEST_F(ExportCli, VtkSeriesHasBodyVelocitiesByCentralDifferences) {
   for (std::size_t k = 0; k < entries.size(); ++k) {
     EXPECT_EQ(entries[k].second, "frame_0000" + std::string(2 * k < 10 ? "0" : "") + std::to_string(2 * k) + ".vtp");
     EXPECT_NEAR(entries[k].first, t.time.at(static_cast<int>(2 * k)), 1e-15);
-    if (k > 0) EXPECT_GT(entries[k].first, entries[k - 1].first);
+    if (k > 0) {
+      EXPECT_GT(entries[k].first, entries[k - 1].first);
+    }
     EXPECT_TRUE(fs::exists(dir_ / "vtk" / entries[k].second));
   }
   EXPECT_FALSE(fs::exists(dir_ / "vtk" / "colliders.vtp"));  // none in this run
@@ -347,8 +356,8 @@ TEST_F(ExportCli, VtkSeriesHasBodyVelocitiesByCentralDifferences) {
 }
 
 // A run folder written by hand: a rod of two nodes (radius 0.1) above a floor at z = 0 and a
-// ball-shaped body, frames at t = 0 and 0.5.
-void write_hand_run(const fs::path& dir, double z0, double z1, const json& colliders) {
+// ball-shaped body, frames at t = 0, 0.5, … moving 0.1 along y per frame.
+void write_hand_run(const fs::path& dir, double z0, double z1, const json& colliders, int frames = 2) {
   fs::create_directories(dir);
   json shapes = {{"title", "by hand"},
                  {"bodies", json::array({{{"name", "ball"}, {"shape", {{"type", "sphere"}, {"radius", 0.2}}}}})},
@@ -357,7 +366,7 @@ void write_hand_run(const fs::path& dir, double z0, double z1, const json& colli
   std::ofstream(dir / "shapes.json") << shapes.dump(1);
   std::ofstream t(dir / "trajectory.csv");
   t << "frame,time,object,kind,index,x,y,z,qw,qx,qy,qz\n";
-  for (const int frame : {0, 1}) {
+  for (int frame = 0; frame < frames; ++frame) {
     const double time = 0.5 * frame, shift = 0.1 * frame;
     t << frame << "," << time << ",ball,body,0,5," << shift << ",0.15,1,0,0,0\n";
     t << frame << "," << time << ",stick,node,0,0," << shift << "," << z0 << ",,,,\n";
@@ -396,7 +405,8 @@ TEST_F(ExportCli, PenetrationIsSignedDepthIntoTheColliders) {
   EXPECT_NEAR(p.vector("velocity", 0).y(), 0.2, 1e-6);
   // The stick as one polyline of its two nodes.
   EXPECT_EQ(p.piece.at("NumberOfLines"), "1");
-  EXPECT_EQ(p.arrays.at("connectivity").size() % 3, 2u);  // the ball's triangles, then the line
+  EXPECT_EQ(p.arrays.at("Lines/connectivity"), (std::vector<double>{double(n - 2), double(n - 1)}));
+  EXPECT_EQ(p.arrays.at("Polys/connectivity").size() % 3, 0u);  // the ball's triangles
   EXPECT_TRUE(fs::exists(out / "colliders.vtp"));
   const VtkPiece colliders(out / "colliders.vtp");
   EXPECT_EQ(colliders.points(), 4u);  // the floor's square
@@ -484,6 +494,16 @@ TEST_F(ExportCli, ASecondExportReplacesTheFramesOfTheFirst) {
   const json manifest = json::parse(test::read_file(dir_ / "run" / "export-vtk" / "run.json"));
   EXPECT_EQ(manifest["files"].size(), 5u);  // three frames, colliders.vtp, run.pvd
   EXPECT_EQ(pvd_entries(dir_ / "run" / "export-vtk" / "run.pvd").size(), 3u);
+}
+
+TEST_F(ExportCli, ThousandsOfFramesAreWrittenOneFileAtATime) {
+  // More files than the 256 an output folder tracks for removal on a signal, and than a
+  // small descriptor limit: each frame's file is finished before the next is begun.
+  write_hand_run(dir_ / "run", 0.04, 0.3, json::array(), 1100);
+  const Result e = run({"export", "run", "--format", "obj"});
+  ASSERT_EQ(e.exit_code, 0) << e.err;
+  EXPECT_EQ(files_named(dir_ / "run" / "export-obj", "frame_.*\\.obj").size(), 1100u);
+  EXPECT_EQ(files_named(dir_ / "run" / "export-obj", "\\..*").size(), 0u);  // no staging folder left
 }
 
 // ---------------------------------------------------------------------------------------
