@@ -358,7 +358,7 @@ int main(int argc, char** argv) {
       options.out = export_out;
       const liedyn::ExportSummary e = liedyn::write_export(export_dir, options);
       std::cout << "export: " << e.files << " files, " << e.frames << " frames, " << e.objects << " objects, "
-                << e.bytes / 1024 << " KiB in " << e.dir.string() << "\n";
+                << e.bytes / 1024 << " KiB (" << e.bytes << " bytes) in " << e.dir.string() << "\n";
       return 0;
     }
     if (sweep_merge->parsed()) {
