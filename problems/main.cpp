@@ -26,6 +26,9 @@
 //                  problems/view.hpp)
 //   liedyn plot DIR [--out OUT]   (PNGs of a run's frames.csv, an optimisation's history.csv
 //                  and starts.csv, written into OUT, default DIR; problems/run_plots.hpp)
+//   liedyn export RUN_DIR --format gltf|obj|vtk [--every N] [--out DIR]
+//                  (the run as run.glb, frame_NNNNNN.obj, or frame_NNNNNN.vtp + run.pvd, in
+//                  DIR or RUN_DIR/export-FORMAT; problems/export.hpp)
 //   liedyn optimize SCENE.json --out DIR [--optimizer nlopt-lbfgs|ceres-lbfgs|ipopt-lbfgs]
 //                  [--max-iterations N] [--resume] [--starts K [--seed S] [--spread σ] [-j N]]
 //                  (exit 0 target reached, 3 stopped short of it, 4 failed;
@@ -49,6 +52,7 @@
 #include "analysis.hpp"
 #include "bench.hpp"
 #include "compare.hpp"
+#include "export.hpp"
 #include "optimization.hpp"
 #include "output.hpp"
 #include "parallel.hpp"
@@ -268,6 +272,18 @@ int main(int argc, char** argv) {
   plot->add_option("dir", plot_dir, "An output folder (liedyn simulate or optimize --out)")
       ->required();
   plot->add_option("--out", plot_out, "Where to write the PNGs (default: the folder itself)");
+  std::string export_dir, export_format, export_out;
+  int export_every = 1;
+  CLI::App* export_command = app.add_subcommand(
+      "export", "Write a run as glTF (run.glb), an OBJ sequence, or VTK PolyData for ParaView");
+  export_command->add_option("run_dir", export_dir, "A run's output folder (liedyn simulate --out)")->required();
+  export_command->add_option("--format", export_format, "gltf, obj or vtk")
+      ->required()
+      ->check(CLI::IsMember({"gltf", "obj", "vtk"}));
+  export_command->add_option("--every", export_every, "Every N-th written frame (and the last)")
+      ->check(CLI::Range(1, 1 << 30))
+      ->capture_default_str();
+  export_command->add_option("--out", export_out, "Output directory (default: RUN_DIR/export-FORMAT)");
 
   std::vector<std::string> merge_dirs;
   CLI::App* sweep_merge = app.add_subcommand(
@@ -348,6 +364,16 @@ int main(int argc, char** argv) {
     }
     if (plot->parsed()) {
       liedyn::write_plots(plot_dir, plot_out.empty() ? plot_dir : plot_out, std::cout);
+      return 0;
+    }
+    if (export_command->parsed()) {
+      liedyn::ExportOptions options;
+      options.format = *liedyn::parse_export_format(export_format);  // CLI11 checked the name
+      options.every = export_every;
+      options.out = export_out;
+      const liedyn::ExportSummary e = liedyn::write_export(export_dir, options);
+      std::cout << "export: " << e.files << " files, " << e.frames << " frames, " << e.objects << " objects, "
+                << e.bytes / 1024 << " KiB (" << e.bytes << " bytes) in " << e.dir.string() << "\n";
       return 0;
     }
     if (sweep_merge->parsed()) {

@@ -196,7 +196,23 @@ FileStream& OutputFolder::stage(const std::string& name) {
   return *staged_.back().file;
 }
 
-std::string OutputFolder::manifest_text() const {
+void OutputFolder::finish(const std::string& name) {
+  for (Staged& s : staged_) {
+    if (s.name == name && s.file) {
+      s.file->finish((dir_ / s.name).string());
+      s.file.reset();  // its buffer
+      // And its slot among the files a signal removes (there are 256): a signal now leaves
+      // it in the staging folder, which the next run into the folder removes (a staging
+      // folder without COMMIT, settle_leftovers).
+      internal::release_removal(s.cleanup_slot);
+      s.cleanup_slot = -1;
+      return;
+    }
+  }
+  throw std::logic_error("OutputFolder::finish: " + name + " is not an open file of the unit");
+}
+
+std::string OutputFolder::manifest_text(const Replaces& replaces, std::vector<std::string>& superseded) const {
   // Entries of the previous manifest for files this unit does not replace are kept while the
   // file is still there: run.json describes the folder, not only this unit.
   json files = json::object(), runs = json::object();
@@ -220,6 +236,11 @@ std::string OutputFolder::manifest_text() const {
           !entry.contains("run") || !entry["run"].is_string()) {
         continue;
       }
+      if (replaces && !S_ISDIR(st.st_mode) && name != kManifest && name != kCommitRecord && name[0] != '.' &&
+          replaces(name)) {
+        superseded.push_back(name);
+        continue;
+      }
       const std::string run = entry["run"].get<std::string>();
       files[name] = entry;
       if (old["runs"].contains(run)) runs[run] = old["runs"][run];
@@ -235,9 +256,11 @@ std::string OutputFolder::manifest_text() const {
   return manifest.dump(2) + "\n";
 }
 
-void OutputFolder::commit() {
+void OutputFolder::commit(const Replaces& replaces) {
   if (staged_.empty()) return;
-  for (Staged& s : staged_) s.file->finish((dir_ / s.name).string());
+  for (Staged& s : staged_) {
+    if (s.file) s.file->finish((dir_ / s.name).string());
+  }
   std::vector<std::string> names;
   for (const Staged& s : staged_) names.push_back(s.name);
   names.push_back(kManifest);
@@ -249,8 +272,9 @@ void OutputFolder::commit() {
     }
   }
   // The manifest and the commit record are staged like the unit's files.
-  for (const auto& [name, text] :
-       {std::pair<std::string, std::string>{kManifest, manifest_text()}, {kCommitRecord, ""}}) {
+  std::vector<std::string> superseded;
+  for (const auto& [name, text] : {std::pair<std::string, std::string>{kManifest, manifest_text(replaces, superseded)},
+                                   {kCommitRecord, ""}}) {
     std::string body = text;
     if (name == kCommitRecord) {
       for (const std::string& n : names) body += n + "\n";
@@ -275,6 +299,7 @@ void OutputFolder::commit() {
   }
   ::unlinkat(staging_fd_, kCommitRecord, 0);
   close_unit(Leave::kFiles);  // renamed away: only the empty staging folder is removed
+  for (const std::string& name : superseded) ::unlinkat(dirfd_, name.c_str(), 0);
 }
 
 void OutputFolder::close_unit(Leave leave) {

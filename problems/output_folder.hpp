@@ -23,6 +23,7 @@
 // liedyn.
 
 #include <filesystem>
+#include <functional>
 #include <memory>
 #include <ostream>
 #include <stdexcept>
@@ -50,10 +51,23 @@ class OutputFolder {
   // A new file of the current unit, written to the staging folder; `name` is a plain file
   // name. Throws std::runtime_error if it cannot be created.
   std::ostream& add(const std::string& name);
-  // Replaces the unit's files in the folder together (see above); throws
-  // std::runtime_error, with the folder's previous unit in place, if the unit cannot be
-  // written. The next add() starts a new unit.
-  void commit();
+  // Writes out, fsyncs and closes the unit's file `name` now rather than at commit(): a unit
+  // of thousands of files (an export's frames) must not hold a descriptor, a buffer and one
+  // of the 256 slots of files removed on SIGINT/SIGTERM (output.hpp) for each until then. A
+  // signal after this leaves the file in the staging folder, for the next run into the
+  // folder to remove (step 4 above). Its stream must not be written again. Throws
+  // std::runtime_error if a write failed, std::logic_error if `name` is not a file of the unit.
+  void finish(const std::string& name);
+  // Which files of earlier units this unit replaces even where it has no file of that name
+  // (an export of every 10th frame replaces an export of every frame): of the files the
+  // folder's run.json lists, those `replaces` accepts are removed after the unit's files are
+  // in place (only what liedyn wrote: run.json names it). Empty: none.
+  using Replaces = std::function<bool(const std::string& name)>;
+  // Replaces the unit's files in the folder together (see above), then removes the earlier
+  // files that `replaces` accepts; throws std::runtime_error, with the folder's previous unit
+  // in place, if the unit cannot be written. The next add() starts a new unit. (A crash
+  // between the renames and the removals leaves those earlier files, no longer in run.json.)
+  void commit(const Replaces& replaces = {});
 
   const std::filesystem::path& path() const { return dir_; }
   const std::string& run_id() const { return run_id_; }
@@ -71,7 +85,8 @@ class OutputFolder {
   // commit cut half-way, for the next run to finish).
   enum class Leave { kNothing, kFiles, kEverything };
   void close_unit(Leave leave);
-  std::string manifest_text() const;
+  // run.json after this unit; `superseded` gets the earlier files `replaces` accepts.
+  std::string manifest_text(const Replaces& replaces, std::vector<std::string>& superseded) const;
 
   std::filesystem::path dir_;
   std::string command_, run_id_, started_;

@@ -31,9 +31,12 @@ namespace liedyn {
 
 nlohmann::ordered_json scene_shapes(const Scene& scene, int trajectory_every);
 
-// The surface of a collider's shape in its own frame, as triangles (outward normals by the
-// right-hand rule): `segments` around every circle. For the shapes a viewer has no primitive
-// for (tori, links, cylinders, capsules, …); a plane has none (std::invalid_argument).
+// The surface of a collider's shape in its own frame, as a closed mesh (outward normals by the
+// right-hand rule): `segments` around every circle (a rounded box's edges and a hemisphere's
+// latitudes: a quarter of that, at least 2 steps). Every shape but the plane, which has none
+// (std::invalid_argument): the shapes a viewer has no primitive for (tori, links, cylinders)
+// in shapes.json, and every shape of an export (problems/export_geometry.hpp). A tube is a
+// capsule about each point's ring, turned without twist; at a sharp bend its rings may cross.
 TriangleMesh tessellate(const Shape& shape, int segments);
 
 }  // namespace liedyn

@@ -6,7 +6,7 @@ packages=(
   libeigen3-dev libsuitesparse-dev
   libceres-dev coinor-libipopt-dev libnlopt-cxx-dev
   nlohmann-json3-dev libcli11-dev
-  libcairo2-dev fonts-dejavu-core libtinyobjloader-dev
+  libcairo2-dev fonts-dejavu-core libtinyobjloader-dev libtinygltf-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   libfcl-dev
   pybind11-dev python3-dev python3-numpy python3-pytest python3-scipy python3-torch

@@ -63,9 +63,21 @@ TEST(Tessellate, SurfacesAreClosedFaceOutwardsAndHoldTheirVolume) {
     double volume;
   };
   const double pi = M_PI;
+  // The shapes of an export besides (problems/export_geometry.hpp): a rounded box is its inner
+  // box, its faces' slabs, its edges' quarter cylinders and its corners' sphere octants; a tube
+  // along a straight line is a capsule.
+  const Vector3 b(0.4, 0.3, 0.2);  // a box of half extents 0.5, 0.4, 0.3 rounded by 0.1
+  const double rounded_box = 8 * b.prod() + 8 * 0.1 * (b.x() * b.y() + b.y() * b.z() + b.z() * b.x()) +
+                             2 * pi * 0.01 * b.sum() + 4.0 / 3 * pi * 0.001;
   for (const Case& c : {Case{"torus", TorusShape{1.0, 0.25}, 2 * pi * pi * 1.0 * 0.0625},
                         Case{"link", LinkShape{0.5, 0.5, 0.1}, 2 * pi * pi * 0.5 * 0.01 + 2 * 1.0 * pi * 0.01},
-                        Case{"cylinder", CylinderShape{0.5, 1.0}, pi * 0.25 * 2.0}}) {
+                        Case{"cylinder", CylinderShape{0.5, 1.0}, pi * 0.25 * 2.0},
+                        Case{"sphere", SphereShape{0.5}, 4.0 / 3 * pi * 0.125},
+                        Case{"capsule", CapsuleShape{1.0, 0.5}, pi * 0.25 * 2.0 + 4.0 / 3 * pi * 0.125},
+                        Case{"box", BoxShape{Vector3(0.5, 0.4, 0.3), 0.0}, 8 * 0.06},
+                        Case{"rounded box", BoxShape{Vector3(0.5, 0.4, 0.3), 0.1}, rounded_box},
+                        Case{"tube", TubeShape{{Vector3(0, 0, 0), Vector3(1, 1, 0), Vector3(2, 2, 0)}, 0.5},
+                             pi * 0.25 * 2 * std::sqrt(2.0) + 4.0 / 3 * pi * 0.125}}) {
     SCOPED_TRACE(c.name);
     const TriangleMesh m = tessellate(c.shape, 24);
     EXPECT_TRUE(closed_and_oriented(m));
@@ -74,6 +86,10 @@ TEST(Tessellate, SurfacesAreClosedFaceOutwardsAndHoldTheirVolume) {
     EXPECT_GT(v, 0.97 * c.volume);
     EXPECT_LE(v, 1.0001 * c.volume);
   }
+  // A bent tube: closed and outward too (its volume is not a formula's).
+  const TriangleMesh bent = tessellate(TubeShape{{Vector3(0, 0, 0), Vector3(1, 0, 0), Vector3(1, 1, 0.5)}, 0.1}, 12);
+  EXPECT_TRUE(closed_and_oriented(bent));
+  EXPECT_GT(signed_volume(bent), 0.0);
   EXPECT_THROW(tessellate(PlaneShape{}, 24), std::invalid_argument);
   EXPECT_THROW(tessellate(TorusShape{}, 2), std::invalid_argument);
 }
