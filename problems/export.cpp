@@ -2,7 +2,7 @@
 
 #include <charconv>
 #include <cstdio>
-#include <regex>
+#include <algorithm>
 #include <sys/stat.h>
 
 #include "export_formats.hpp"
@@ -147,22 +147,33 @@ ExportSummary write_export(const std::filesystem::path& run_dir, const ExportOpt
   summary.dir = options.out.empty() ? run_dir / (std::string("export-") + format) : options.out;
   OutputFolder folder(summary.dir, std::string("export --format ") + format, nullptr);
   std::vector<std::string> names;
-  std::regex earlier;  // the files of an earlier export that this one replaces
+  // The files of an earlier export of this format, which this one replaces: its fixed names
+  // and its frame files (frame_ + digits + the extension).
+  std::vector<std::string> fixed;
+  const char* frame_extension = nullptr;
   switch (options.format) {
     case ExportFormat::kGltf:
       names = write_gltf(job, folder);
-      earlier = std::regex("run\\.glb");
+      fixed = {"run.glb"};
       break;
     case ExportFormat::kObj:
       names = write_obj(job, folder);
-      earlier = std::regex("frame_[0-9]+\\.obj");
+      frame_extension = ".obj";
       break;
     case ExportFormat::kVtk:
       names = write_vtk(job, folder);
-      earlier = std::regex("frame_[0-9]+\\.vtp|colliders\\.vtp|run\\.pvd");
+      fixed = {"colliders.vtp", "run.pvd"};
+      frame_extension = ".vtp";
       break;
   }
-  folder.commit([&](const std::string& name) { return std::regex_match(name, earlier); });
+  folder.commit([&](const std::string& name) {
+    if (std::find(fixed.begin(), fixed.end(), name) != fixed.end()) return true;
+    if (frame_extension == nullptr || name.rfind("frame_", 0) != 0) return false;
+    const std::size_t dot = name.find('.', 6);
+    return dot > 6 && dot != std::string::npos && name.substr(dot) == frame_extension &&
+           std::all_of(name.begin() + 6, name.begin() + static_cast<std::ptrdiff_t>(dot),
+                       [](char c) { return c >= '0' && c <= '9'; });
+  });
 
   summary.files = static_cast<int>(names.size());
   summary.frames = static_cast<int>(job.frames.size());

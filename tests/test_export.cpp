@@ -15,7 +15,6 @@
 #include <fstream>
 #include <map>
 #include <nlohmann/json.hpp>
-#include <regex>
 #include <sstream>
 #include <string>
 #include <tuple>
@@ -82,8 +81,25 @@ std::vector<float> floats(const tinygltf::Model& m, int accessor) {
   return out;
 }
 
-// A VTK XML file read with regular expressions: the Piece's counts, and each DataArray's
-// numbers by name ("Points" for the points' array, which has none).
+// The value of attribute NAME="…" in an XML tag's text; empty when it has none.
+std::string xml_attribute(const std::string& tag, const std::string& name) {
+  const std::string key = " " + name + "=\"";
+  const std::size_t at = tag.find(key);
+  if (at == std::string::npos) return "";
+  const std::size_t from = at + key.size();
+  return tag.substr(from, tag.find('"', from) - from);
+}
+
+// Every occurrence of `from` in `text` replaced by `to`.
+std::string replace_all(std::string text, const std::string& from, const std::string& to) {
+  for (std::size_t at = text.find(from); at != std::string::npos; at = text.find(from, at + to.size())) {
+    text.replace(at, from.size(), to);
+  }
+  return text;
+}
+
+// A VTK XML file scanned by hand: the Piece's counts, and each DataArray's numbers by name
+// ("Points" for the points' array, which has none).
 struct VtkPiece {
   std::map<std::string, std::string> piece;  // NumberOfPoints, …
   std::map<std::string, std::vector<double>> arrays;
@@ -91,23 +107,21 @@ struct VtkPiece {
 
   explicit VtkPiece(const fs::path& file) {
     const std::string text = test::read_file(file);
-    std::smatch m;
-    EXPECT_TRUE(std::regex_search(text, m, std::regex(R"re(<VTKFile type="PolyData" version="0\.1" byte_order="LittleEndian")re")))
+    EXPECT_NE(text.find(R"(<VTKFile type="PolyData" version="0.1" byte_order="LittleEndian")"), std::string::npos)
         << file;
-    EXPECT_TRUE(std::regex_search(text, m, std::regex("<Piece ([^>]*)>"))) << file;
-    const std::string attributes = m[1];
-    const std::regex attribute(R"re((\w+)="([^"]*)")re");
-    for (std::sregex_iterator it(attributes.begin(), attributes.end(), attribute), end; it != end; ++it) {
-      piece[(*it)[1]] = (*it)[2];
+    const std::size_t piece_at = text.find("<Piece ");
+    EXPECT_NE(piece_at, std::string::npos) << file;
+    if (piece_at == std::string::npos) return;
+    const std::string piece_tag = text.substr(piece_at, text.find('>', piece_at) - piece_at);
+    for (const char* name : {"NumberOfPoints", "NumberOfVerts", "NumberOfLines", "NumberOfStrips", "NumberOfPolys"}) {
+      if (const std::string value = xml_attribute(piece_tag, name); !value.empty()) piece[name] = value;
     }
-    // Scanned by hand: std::regex recurses per character, too deep for long arrays.
     // Lines and Polys each have a "connectivity" and "offsets": keyed "Lines/connectivity" ….
     const std::size_t points_at = text.find("<Points>"), lines_at = text.find("<Lines>"), polys_at = text.find("<Polys>");
     for (std::size_t at = text.find("<DataArray "); at != std::string::npos; at = text.find("<DataArray ", at + 1)) {
       const std::size_t body = text.find('>', at) + 1, close = text.find("</DataArray>", body);
       const std::string head = text.substr(at, body - at);
-      std::smatch name, components_of;
-      std::string key = std::regex_search(head, name, std::regex(R"re(Name="([^"]*)")re")) ? std::string(name[1]) : "";
+      std::string key = xml_attribute(head, "Name");
       if (key.empty() && at > points_at) key = "Points";
       if (polys_at != std::string::npos && at > polys_at) {
         key = "Polys/" + key;
@@ -118,9 +132,8 @@ struct VtkPiece {
       std::istringstream in(text.substr(body, close - body));
       for (double v; in >> v;) values.push_back(v);
       arrays[key] = values;
-      components[key] = std::regex_search(head, components_of, std::regex(R"re(NumberOfComponents="(\d+)")re"))
-                            ? std::stoi(components_of[1])
-                            : 1;
+      const std::string components_of = xml_attribute(head, "NumberOfComponents");
+      components[key] = components_of.empty() ? 1 : std::stoi(components_of);
     }
   }
   std::size_t points() const { return std::stoul(piece.at("NumberOfPoints")); }
@@ -134,18 +147,24 @@ struct VtkPiece {
 std::vector<std::pair<double, std::string>> pvd_entries(const fs::path& file) {
   const std::string text = test::read_file(file);
   std::vector<std::pair<double, std::string>> out;
-  const std::regex entry(R"re(<DataSet timestep="([^"]*)" group="" part="0" file="([^"]*)"/>)re");
-  for (std::sregex_iterator it(text.begin(), text.end(), entry), end; it != end; ++it) {
-    out.emplace_back(std::stod((*it)[1]), (*it)[2]);
+  for (std::size_t at = text.find("<DataSet "); at != std::string::npos; at = text.find("<DataSet ", at + 1)) {
+    const std::string tag = text.substr(at, text.find('>', at) - at);
+    EXPECT_EQ(xml_attribute(tag, "group"), "") << tag;
+    EXPECT_EQ(xml_attribute(tag, "part"), "0") << tag;
+    out.emplace_back(std::stod(xml_attribute(tag, "timestep")), xml_attribute(tag, "file"));
   }
   return out;
 }
 
-std::vector<std::string> files_named(const fs::path& dir, const std::string& pattern) {
+// The names in `dir` that begin with `prefix` and end with `suffix`, sorted.
+std::vector<std::string> files_named(const fs::path& dir, const std::string& prefix, const std::string& suffix = "") {
   std::vector<std::string> names;
   for (const auto& e : fs::directory_iterator(dir)) {
     const std::string name = e.path().filename().string();
-    if (std::regex_match(name, std::regex(pattern))) names.push_back(name);
+    if (name.size() >= prefix.size() + suffix.size() && name.compare(0, prefix.size(), prefix) == 0 &&
+        name.compare(name.size() - suffix.size(), suffix.size(), suffix) == 0) {
+      names.push_back(name);
+    }
   }
   std::sort(names.begin(), names.end());
   return names;
@@ -438,7 +457,7 @@ TEST_F(ExportCli, ObjFramesHoldEveryObjectInWorldCoordinates) {
   ASSERT_EQ(e.exit_code, 0) << e.err;
   EXPECT_NE(e.out.find("export: 5 files, 5 frames, 3 objects"), std::string::npos) << e.out;
   const fs::path out = dir_ / "run" / "export-obj";
-  EXPECT_EQ(files_named(out, "frame_.*"), (std::vector<std::string>{"frame_000000.obj", "frame_000010.obj", "frame_000020.obj",
+  EXPECT_EQ(files_named(out, "frame_"), (std::vector<std::string>{"frame_000000.obj", "frame_000010.obj", "frame_000020.obj",
                                                                     "frame_000030.obj", "frame_000040.obj"}));
   const Trajectory t(dir_ / "run" / "trajectory.csv");
   std::istringstream in(test::read_file(out / "frame_000030.obj"));
@@ -486,10 +505,10 @@ TEST_F(ExportCli, ASecondExportReplacesTheFramesOfTheFirst) {
   const Result sim = run({"simulate", kExportScene, "--out", "run", "--quiet"});
   ASSERT_EQ(sim.exit_code, 0) << sim.err;
   ASSERT_EQ(run({"export", "run", "--format", "vtk"}).exit_code, 0);
-  EXPECT_EQ(files_named(dir_ / "run" / "export-vtk", "frame_.*").size(), 41u);
+  EXPECT_EQ(files_named(dir_ / "run" / "export-vtk", "frame_").size(), 41u);
   std::ofstream(dir_ / "run" / "export-vtk" / "frame_999999.vtp") << "not liedyn's";  // kept: not in run.json
   ASSERT_EQ(run({"export", "run", "--format", "vtk", "--every", "20"}).exit_code, 0);
-  EXPECT_EQ(files_named(dir_ / "run" / "export-vtk", "frame_.*"),
+  EXPECT_EQ(files_named(dir_ / "run" / "export-vtk", "frame_"),
             (std::vector<std::string>{"frame_000000.vtp", "frame_000020.vtp", "frame_000040.vtp", "frame_999999.vtp"}));
   const json manifest = json::parse(test::read_file(dir_ / "run" / "export-vtk" / "run.json"));
   EXPECT_EQ(manifest["files"].size(), 5u);  // three frames, colliders.vtp, run.pvd
@@ -502,8 +521,8 @@ TEST_F(ExportCli, ThousandsOfFramesAreWrittenOneFileAtATime) {
   write_hand_run(dir_ / "run", 0.04, 0.3, json::array(), 1100);
   const Result e = run({"export", "run", "--format", "obj"});
   ASSERT_EQ(e.exit_code, 0) << e.err;
-  EXPECT_EQ(files_named(dir_ / "run" / "export-obj", "frame_.*\\.obj").size(), 1100u);
-  EXPECT_EQ(files_named(dir_ / "run" / "export-obj", "\\..*").size(), 0u);  // no staging folder left
+  EXPECT_EQ(files_named(dir_ / "run" / "export-obj", "frame_", ".obj").size(), 1100u);
+  EXPECT_EQ(files_named(dir_ / "run" / "export-obj", ".").size(), 0u);  // no staging folder left
 }
 
 // ---------------------------------------------------------------------------------------
@@ -518,7 +537,7 @@ TEST_F(ExportCli, NamesFromTheRunNeverChooseAPathAndStayInsideTheirLine) {
     const Result e = run({"export", "run", "--format", format});
     ASSERT_EQ(e.exit_code, 0) << e.err;
   }
-  EXPECT_EQ(files_named(dir_ / "run" / "export-obj", ".*\\.obj"), (std::vector<std::string>{"frame_000000.obj", "frame_000001.obj"}));
+  EXPECT_EQ(files_named(dir_ / "run" / "export-obj", "", ".obj"), (std::vector<std::string>{"frame_000000.obj", "frame_000001.obj"}));
   const std::string obj = test::read_file(dir_ / "run" / "export-obj" / "frame_000000.obj");
   EXPECT_NE(obj.find("o ../../floor_v_1_2_3\n"), std::string::npos);
   EXPECT_EQ(obj.find("\nv 1 2 3"), std::string::npos);
@@ -543,16 +562,16 @@ TEST_F(ExportCli, BadInputIsRefusedNamingTheFile) {
   EXPECT_EQ(r.exit_code, 2);
   // A trajectory of another run.
   std::string trajectory = test::read_file(dir_ / "run" / "trajectory.csv");
-  std::ofstream(dir_ / "run" / "trajectory.csv") << std::regex_replace(trajectory, std::regex("stick"), "staff");
+  std::ofstream(dir_ / "run" / "trajectory.csv") << replace_all(trajectory, "stick", "staff");
   r = run({"export", "run", "--format", "gltf"});
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_NE(r.err.find("trajectory.csv: line 3: is staff node 0 where shapes.json has stick node 0"), std::string::npos) << r.err;
   // A quaternion that is not one, a coordinate that is not finite.
-  std::ofstream(dir_ / "run" / "trajectory.csv") << std::regex_replace(trajectory, std::regex(",1,0,0,0\n"), ",2,0,0,0\n");
+  std::ofstream(dir_ / "run" / "trajectory.csv") << replace_all(trajectory, ",1,0,0,0\n", ",2,0,0,0\n");
   r = run({"export", "run", "--format", "vtk"});
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_NE(r.err.find("trajectory.csv: frame 0, ball body 0: is not a unit quaternion (norm 2"), std::string::npos) << r.err;
-  std::ofstream(dir_ / "run" / "trajectory.csv") << std::regex_replace(trajectory, std::regex(",5,"), ",inf,");
+  std::ofstream(dir_ / "run" / "trajectory.csv") << replace_all(trajectory, ",5,", ",inf,");
   r = run({"export", "run", "--format", "obj"});
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_NE(r.err.find("trajectory.csv: frame 0, ball body 0: is not finite"), std::string::npos) << r.err;
