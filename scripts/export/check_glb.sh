@@ -28,8 +28,8 @@ want_tracks=${4:-}
 three_dir=${LIEDYN_THREE_DIR:-/usr/share/javascript/three}
 three=$three_dir/three.min.js
 loader=$three_dir/examples/js/loaders/GLTFLoader.js
-chrome=$(command -v chromium || command -v chromium-browser || true)
-[[ -n $chrome ]] || skip "chromium not found (apt-get install -y --no-install-recommends chromium)"
+source "$(dirname "${BASH_SOURCE[0]}")/../lib/headless_chromium.sh"
+chromium_path >/dev/null || skip "chromium not found (apt-get install -y --no-install-recommends chromium)"
 [[ -f $three && -f $loader ]] || skip "$three or $loader missing (apt-get install -y libjs-three)"
 
 work=$(mktemp -d)
@@ -80,20 +80,14 @@ PY
 
 url=$(python3 -c 'import pathlib, sys; print(pathlib.Path(sys.argv[1]).resolve().as_uri())' "$page")
 log=$work/chromium.log
-# As scripts/viewer/check_view.sh: a fresh profile, console messages on stderr (each as
-# [...:CONSOLE(LINE)] "MESSAGE", source: URL), --no-sandbox as root; --dump-dom returns once
-# the page's scripts have run (parse is synchronous for a glb without external resources).
-start=$(date +%s%N)
-status=0
-timeout 300 "$chrome" --headless --no-sandbox --disable-gpu --user-data-dir="$work/profile" \
-  --enable-logging=stderr --v=0 --virtual-time-budget=10000 --dump-dom "$url" >"$work/dom.html" 2>"$log" || status=$?
-ms=$((($(date +%s%N) - start) / 1000000))
-printf 'check_glb: chromium took %d.%03d s (exit status %d)\n' $((ms / 1000)) $((ms % 1000)) "$status"
+# --dump-dom returns once the page's scripts have run (parse is synchronous for a glb without
+# external resources).
+run_headless_chromium check_glb "$log" --virtual-time-budget=10000 --dump-dom "$url"
 
 failed=0
 fail() { echo "check_glb: FAIL: $*" >&2; failed=1; }
-console=$(grep -E '^\[[^]]*:CONSOLE[:(]' "$log" || true)
-[[ $status -eq 0 ]] || fail "chromium exited with status $status"
+console=$(page_console "$log")
+[[ $chromium_status -eq 0 ]] || fail "chromium exited with status $chromium_status"
 loaded=$(grep -oE '"liedyn-glb: loaded [0-9]+ nodes, [0-9]+ animations, [0-9]+ tracks[^"]*"' <<<"$console" | head -n 1 || true)
 if [[ -z $loaded ]]; then
   fail 'no console line "liedyn-glb: loaded N nodes, A animations, T tracks"'

@@ -57,35 +57,27 @@ png=$2
 want_frames=${3:-}
 want_objects=${4:-}
 [[ -f $view ]] || die "$view: no such file"
-chrome=$(command -v chromium || command -v chromium-browser || true)
-[[ -n $chrome ]] || die "chromium not found (apt-get install -y --no-install-recommends chromium)"
+source "$(dirname "${BASH_SOURCE[0]}")/../lib/headless_chromium.sh"
+chromium_path >/dev/null || die "chromium not found (apt-get install -y --no-install-recommends chromium)"
 
 url=$(python3 -c 'import pathlib, sys; print(pathlib.Path(sys.argv[1]).resolve().as_uri())' "$view")$fragment
 png_abs=$(realpath -m "$png")
 mkdir -p "$(dirname "$png_abs")"
 rm -f "$png_abs"
-# A fresh profile each run: no lock held by another Chromium, nothing left in ~/.config.
-profile=$(mktemp -d)
 log=$(mktemp)
-trap 'rm -rf "$profile" "$log"' EXIT
+trap 'rm -f "$log" "$log.out"' EXIT
 
 # --disable-gpu --use-gl=swiftshader --enable-unsafe-swiftshader: WebGL on the CPU (SwiftShader);
 #   without the last flag Chromium 156 refuses the software WebGL fallback.
 # --virtual-time-budget: the screenshot waits until the page is idle or 5 s of virtual time
 #   have passed; the page draws its first frame synchronously on load anyway.
-# --no-sandbox: we run as root.
-start=$(date +%s%N)
-status=0
-timeout 300 "$chrome" --headless --no-sandbox --disable-gpu --use-gl=swiftshader \
-  --enable-unsafe-swiftshader --allow-file-access-from-files --user-data-dir="$profile" \
-  --enable-logging=stderr --v=0 --virtual-time-budget=5000 --window-size="$size" \
-  --hide-scrollbars --screenshot="$png_abs" "$url" >"$log" 2>&1 || status=$?
-ms=$((($(date +%s%N) - start) / 1000000))
-printf 'check_view: chromium took %d.%03d s (exit status %d)\n' $((ms / 1000)) $((ms % 1000)) "$status"
+run_headless_chromium check_view "$log" --use-gl=swiftshader --enable-unsafe-swiftshader \
+  --allow-file-access-from-files --virtual-time-budget=5000 --window-size="$size" \
+  --hide-scrollbars --screenshot="$png_abs" "$url"
 
 failed=0
-console=$(grep -E '^\[[^]]*:CONSOLE[:(]' "$log" || true)
-[[ $status -eq 0 ]] || fail "chromium exited with status $status"
+console=$(page_console "$log")
+[[ $chromium_status -eq 0 ]] || fail "chromium exited with status $chromium_status"
 
 # (a) the load line, and the expected counts
 loaded=$(grep -oE '"liedyn-view: loaded [0-9]+ frames, [0-9]+ objects"' <<<"$console" | head -n 1 || true)
