@@ -297,6 +297,12 @@ double pixel_x(const Area& a, double x, double lo, double hi) {
   return a.left + (x - (lo - pad)) / (hi - lo + 2 * pad) * (a.right - a.left);
 }
 
+// Series 0's (blue) pixels over the plot area's height between data x0 and x1, the x axis
+// spanning lo … hi.
+int blue_between(const Image& image, const Area& a, double x0, double x1, double lo, double hi) {
+  return count_pixels(image, pixel_x(a, x0, lo, hi), pixel_x(a, x1, lo, hi), a.top + 1, a.bottom, blue);
+}
+
 LinePlot line_plot(const std::vector<double>& x) {
   LinePlot plot;
   plot.title = "line plot";
@@ -362,10 +368,7 @@ TEST_F(Plot, NaNsAreGapsInTheLineAndNotReported) {
   ASSERT_EQ(image.status(), CAIRO_STATUS_SUCCESS);
   const Area a = area_of(image);
   ASSERT_GT(a.right, a.left + 300);
-  const auto blue_between = [&](double x0, double x1) {
-    return count_pixels(image, pixel_x(a, x0, 0, 99), pixel_x(a, x1, 0, 99), a.top + 1, a.bottom,
-                        blue);
-  };
+  const auto blue_between = [&](double x0, double x1) { return liedyn::blue_between(image, a, x0, x1, 0, 99); };
   EXPECT_GT(blue_between(10, 30), 100);
   EXPECT_EQ(blue_between(40, 59), 0) << "a segment across the gap";
   EXPECT_GT(blue_between(61, 77), 100);
@@ -387,8 +390,7 @@ TEST_F(Plot, ValuesALogAxisCannotShowAreReportedNotDrawn) {
   const Area a = area_of(log_image);
   ASSERT_GT(a.right, a.left + 300);
   const auto blue_between = [&](const Image& image, double x0, double x1) {
-    return count_pixels(image, pixel_x(a, x0, 0, 6), pixel_x(a, x1, 0, 6), a.top + 1, a.bottom,
-                        blue);
+    return liedyn::blue_between(image, a, x0, x1, 0, 6);
   };
   EXPECT_GT(log_image.count(0, 0.5, 0.9, 1, red), 10) << "the note";
   EXPECT_GT(blue_between(log_image, 0.2, 0.8), 20);
