@@ -111,47 +111,70 @@ LaggedContact lag(const Vector3& previous_position, const State& previous, int b
   return out;
 }
 
-// The slip law of a sample at p: d = x_B + R_B û − p (written), r_B = R_B û (written), u = P d.
-SmoothedSlip slip(const Vector3& p, const LaggedContact& l, const State& q, int body_b,
-                  double epsilon, Vector3& lever_b, Vector3& d) {
+// The sample's displacement over the step from the point of B it touched: d = x_B + R_B û − p,
+// with r_B = R_B û (written).
+Vector3 displacement(const Vector3& p, const LaggedContact& l, const State& q, int body_b, Vector3& lever_b) {
   lever_b = q.rotations[body_b] * l.contact_point;
-  d = q.points[body_b] + lever_b - p;
-  return SmoothedSlip(d - l.normal.dot(d) * l.normal, epsilon);
+  return q.points[body_b] + lever_b - p;
 }
 
-// A sample's friction D = μλ f₀(‖P d‖), returned; its gradient and Hessian are ADDED to g
-// and H where non-null.
-double add_friction(const SampledPoint& p, const LaggedContact& l, const State& q, int body_b,
-                    double coefficient, double epsilon, LocalGradient<4>* g, LocalHessian<4>* H) {
+// ∂d/∂(blocks) = [−A, I, −hat(r_B)].
+Jacobian displacement_jacobian(const SampledPoint& p, const Vector3& lever_b) {
+  Jacobian Jd;
+  Jd << -p.map, Matrix3::Identity(), -so3::hat(lever_b);
+  return Jd;
+}
+
+// A sample's dissipation D(d) under `law` (k: its stiffness), returned; its gradient and Hessian
+// are ADDED to g and H where non-null.
+template <class Law>
+double add_dissipation(const SampledPoint& p, const LaggedContact& l, const State& q, int body_b, double k,
+                       const Law& law, LocalGradient<4>* g, LocalHessian<4>* H) {
   if (l.normal_force == 0.0) return 0.0;
-  Vector3 r_b, d;
-  const SmoothedSlip s = slip(p.position, l, q, body_b, epsilon, r_b, d);
-  const double scale = coefficient * l.normal_force;  // μλ
-  if (g != nullptr || H != nullptr) {
-    const Vector3 f = scale * s.phi1 * s.u;  // ∂D/∂d
-    Jacobian Jd;                             // ∂d/∂(blocks)
-    Jd << -p.map, Matrix3::Identity(), -so3::hat(r_b);
+  Vector3 r_b;
+  const Vector3 d = displacement(p.position, l, q, body_b, r_b);
+  Vector3 f;  // ∂D/∂d
+  Matrix3 K;
+  const bool derivatives = g != nullptr || H != nullptr;
+  const double D = law.evaluate(d, l.normal_force, l.normal, k, derivatives ? &f : nullptr, H != nullptr ? &K : nullptr);
+  if (derivatives) {
+    const Jacobian Jd = displacement_jacobian(p, r_b);
     if (g != nullptr) g->noalias() += Jd.transpose() * f;
     if (H != nullptr) {
-      const Matrix3 K = scale * s.curvature(Matrix3::Identity() - l.normal * l.normal.transpose());
       const Eigen::Matrix<double, 12, 3> JtK = Jd.transpose() * K;
       H->noalias() += JtK.lazyProduct(Jd);
       H->block<3, 3>(3, 3) += rotated_point_curvature(p.lever, -f);  // ∂D/∂p = −f
       H->block<3, 3>(9, 9) += rotated_point_curvature(r_b, f);
     }
   }
-  return scale * s.f0;
+  return D;
+}
+
+// A dashpot sample's residual √r s (dissipation_law.hpp), its row of ∂r/∂(blocks) written where
+// non-null; 0 outside the lagged zone.
+double dashpot_residual(const SampledPoint& p, const LaggedContact& l, const State& q, int body_b, double k,
+                        const NormalDashpot& law, Eigen::Matrix<double, 1, 12>* row) {
+  if (l.normal_force == 0.0) {
+    if (row != nullptr) row->setZero();
+    return 0.0;
+  }
+  Vector3 r_b;
+  const Vector3 d = displacement(p.position, l, q, body_b, r_b);
+  Eigen::RowVector3d dr;  // ∂r/∂d
+  const double r = law.residual(d, l.normal, k, dr);
+  if (row != nullptr) *row = dr * displacement_jacobian(p, r_b);
+  return r;
 }
 
 // Adds a sample's ∂C/∂q̂ (body_contact.hpp) to `out`: `now` is the sample at q, `before` at
 // `previous`, k its stiffness.
-void add_friction_previous_jacobian(const SampledPoint& now, const SampledPoint& before,
-                                    const LaggedContact& l, const State& q, const State& previous,
-                                    int body_b, const Collider& shape, double k, double coefficient,
-                                    double epsilon, MixedBlock& out) {
+template <class Law>
+void add_dissipation_previous_jacobian(const SampledPoint& now, const SampledPoint& before, const LaggedContact& l,
+                                       const State& q, const State& previous, int body_b, const Collider& shape,
+                                       double k, const Law& law, MixedBlock& out) {
   if (l.normal_force == 0.0) return;
-  Vector3 r_b, d;
-  const SmoothedSlip s = slip(now.position, l, q, body_b, epsilon, r_b, d);
+  Vector3 r_b;
+  const Vector3 d = displacement(now.position, l, q, body_b, r_b);
   const Matrix3& R_b_previous = previous.rotations[body_b];
   const SdfValue lagged = shape.evaluate(l.contact_point, true);
   const double g_norm = lagged.gradient.norm();
@@ -167,9 +190,9 @@ void add_friction_previous_jacobian(const SampledPoint& now, const SampledPoint&
   if (g_norm > 0.0) dn = (P * N / g_norm) * J_previous;
   dn.rightCols<3>() -= so3::hat(n);
   const Jacobian dd = q.rotations[body_b] * du_contact;
-  const Jacobian du = P * dd - (n * d.transpose() + n.dot(d) * Matrix3::Identity()) * dn;
-  const Jacobian df = coefficient * (s.phi1 * s.u * dlambda + l.normal_force * s.jacobian() * du);
-  const Vector3 f = coefficient * l.normal_force * s.phi1 * s.u;
+  const Jacobian df = law.force_jacobian(d, l.normal_force, n, k, dd, dlambda, dn);
+  Vector3 f;
+  law.evaluate(d, l.normal_force, n, k, &f, nullptr);
   out.topRows<6>() -= now.map.transpose() * df;
   out.middleRows<3>(6) += df;
   out.middleRows<3>(9) += so3::hat(r_b) * df - so3::hat(f) * dd;
@@ -202,33 +225,43 @@ void BodyContact::residual(const State& q, Residual& r, ResidualJacobian* J) con
   r(0) = penalty_residual(SampledPoint::on_frame(at, q), q, body_b, *shape, stiffness, radius, J);
 }
 
-void BodyFriction::begin_step(const State& previous, const Step&) {
+template <class Law>
+void BodyDissipation<Law>::begin_step(const State& previous, const Step&) {
   const LaggedContact l = lag(at.position(previous), previous, body_b, *shape, stiffness, radius);
   contact_point = l.contact_point;
   normal_force = l.normal_force;
   normal = l.normal;
 }
 
-double BodyFriction::evaluate(const State& q, LocalGradient<kBlocks>* g, LocalHessian<kBlocks>* H) const {
+template <class Law>
+double BodyDissipation<Law>::evaluate(const State& q, LocalGradient<kBlocks>* g, LocalHessian<kBlocks>* H) const {
   if (g != nullptr) g->setZero();
   if (H != nullptr) H->setZero();
-  return add_friction(SampledPoint::on_frame(at, q), lagged(), q, body_b, coefficient, epsilon, g, H);
+  return add_dissipation(SampledPoint::on_frame(at, q), lagged(), q, body_b, stiffness, static_cast<const Law&>(*this),
+                         g, H);
 }
 
-void BodyFriction::residual(const State& q, Residual& r, ResidualJacobian* J) const {
-  friction_residual(*this, q, r, J);
+template <class Law>
+void BodyDissipation<Law>::residual(const State& q, Residual& r, ResidualJacobian* J) const {
+  if constexpr (Law::kResidualPerSample) {
+    r(0) = dashpot_residual(SampledPoint::on_frame(at, q), lagged(), q, body_b, stiffness, *this, J);
+  } else {
+    friction_residual(*this, q, r, J);
+  }
 }
 
-Eigen::Matrix<double, 12, 12> BodyFriction::previous_jacobian(const State& q, const State& previous) const {
+template <class Law>
+Eigen::Matrix<double, 12, 12> BodyDissipation<Law>::previous_jacobian(const State& q, const State& previous) const {
   MixedBlock out = MixedBlock::Zero();
-  add_friction_previous_jacobian(SampledPoint::on_frame(at, q), SampledPoint::on_frame(at, previous), lagged(), q,
-                                 previous, body_b, *shape, stiffness, coefficient, epsilon, out);
+  add_dissipation_previous_jacobian(SampledPoint::on_frame(at, q), SampledPoint::on_frame(at, previous), lagged(), q,
+                                    previous, body_b, *shape, stiffness, static_cast<const Law&>(*this), out);
   return out;
 }
 
-void BodyFriction::add_step_adjoint(const State& q, const State& previous, const Step&,
-                                    const LocalGradient<kBlocks>& z, Eigen::VectorXd& a_previous,
-                                    Eigen::VectorXd&) const {
+template <class Law>
+void BodyDissipation<Law>::add_step_adjoint(const State& q, const State& previous, const Step&,
+                                            const LocalGradient<kBlocks>& z, Eigen::VectorXd& a_previous,
+                                            Eigen::VectorXd&) const {
   if (normal_force == 0.0) return;
   // A rod node has no rotation.
   add_previous(previous_jacobian(q, previous), z,
@@ -236,6 +269,9 @@ void BodyFriction::add_step_adjoint(const State& q, const State& previous, const
                 tangent_point(body_b), tangent_rotation(q, body_b)},
                a_previous);
 }
+
+template struct BodyDissipation<SlipFriction>;
+template struct BodyDissipation<NormalDashpot>;
 
 namespace {
 
@@ -286,45 +322,55 @@ void BasicEdgeBodyContact<N>::residual(const State& q, Residual& r, ResidualJaco
   });
 }
 
-template <int N>
-void BasicEdgeBodyFriction<N>::begin_step(const State& previous, const Step&) {
+template <int N, class Law>
+void BasicEdgeBodyDissipation<N, Law>::begin_step(const State& previous, const Step&) {
   for_each_gauss_point<N>(*this, [&](int k, double s, double stiffness_k) {
     lagged[k] = lag(edge_point(*this, previous, s).position, previous, body_b, *shape, stiffness_k, radius);
   });
 }
 
-template <int N>
-double BasicEdgeBodyFriction<N>::evaluate(const State& q, LocalGradient<kBlocks>* g,
-                                          LocalHessian<kBlocks>* H) const {
+template <int N, class Law>
+double BasicEdgeBodyDissipation<N, Law>::evaluate(const State& q, LocalGradient<kBlocks>* g,
+                                                  LocalHessian<kBlocks>* H) const {
   if (g != nullptr) g->setZero();
   if (H != nullptr) H->setZero();
   double value = 0.0;
-  for_each_gauss_point<N>(*this, [&](int k, double s, double) {
-    value += add_friction(edge_point(*this, q, s), lagged[k], q, body_b, coefficient, epsilon, g, H);
+  for_each_gauss_point<N>(*this, [&](int k, double s, double stiffness_k) {
+    value += add_dissipation(edge_point(*this, q, s), lagged[k], q, body_b, stiffness_k,
+                             static_cast<const Law&>(*this), g, H);
   });
   return value;
 }
 
-template <int N>
-void BasicEdgeBodyFriction<N>::residual(const State& q, Residual& r, ResidualJacobian* J) const {
-  friction_residual(*this, q, r, J);
+template <int N, class Law>
+void BasicEdgeBodyDissipation<N, Law>::residual(const State& q, Residual& r, ResidualJacobian* J) const {
+  if constexpr (Law::kResidualPerSample) {
+    for_each_gauss_point<N>(*this, [&](int k, double s, double stiffness_k) {
+      Eigen::Matrix<double, 1, 12> row;
+      r(k) = dashpot_residual(edge_point(*this, q, s), lagged[k], q, body_b, stiffness_k, *this,
+                              J != nullptr ? &row : nullptr);
+      if (J != nullptr) J->row(k) = row;
+    });
+  } else {
+    friction_residual(*this, q, r, J);
+  }
 }
 
-template <int N>
-Eigen::Matrix<double, 12, 12> BasicEdgeBodyFriction<N>::previous_jacobian(const State& q,
-                                                                          const State& previous) const {
+template <int N, class Law>
+Eigen::Matrix<double, 12, 12> BasicEdgeBodyDissipation<N, Law>::previous_jacobian(const State& q,
+                                                                                  const State& previous) const {
   MixedBlock out = MixedBlock::Zero();
   for_each_gauss_point<N>(*this, [&](int k, double s, double stiffness_k) {
-    add_friction_previous_jacobian(edge_point(*this, q, s), edge_point(*this, previous, s), lagged[k], q, previous,
-                                   body_b, *shape, stiffness_k, coefficient, epsilon, out);
+    add_dissipation_previous_jacobian(edge_point(*this, q, s), edge_point(*this, previous, s), lagged[k], q, previous,
+                                      body_b, *shape, stiffness_k, static_cast<const Law&>(*this), out);
   });
   return out;
 }
 
-template <int N>
-void BasicEdgeBodyFriction<N>::add_step_adjoint(const State& q, const State& previous, const Step&,
-                                                const LocalGradient<kBlocks>& z, Eigen::VectorXd& a_previous,
-                                                Eigen::VectorXd&) const {
+template <int N, class Law>
+void BasicEdgeBodyDissipation<N, Law>::add_step_adjoint(const State& q, const State& previous, const Step&,
+                                                        const LocalGradient<kBlocks>& z, Eigen::VectorXd& a_previous,
+                                                        Eigen::VectorXd&) const {
   if (std::all_of(lagged.begin(), lagged.end(), [](const LaggedContact& l) { return l.normal_force == 0.0; })) return;
   add_previous(previous_jacobian(q, previous), z,
                {tangent_point(nodes[0]), tangent_point(nodes[1]), tangent_point(body_b), tangent_rotation(q, body_b)},
@@ -334,7 +380,8 @@ void BasicEdgeBodyFriction<N>::add_step_adjoint(const State& q, const State& pre
 template struct BasicEdgeBodyContact<1>;
 template struct BasicEdgeBodyContact<4>;
 template struct BasicEdgeBodyContact<8>;
-template struct BasicEdgeBodyFriction<4>;
+template struct BasicEdgeBodyDissipation<4, SlipFriction>;
+template struct BasicEdgeBodyDissipation<4, NormalDashpot>;
 
 namespace {
 

@@ -62,13 +62,18 @@
 //
 // Least-squares form: r = √(2D), J = gᵀ/r (friction_residual).
 //
+// Damping: the dashpot of dissipation_law.hpp on the same d, D = ½ r (n·d)² (r = τ k/h) while
+// the sample was in contact: the same mapping with its f and K, one residual √r (n·d) with the
+// row √r nᵀ Jd. Friction and damping are one term, BodyDissipation<Law>, whose law gives D, f,
+// K and ∂f from ∂d, ∂λ and ∂n; the geometry above and the adjoint below are written once.
+//
 // The adjoint: λ, n and û are functions of q̂ = (the sampled side's blocks, x̂_B, θ̂_B) at
 // q_{k−1}, through
 //   ∂û/∂q̂ = R̂_Bᵀ Ĵ,   Ĵ = [Â, −I, hat(ŵ)],   ŵ = p̂ − x̂_B   (the contact's J at q_{k−1}),
 //   ∂λ/∂q̂ = −k Gᵀ ∂û/∂q̂,
 //   ∂n/∂q̂ = (P N/‖G‖) Ĵ − [0, 0, 0, hat(n)]   (N = R̂_B ∇²φ_B(û) R̂_Bᵀ; B's turn carries n),
 //   ∂d/∂q̂ = R_B ∂û/∂q̂,   ∂u/∂q̂ = P ∂d/∂q̂ − (n dᵀ + (n·d) I) ∂n/∂q̂,
-//   ∂f/∂q̂ = μ φ₁ u ∂λ/∂q̂ + μλ (φ₁ I + (φ₁′/y) u uᵀ) ∂u/∂q̂,
+//   ∂f/∂q̂ = μ φ₁ u ∂λ/∂q̂ + μλ (φ₁ I + (φ₁′/y) u uᵀ) ∂u/∂q̂   (friction; the dashpot's: its law),
 // and the gradient C = [−Aᵀ f; f; r_B × f] has ∂C/∂q̂ rows −Aᵀ ∂f (A at q_k: p̂ does not
 // enter it), ∂f and hat(r_B) ∂f − hat(f) R_B ∂û/∂q̂ (r_B moves with û). Δq_{k−1} does not
 // enter.
@@ -80,8 +85,8 @@
 // weights w_q, Σ w_q = 1) with ℓ̄ the edge's rest length:
 //   V = Σ_q c_q ½ κ max(0, ρ − φ(p_q))²,   p_q = (1 − s_q) x_0 + s_q x_1,   c_q = w_q ℓ̄,
 // κ a stiffness per unit length: each Gauss point is a sample on an edge with stiffness c_q κ,
-// and its friction a sample's friction with its own lagged (û_q, λ_q = c_q κ max(0, ρ −
-// φ_B(û_q)), n_q); the blocks are (x_0, x_1, x_B, θ_B), a clamped node's or a kinematic
+// and its friction (damping) a sample's friction (damping) with its own lagged (û_q, λ_q =
+// c_q κ max(0, ρ − φ_B(û_q)), n_q); the blocks are (x_0, x_1, x_B, θ_B), a clamped node's or a kinematic
 // body's offsets −1. The builder takes κ = k/ℓ̄ (the rod's contact k, as EdgeContact does), so
 // that c_q κ = w_q k: an edge lying along a body presses with k in all, about k per node, as
 // the node samples it replaces did.
@@ -109,6 +114,7 @@
 #include <vector>
 
 #include "edge_contact.hpp"
+#include "dissipation_law.hpp"
 #include "friction.hpp"
 #include "model.hpp"
 #include "sdf.hpp"
@@ -162,12 +168,13 @@ struct BodyContact : BodySample {
   void residual(const State& q, Residual& r, ResidualJacobian* J) const;
 };
 
-struct BodyFriction : BodySample {
+// The lagged dissipation of a sample against B (friction and damping, formulas above and in
+// dissipation_law.hpp): the geometry of the relative displacement d and its adjoint here, the
+// law of d in Law (SlipFriction: μ, ε; NormalDashpot: τ, h).
+template <class Law>
+struct BodyDissipation : BodySample, Law {
   static constexpr int kBlocks = 4;
-  static constexpr const char* kName = "body_friction";
   static constexpr bool kEndOfStep = true;  // term.hpp
-  double coefficient = 0.0;  // μ, A's
-  double epsilon = 0.0;      // ε = ε_v h, m, > 0
 
   // Lagged per step (begin_step): a LaggedContact's.
   Vector3 contact_point = Vector3::Zero();  // û, in B's coordinates
@@ -177,6 +184,7 @@ struct BodyFriction : BodySample {
   void begin_step(const State& previous, const Step& previous_step);
   double evaluate(const State& q, LocalGradient<kBlocks>* g, LocalHessian<kBlocks>* H) const;
 
+  // Friction: r = √(2D) (friction_residual); the dashpot: r = √r s (dissipation_law.hpp).
   static constexpr int kResiduals = 1;
   using Residual = LocalResidual<kResiduals>;
   using ResidualJacobian = LocalResidualJacobian<kResiduals, kBlocks>;
@@ -191,6 +199,13 @@ struct BodyFriction : BodySample {
 
  private:
   LaggedContact lagged() const { return {contact_point, normal_force, normal}; }
+};
+
+struct BodyFriction : BodyDissipation<SlipFriction> {
+  static constexpr const char* kName = "body_friction";
+};
+struct BodyDamping : BodyDissipation<NormalDashpot> {
+  static constexpr const char* kName = "body_damping";
 };
 
 // What the contact and friction terms of a rod's edge against B's shape share.
@@ -223,23 +238,20 @@ struct BasicEdgeBodyContact : EdgeBodySample {
   void residual(const State& q, Residual& r, ResidualJacobian* J) const;
 };
 
-template <int N>
-struct BasicEdgeBodyFriction : EdgeBodySample {
+template <int N, class Law>
+struct BasicEdgeBodyDissipation : EdgeBodySample, Law {
   static_assert(N >= 1 && N <= kMaxEdgeQuadraturePoints, "Gauss–Legendre points per edge");
   static constexpr int kBlocks = 4;
-  static constexpr const char* kName = "edge_body_friction";
   static constexpr bool kEndOfStep = true;  // term.hpp
   static constexpr int kQuadraturePoints = N;
-  double coefficient = 0.0;  // μ, the rod's
-  double epsilon = 0.0;      // ε = ε_v h, m, > 0
   std::array<LaggedContact, N> lagged{};  // per Gauss point, fixed by begin_step
 
   void begin_step(const State& previous, const Step& previous_step);
   // D = Σ_q D_q.
   double evaluate(const State& q, LocalGradient<kBlocks>* g, LocalHessian<kBlocks>* H) const;
 
-  // r = √(2D) (friction_residual).
-  static constexpr int kResiduals = 1;
+  // Friction: r = √(2D) (friction_residual); the dashpot: one residual per Gauss point.
+  static constexpr int kResiduals = Law::kResidualPerSample ? N : 1;
   using Residual = LocalResidual<kResiduals>;
   using ResidualJacobian = LocalResidualJacobian<kResiduals, kBlocks>;
   void residual(const State& q, Residual& r, ResidualJacobian* J) const;
@@ -252,15 +264,28 @@ struct BasicEdgeBodyFriction : EdgeBodySample {
                         Eigen::VectorXd& da_previous) const;
 };
 
+template <int N>
+struct BasicEdgeBodyFriction : BasicEdgeBodyDissipation<N, SlipFriction> {
+  static constexpr const char* kName = "edge_body_friction";
+};
+template <int N>
+struct BasicEdgeBodyDamping : BasicEdgeBodyDissipation<N, NormalDashpot> {
+  static constexpr const char* kName = "edge_body_damping";
+};
+
 // 4 Gauss points per edge, as EdgeContact (the rule's size is a template parameter because
 // the residual count must be known at compile time).
 using EdgeBodyContact = BasicEdgeBodyContact<4>;
 using EdgeBodyFriction = BasicEdgeBodyFriction<4>;
+using EdgeBodyDamping = BasicEdgeBodyDamping<4>;
 
 extern template struct BasicEdgeBodyContact<1>;
 extern template struct BasicEdgeBodyContact<4>;
 extern template struct BasicEdgeBodyContact<8>;
-extern template struct BasicEdgeBodyFriction<4>;
+extern template struct BodyDissipation<SlipFriction>;
+extern template struct BodyDissipation<NormalDashpot>;
+extern template struct BasicEdgeBodyDissipation<4, SlipFriction>;
+extern template struct BasicEdgeBodyDissipation<4, NormalDashpot>;
 
 // Points on the surface of a body's shape (its coordinates, the shape's pose within the body
 // applied), about `spacing` (m, > 0) apart, deterministic, every point of the surface within

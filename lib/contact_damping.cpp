@@ -3,6 +3,7 @@
 #include <cmath>
 
 #include "point_pair.hpp"
+#include "so3.hpp"
 
 namespace liedyn {
 
@@ -13,19 +14,21 @@ void ContactDamping::begin_step(const State& previous, const Step&) {
   normal = lagged.normal;
 }
 
+const NormalDashpot& ContactDamping::law() const { return *this; }
+
 double ContactDamping::evaluate(const State& q, LocalGradient<2>* g, LocalHessian<2>* H) const {
   if (!active) {
     if (g != nullptr) g->setZero();
     if (H != nullptr) H->setZero();
     return 0.0;
   }
-  const double rate = damping / time_step;  // c/h
-  const double s = normal.dot(at.position(q) - previous_position);
-  if (g != nullptr || H != nullptr) {
-    const Matrix3 K = H != nullptr ? Matrix3(rate * normal * normal.transpose()) : Matrix3::Zero();
-    attached_point_derivatives(at.lever(q), rate * s * normal, K, g, H);
-  }
-  return 0.5 * rate * s * s;
+  Vector3 f;
+  Matrix3 K = Matrix3::Zero();
+  const bool derivatives = g != nullptr || H != nullptr;
+  const double D = law().evaluate(at.position(q) - previous_position, 0.0, normal, stiffness,
+                                  derivatives ? &f : nullptr, H != nullptr ? &K : nullptr);
+  if (derivatives) attached_point_derivatives(at.lever(q), f, K, g, H);
+  return D;
 }
 
 void ContactDamping::residual(const State& q, Residual& r, ResidualJacobian* J) const {
@@ -34,23 +37,23 @@ void ContactDamping::residual(const State& q, Residual& r, ResidualJacobian* J) 
     if (J != nullptr) J->setZero();
     return;
   }
-  const double root = std::sqrt(damping / time_step);
-  r(0) = root * normal.dot(at.position(q) - previous_position);
+  Eigen::RowVector3d row;  // ∂r/∂p
+  r(0) = law().residual(at.position(q) - previous_position, normal, stiffness, row);
   if (J == nullptr) return;
-  J->leftCols<3>() = root * normal.transpose();
-  J->rightCols<3>() = root * at.lever(q).cross(normal).transpose();
+  J->leftCols<3>() = row;
+  J->rightCols<3>() = row * so3::hat(at.lever(q)).transpose();  // ∂p/∂θ = −hat(r)
 }
 
 Eigen::Matrix<double, 6, 6> ContactDamping::previous_jacobian(const State& q,
                                                               const State& previous) const {
   if (!active) return Eigen::Matrix<double, 6, 6>::Zero();
-  const double rate = damping / time_step;
-  const Vector3 w = at.position(q) - previous_position;
-  const double s = normal.dot(w);
   SdfValue lagged;
   const Matrix3 dn = normal_jacobian(previous_position, normal, lagged);
-  const Eigen::RowVector3d ds = -normal.transpose() + w.transpose() * dn;
-  const Matrix3 df = rate * (normal * ds + s * dn);
+  // d = p − p̂: ∂d/∂p̂ = −I; λ enters only through the zone.
+  const Vector3 d = at.position(q) - previous_position;
+  const Matrix3 dd = -Matrix3::Identity();
+  const Eigen::RowVector3d no_lambda = Eigen::RowVector3d::Zero();
+  const Matrix3 df = law().force_jacobian(d, 0.0, normal, stiffness, dd, no_lambda, dn);
   return previous_block(q, previous, df);
 }
 

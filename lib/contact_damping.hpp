@@ -33,17 +33,18 @@
 // Δq_{k−1} does not enter.
 
 #include "contact.hpp"
+#include "dissipation_law.hpp"
 #include "state.hpp"
 #include "term.hpp"
 
 namespace liedyn {
 
-struct ContactDamping : ContactSample {
+// The dashpot's law and rate r = c/h = τ k/h (τ = c/k) are NormalDashpot's (dissipation_law.hpp,
+// which the dashpots between objects share).
+struct ContactDamping : ContactSample, NormalDashpot {
   static constexpr int kBlocks = 2;
   static constexpr const char* kName = "contact_damping";
   static constexpr bool kEndOfStep = true;  // term.hpp
-  double damping = 0.0;    // c, N·s/m, > 0
-  double time_step = 0.0;  // h, s, > 0
 
   // Lagged per step (begin_step): p̂, whether the sample is in the zone, n.
   Vector3 previous_position = Vector3::Zero();
@@ -66,6 +67,9 @@ struct ContactDamping : ContactSample {
   void add_step_adjoint(const State& q, const State& previous, const Step& previous_step,
                         const LocalGradient<kBlocks>& z, Eigen::VectorXd& a_previous,
                         Eigen::VectorXd& da_previous) const;
+
+ private:
+  const NormalDashpot& law() const;  // the law, apart from the term's own evaluate and residual
 };
 
 }  // namespace liedyn

@@ -118,6 +118,12 @@ std::array<double, 4> sample_beta(int side) {
 }
 
 // The four nodes a0, a1, b0, b1 at q.
+// c_q = ½ w_q ℓ̄ of side's sample k: its share of the penalty integrated from both sides.
+template <int N>
+double sample_weight(const EdgeEdgeSample& term, int side, int k) {
+  return 0.5 * gauss_legendre(N).weights[k] * (side == 0 ? term.rest_length_a : term.rest_length_b);
+}
+
 std::array<const Vector3*, 4> node_positions(const EdgeEdgeSample& term, const State& q) {
   return {&q.points[term.nodes[0]], &q.points[term.nodes[1]], &q.points[term.nodes[2]], &q.points[term.nodes[3]]};
 }
@@ -133,11 +139,10 @@ void for_each_sample(const EdgeEdgeSample& term, const State& q, Visit&& visit) 
     const Vector3& p1 = *x[2 * side + 1];
     const Vector3& s0 = *x[2 - 2 * side];
     const Vector3& s1 = *x[3 - 2 * side];
-    const double length = side == 0 ? term.rest_length_a : term.rest_length_b;
     for (int k = 0; k < N; ++k) {
       const double s = rule.nodes[k];
       const Vector3 p = (1.0 - s) * p0 + s * p1;
-      visit(side, k, s, 0.5 * rule.weights[k] * length, project(p, s0, s1));
+      visit(side, k, s, sample_weight<N>(term, side, k), project(p, s0, s1));
     }
   }
 }
@@ -249,8 +254,8 @@ template struct BasicEdgeContact<2>;
 template struct BasicEdgeContact<4>;
 template struct BasicEdgeContact<8>;
 
-template <int N>
-void BasicEdgeFriction<N>::begin_step(const State& previous, const Step&) {
+template <int N, class Law>
+void BasicEdgeDissipation<N, Law>::begin_step(const State& previous, const Step&) {
   const double reach = radius_a + radius_b;
   for_each_sample<N>(*this, previous, [&](int side, int k, double, double c, const Projection& pr) {
     LaggedEdgeSample& l = lagged[side * N + k];
@@ -273,50 +278,73 @@ Vector3 relative_slip(const std::array<double, 4>& alpha, const std::array<const
   return W;
 }
 
-}  // namespace
-
-template <int N>
-double BasicEdgeFriction<N>::evaluate(const State& q, LocalGradient<kBlocks>* g, LocalHessian<kBlocks>* H) const {
-  if (g != nullptr) g->setZero();
-  if (H != nullptr) H->setZero();
+// Calls visit(side, k, α, W, c_q k) for every sample in contact at the step's start.
+template <int N, class Law, class Visit>
+void for_each_lagged_sample(const BasicEdgeDissipation<N, Law>& term, const State& q, Visit&& visit) {
   const QuadratureRule& rule = gauss_legendre(N);
-  const std::array<const Vector3*, 4> x = node_positions(*this, q);
-  double value = 0.0;
+  const std::array<const Vector3*, 4> x = node_positions(term, q);
   for (int side = 0; side < 2; ++side) {
     for (int k = 0; k < N; ++k) {
-      const LaggedEdgeSample& l = lagged[side * N + k];
+      const LaggedEdgeSample& l = term.lagged[side * N + k];
       if (l.normal_force == 0.0) continue;
       const std::array<double, 4> alpha = sample_alpha(side, rule.nodes[k], l.t);
-      const Vector3 W = relative_slip(alpha, x, l);
-      const SmoothedSlip slip(W - l.normal.dot(W) * l.normal, epsilon[side]);
-      const double scale = coefficient[side] * l.normal_force;  // μλ
-      value += scale * slip.f0;
-      if (g != nullptr) {
-        const Vector3 f = scale * slip.phi1 * slip.u;
-        for (int i = 0; i < 4; ++i) g->template segment<3>(3 * i) += alpha[i] * f;
-      }
-      if (H != nullptr) {  // α_i α_j K with K symmetric: each block pair once
-        const Matrix3 K = scale * slip.curvature(Matrix3::Identity() - l.normal * l.normal.transpose());
-        for (int i = 0; i < 4; ++i) {
-          for (int j = i; j < 4; ++j) {
-            const Matrix3 block = (alpha[i] * alpha[j]) * K;
-            H->template block<3, 3>(3 * i, 3 * j) += block;
-            if (j != i) H->template block<3, 3>(3 * j, 3 * i) += block;
-          }
+      visit(side, k, alpha, relative_slip(alpha, x, l), sample_weight<N>(term, side, k) * term.stiffness);
+    }
+  }
+}
+
+}  // namespace
+
+template <int N, class Law>
+double BasicEdgeDissipation<N, Law>::evaluate(const State& q, LocalGradient<kBlocks>* g,
+                                              LocalHessian<kBlocks>* H) const {
+  if (g != nullptr) g->setZero();
+  if (H != nullptr) H->setZero();
+  double value = 0.0;
+  for_each_lagged_sample(*this, q, [&](int side, int k, const std::array<double, 4>& alpha, const Vector3& W,
+                                       double stiffness_k) {
+    const LaggedEdgeSample& l = lagged[side * N + k];
+    Vector3 f;
+    Matrix3 K;
+    value += law[side].evaluate(W, l.normal_force, l.normal, stiffness_k, g != nullptr ? &f : nullptr,
+                                H != nullptr ? &K : nullptr);
+    if (g != nullptr) {
+      for (int i = 0; i < 4; ++i) g->template segment<3>(3 * i) += alpha[i] * f;
+    }
+    if (H != nullptr) {  // α_i α_j K with K symmetric: each block pair once
+      for (int i = 0; i < 4; ++i) {
+        for (int j = i; j < 4; ++j) {
+          const Matrix3 block = (alpha[i] * alpha[j]) * K;
+          H->template block<3, 3>(3 * i, 3 * j) += block;
+          if (j != i) H->template block<3, 3>(3 * j, 3 * i) += block;
         }
       }
     }
-  }
+  });
   return value;
 }
 
-template <int N>
-void BasicEdgeFriction<N>::residual(const State& q, Residual& r, ResidualJacobian* J) const {
-  friction_residual(*this, q, r, J);
+template <int N, class Law>
+void BasicEdgeDissipation<N, Law>::residual(const State& q, Residual& r, ResidualJacobian* J) const {
+  if constexpr (Law::kResidualPerSample) {
+    r.setZero();
+    if (J != nullptr) J->setZero();
+    for_each_lagged_sample(*this, q, [&](int side, int k, const std::array<double, 4>& alpha, const Vector3& W,
+                                         double stiffness_k) {
+      Eigen::RowVector3d row;
+      r(side * N + k) = law[side].residual(W, lagged[side * N + k].normal, stiffness_k, row);
+      if (J != nullptr) {
+        for (int i = 0; i < 4; ++i) J->template block<1, 3>(side * N + k, 3 * i) = alpha[i] * row;
+      }
+    });
+  } else {
+    friction_residual(*this, q, r, J);
+  }
 }
 
-template <int N>
-Eigen::Matrix<double, 12, 12> BasicEdgeFriction<N>::previous_jacobian(const State& q, const State& previous) const {
+template <int N, class Law>
+Eigen::Matrix<double, 12, 12> BasicEdgeDissipation<N, Law>::previous_jacobian(const State& q,
+                                                                              const State& previous) const {
   Eigen::Matrix<double, 12, 12> out = Eigen::Matrix<double, 12, 12>::Zero();
   const std::array<const Vector3*, 4> x = node_positions(*this, q);
   const std::array<const Vector3*, 4> x_hat = node_positions(*this, previous);
@@ -336,17 +364,14 @@ Eigen::Matrix<double, 12, 12> BasicEdgeFriction<N>::previous_jacobian(const Stat
     const Vector3& n = l.normal;
     const Matrix3 P = I - n * n.transpose();
     const Vector3 W = relative_slip(alpha, x, l);
-    const SmoothedSlip slip(P * W, epsilon[side]);
-    const double mu = coefficient[side];
-    const Vector3 f = mu * l.normal_force * slip.phi1 * slip.u;
-    const Matrix3 A = slip.jacobian();
-    const Matrix3 turn = n * W.transpose() + n.dot(W) * I;  // ∂u/∂n, negated
+    const double stiffness_k = c * stiffness;
+    Vector3 f;
+    law[side].evaluate(W, l.normal_force, n, stiffness_k, &f, nullptr);
     for (int j = 0; j < 4; ++j) {
       const Matrix3 dW = -alpha[j] * I - moved_other * gamma[j].transpose();
       const Matrix3 dn = P * (alpha[j] * I - pr.e * gamma[j].transpose()) / pr.distance;
-      const Vector3 dlambda = -c * stiffness * alpha[j] * n;
-      const Matrix3 du = P * dW - turn * dn;
-      const Matrix3 df = mu * slip.phi1 * slip.u * dlambda.transpose() + mu * l.normal_force * A * du;
+      const Eigen::RowVector3d dlambda = -stiffness_k * alpha[j] * n.transpose();
+      const Matrix3 df = law[side].force_jacobian(W, l.normal_force, n, stiffness_k, dW, dlambda, dn);
       for (int i = 0; i < 4; ++i) {
         out.template block<3, 3>(3 * i, 3 * j) += alpha[i] * df - beta[i] * f * gamma[j].transpose();
       }
@@ -355,10 +380,10 @@ Eigen::Matrix<double, 12, 12> BasicEdgeFriction<N>::previous_jacobian(const Stat
   return out;
 }
 
-template <int N>
-void BasicEdgeFriction<N>::add_step_adjoint(const State& q, const State& previous, const Step&,
-                                            const LocalGradient<kBlocks>& z, Eigen::VectorXd& a_previous,
-                                            Eigen::VectorXd&) const {
+template <int N, class Law>
+void BasicEdgeDissipation<N, Law>::add_step_adjoint(const State& q, const State& previous, const Step&,
+                                                    const LocalGradient<kBlocks>& z, Eigen::VectorXd& a_previous,
+                                                    Eigen::VectorXd&) const {
   if (std::all_of(lagged.begin(), lagged.end(), [](const LaggedEdgeSample& l) { return l.normal_force == 0.0; })) {
     return;
   }
@@ -366,8 +391,9 @@ void BasicEdgeFriction<N>::add_step_adjoint(const State& q, const State& previou
   for (int b = 0; b < 4; ++b) a_previous.template segment<3>(tangent_point(nodes[b])) += w.template segment<3>(3 * b);
 }
 
-template struct BasicEdgeFriction<1>;
-template struct BasicEdgeFriction<4>;
+template struct BasicEdgeDissipation<1, SlipFriction>;
+template struct BasicEdgeDissipation<4, SlipFriction>;
+template struct BasicEdgeDissipation<4, NormalDashpot>;
 
 TouchingEdges::TouchingEdges(const Model& model) {
   for (const EdgePair& e : model.edge_pairs()) {

@@ -68,6 +68,7 @@
 #include <array>
 #include <vector>
 
+#include "dissipation_law.hpp"
 #include "model.hpp"
 #include "state.hpp"
 #include "term.hpp"
@@ -175,21 +176,24 @@ struct LaggedEdgeSample {
 //   ∂f/∂x̂_j = μ φ₁ u (∂λ/∂x̂_j)ᵀ + μλ (φ₁ I + (φ₁′/y) u uᵀ) ∂u/∂x̂_j,
 //   ∂(gradient block i)/∂x̂_j = α_i ∂f/∂x̂_j − β_i f γ_jᵀ,
 // summed over the samples. Δq_{k−1} does not enter.
-template <int N>
-struct BasicEdgeFriction : EdgeEdgeSample {
+// The same per sample under either law of dissipation_law.hpp, d = W: SlipFriction (above),
+// or NormalDashpot, D = ½ r (n·W)² while the sample was in contact, with ∂W/∂x_i = α_i I as for
+// friction (the gradient α_i f, the Hessian α_i α_j K) and the adjoint's ∂f/∂x̂_j from the law.
+// Each side's samples use their own rod's law (Law's members of side 0, a's samples, then 1).
+template <int N, class Law>
+struct BasicEdgeDissipation : EdgeEdgeSample {
   static_assert(N >= 1 && N <= kMaxEdgeQuadraturePoints, "Gauss–Legendre points per edge");
   static constexpr int kBlocks = 4;
-  static constexpr const char* kName = "edge_friction";
   static constexpr bool kEndOfStep = true;  // term.hpp
   static constexpr int kQuadraturePoints = N;
-  std::array<double, 2> coefficient{0.0, 0.0};  // μ of a's samples, of b's
-  std::array<double, 2> epsilon{0.0, 0.0};      // ε = ε_v h of a's samples, of b's, m, > 0
+  std::array<Law, 2> law{};                     // of a's samples, of b's
   std::array<LaggedEdgeSample, 2 * N> lagged{};  // a's samples, then b's; fixed by begin_step
 
   void begin_step(const State& previous, const Step& previous_step);
   double evaluate(const State& q, LocalGradient<kBlocks>* g, LocalHessian<kBlocks>* H) const;
 
-  static constexpr int kResiduals = 1;
+  // Friction: r = √(2D) (friction_residual); the dashpot: one residual per sample.
+  static constexpr int kResiduals = Law::kResidualPerSample ? 2 * N : 1;
   using Residual = LocalResidual<kResiduals>;
   using ResidualJacobian = LocalResidualJacobian<kResiduals, kBlocks>;
   void residual(const State& q, Residual& r, ResidualJacobian* J) const;
@@ -202,17 +206,28 @@ struct BasicEdgeFriction : EdgeEdgeSample {
                         Eigen::VectorXd& da_previous) const;
 };
 
+template <int N>
+struct BasicEdgeFriction : BasicEdgeDissipation<N, SlipFriction> {
+  static constexpr const char* kName = "edge_friction";
+};
+template <int N>
+struct BasicEdgeDamping : BasicEdgeDissipation<N, NormalDashpot> {
+  static constexpr const char* kName = "edge_damping";
+};
+
 // The rule's size is a template parameter because the residual count 2N must be known at
 // compile time (Ceres's residual blocks); 4 points per edge by default.
 using EdgeContact = BasicEdgeContact<4>;
 using EdgeFriction = BasicEdgeFriction<4>;
+using EdgeDamping = BasicEdgeDamping<4>;
 
 extern template struct BasicEdgeContact<1>;
 extern template struct BasicEdgeContact<2>;
 extern template struct BasicEdgeContact<4>;
 extern template struct BasicEdgeContact<8>;
-extern template struct BasicEdgeFriction<1>;
-extern template struct BasicEdgeFriction<4>;
+extern template struct BasicEdgeDissipation<1, SlipFriction>;
+extern template struct BasicEdgeDissipation<4, SlipFriction>;
+extern template struct BasicEdgeDissipation<4, NormalDashpot>;
 
 // Which pairs of rod edges (Model::edge_pairs: the candidates) are within reach of each
 // other at a state, for the couplings and terms of a step: a pair is within reach when its

@@ -297,17 +297,35 @@ double slip_zone(const Model& model, const ContactMaterial& material) {
   return material.friction_velocity * model.time_step;
 }
 
-// A sample's penalty term (against a collider: Contact; against a body: BodyContact), and its
-// friction term where its material rubs.
-template <class Penalty, class FrictionTerm, class Sample>
+// Whether a material's samples are damped: c > 0, and a dynamic model (as friction).
+bool damps(const Model& model, const ContactMaterial& material) {
+  return material.damping > 0.0 && !model.static_equilibrium;
+}
+
+// A material's dashpot: τ = c/k (dissipation_law.hpp; none without damping).
+NormalDashpot dashpot(const Model& model, const ContactMaterial& material) {
+  return {damps(model, material) ? material.damping / material.stiffness : 0.0, model.time_step};
+}
+
+// A sample's penalty term (against a collider: Contact; against a body: BodyContact), its
+// friction term where its material rubs and its damping term where it is damped (the dashpot's
+// τ = c/k: dissipation_law.hpp).
+template <class Penalty, class FrictionTerm, class DampingTerm, class Sample>
 void add_sample_terms(const Model& model, const Sample& sample, const ContactMaterial& material,
                       IncrementalPotential& potential) {
   potential.add(Penalty{sample});
   if (rubs(model, material)) {
-    FrictionTerm friction{sample};
+    FrictionTerm friction;
+    static_cast<Sample&>(friction) = sample;
     friction.coefficient = material.friction;
     friction.epsilon = slip_zone(model, material);
     potential.add(friction);
+  }
+  if (damps(model, material)) {
+    DampingTerm damping;
+    static_cast<Sample&>(damping) = sample;
+    static_cast<NormalDashpot&>(damping) = dashpot(model, material);
+    potential.add(damping);
   }
 }
 
@@ -320,13 +338,7 @@ void add_contact_terms(const Model& model,
   for (const auto& collider : colliders) {
     if (!material.touches(collider->name)) continue;
     const ContactSample sample{offsets, at, collider, material.stiffness, material.radius};
-    add_sample_terms<Contact, Friction>(model, sample, material, p);
-    if (material.damping > 0.0 && !model.static_equilibrium) {  // a dynamic term, as friction
-      ContactDamping damping{sample};
-      damping.damping = material.damping;
-      damping.time_step = model.time_step;
-      p.add(damping);
-    }
+    add_sample_terms<Contact, Friction, ContactDamping>(model, sample, material, p);
   }
 }
 
@@ -366,7 +378,7 @@ void add_body_contact_terms(const Model& model, const std::vector<bool>& key, co
       const RigidBody& solid = model.bodies[b];
       if (!sampled.contact.enabled() || solid.shape == nullptr) continue;
       for (const Vector3& point : sampled.contact_points) {
-        add_sample_terms<BodyContact, BodyFriction>(
+        add_sample_terms<BodyContact, BodyFriction, BodyDamping>(
             model,
             BodySample{{point_offset[a], rotation_offset[a], point_offset[b], rotation_offset[b]},
                        {a, a, point},
@@ -640,9 +652,14 @@ void add_edge_contact_terms(const Model& model, const std::vector<bool>& key, co
     potential.add(term);
     if (rubs(model, a.contact) || rubs(model, b.contact)) {
       EdgeFriction friction{term};
-      friction.coefficient = {a.contact.friction, b.contact.friction};
-      friction.epsilon = {slip_zone(model, a.contact), slip_zone(model, b.contact)};
+      friction.law = {SlipFriction{a.contact.friction, slip_zone(model, a.contact)},
+                      SlipFriction{b.contact.friction, slip_zone(model, b.contact)}};
       potential.add(friction);
+    }
+    if (damps(model, a.contact) || damps(model, b.contact)) {
+      EdgeDamping damping{term};
+      damping.law = {dashpot(model, a.contact), dashpot(model, b.contact)};
+      potential.add(damping);
     }
   }
 }
@@ -673,7 +690,7 @@ void add_rod_body_contact_terms(const Model& model, const std::vector<bool>& key
     for (int e = 0; e < rod.edge_count(); ++e) {
       if (offset(e) < 0 && offset(e + 1) < 0) continue;
       const double rest_length = rods[r]->rest_length[e];
-      add_sample_terms<EdgeBodyContact, EdgeBodyFriction>(
+      add_sample_terms<EdgeBodyContact, EdgeBodyFriction, EdgeBodyDamping>(
           model,
           EdgeBodySample{{offset(e), offset(e + 1), body[1], body_rotation},
                          {model.rod_point(r, e), model.rod_point(r, e + 1)},
@@ -686,7 +703,7 @@ void add_rod_body_contact_terms(const Model& model, const std::vector<bool>& key
     }
     for (int i : {0, rod.node_count() - 1}) {
       if (offset(i) < 0) continue;
-      add_sample_terms<BodyContact, BodyFriction>(
+      add_sample_terms<BodyContact, BodyFriction, BodyDamping>(
           model,
           BodySample{{offset(i), -1, body[1], body_rotation}, {model.rod_point(r, i), -1, Vector3::Zero()}, b,
                      model.bodies[b].shape, rod.contact.stiffness, rod.contact.radius},

@@ -68,8 +68,8 @@ class IncrementalPotential {
                                CableSegment, JointPoint, JointLine, JointAlignment, JointWeld,
                                JointMotor, JointForceMotor, JointLimit<HingeAngle>,
                                JointLimit<SliderPosition>, Contact, Friction, ContactDamping, BodyContact,
-                               BodyFriction, EdgeContact, EdgeFriction, EdgeBodyContact,
-                               EdgeBodyFriction>;
+                               BodyFriction, BodyDamping, EdgeContact, EdgeFriction, EdgeDamping,
+                               EdgeBodyContact, EdgeBodyFriction, EdgeBodyDamping>;
 
   // The terms of type T (one contiguous vector per type).
   template <class T>

@@ -394,23 +394,26 @@ TEST(SurfaceSamples, ASpacingThatIsNotPositiveOrTooFineIsAnErrorNamingItsField) 
 // ----------------------------------------------------------------------------------------
 // Friction between bodies.
 
-struct FrictionPair {
-  BodyFriction term;
+template <class Term>
+struct LaggedPair {
+  Term term;
   State previous, q;
 };
+using FrictionPair = LaggedPair<BodyFriction>;
+using DampingPair = LaggedPair<BodyDamping>;
 
 // A's sample 0.02 deep in B at the previous state (make_pair's geometry), then both bodies
 // moved and turned (B by a small rigid motion, A turned by 0.2 rad) so that the sample slips
 // by `slip` along the lagged tangent plane relative to the point of B it touched, and moves
-// by `normal_move` along the normal.
-FrictionPair friction_pair(const std::shared_ptr<const Collider>& shape, double angle_a, double angle_b,
-                           double slip, double epsilon, double stiffness, std::mt19937& rng,
-                           double normal_move = 0.002) {
+// by `normal_move` along the normal. The term's law is `law`.
+template <class Term, class Law>
+LaggedPair<Term> lagged_pair(const std::shared_ptr<const Collider>& shape, double angle_a, double angle_b,
+                             double slip, const Law& law, double stiffness, std::mt19937& rng,
+                             double normal_move = 0.002) {
   const Pair start = make_pair(shape, 0.02, angle_a, angle_b, stiffness, rng);
-  FrictionPair c;
+  LaggedPair<Term> c;
   static_cast<BodySample&>(c.term) = start.term;
-  c.term.coefficient = 0.4;
-  c.term.epsilon = epsilon;
+  static_cast<Law&>(c.term) = law;
   c.previous = start.q;
   c.term.begin_step(c.previous, Step{});
   const Vector3 n = c.term.normal;
@@ -422,6 +425,13 @@ FrictionPair friction_pair(const std::shared_ptr<const Collider>& shape, double 
   const Vector3 p_a = p_b + slip * fd::random_perpendicular(n, rng) + normal_move * n;
   c.q.points[0] = p_a - c.q.rotations[0] * c.term.at.local;
   return c;
+}
+
+FrictionPair friction_pair(const std::shared_ptr<const Collider>& shape, double angle_a, double angle_b,
+                           double slip, double epsilon, double stiffness, std::mt19937& rng,
+                           double normal_move = 0.002) {
+  return lagged_pair<BodyFriction>(shape, angle_a, angle_b, slip, SlipFriction{0.4, epsilon}, stiffness, rng,
+                                   normal_move);
 }
 
 TEST(BodyFriction, LieDerivativesInStickAndSlipMatchFiniteDifferences) {
@@ -575,6 +585,134 @@ TEST(BodyFriction, TinyAndHugeTimeStepsKeepDerivativesExactAndTheForceBounded) {
       c.term.evaluate(c.q, &g, &H);
       EXPECT_LE(g.head<3>().norm(), c.term.coefficient * c.term.normal_force * (1.0 + 1e-9));
       EXPECT_TRUE(H.allFinite());
+    }
+  }
+}
+
+// ----------------------------------------------------------------------------------------
+// Damping between bodies (the dashpot law of lib/dissipation_law.hpp on the relative
+// displacement of body_contact.hpp's friction): D = ½ (τ k/h) (n·d)².
+
+// c = 30 N·s/m at k = 1e4 N/m, h = 1 ms.
+DampingPair damping_pair(const std::shared_ptr<const Collider>& shape, double angle_a, double angle_b,
+                         double slide, double normal_move, std::mt19937& rng, double h = 1e-3, double c = 30.0) {
+  return lagged_pair<BodyDamping>(shape, angle_a, angle_b, slide, NormalDashpot{c / 1e4, h}, 1e4, rng, normal_move);
+}
+
+TEST(BodyDamping, LieDerivativesMatchFiniteDifferences) {
+  std::mt19937 rng(144);
+  int checked = 0;
+  for (const auto& shape : shapes(rng)) {
+    for (const double angle_a : kAngles) {
+      for (const double angle_b : {0.0, 1e-9, 2.5, std::numbers::pi}) {
+        // Approaching and receding, sliding across the normal.
+        for (const double normal_move : {-0.004, 0.003}) {
+          SCOPED_TRACE(trace("angles of A and B, normal move", angle_a, angle_b, normal_move));
+          const DampingPair c = damping_pair(shape, angle_a, angle_b, 0.02, normal_move, rng);
+          ASSERT_GT(c.term.normal_force, 0.0);
+          EXPECT_TRUE(fd::check_term(c.term, c.q, kDofs));
+          ++checked;
+        }
+      }
+    }
+  }
+  EXPECT_EQ(checked, 3 * 9 * 4 * 2);
+}
+
+TEST(BodyDamping, IsTheDashpotOnTheRelativeNormalVelocityEqualAndOppositeAndTorqueFree) {
+  std::mt19937 rng(145);
+  for (const auto& shape : shapes(rng)) {
+    for (const double h : {1e-6, 1e-3, 1.0}) {
+      SCOPED_TRACE(trace("h", h));
+      // A's sample moved 3 mm into B relative to the point it touched, nothing across.
+      const double c = 30.0;
+      const DampingPair pair = damping_pair(shape, 1.0, 2.0, 0.0, -0.003, rng, h, c);
+      LocalGradient<4> g;
+      const double D = pair.term.evaluate(pair.q, &g, nullptr);
+      // The force on A, −∂D/∂x_A, is c v_n n with v_n = 3 mm/h: it pushes A back out.
+      const Vector3 expected = (c * 0.003 / h) * pair.term.normal;
+      EXPECT_TRUE((-g.head<3>()).isApprox(expected, 1e-9)) << (-g.head<3>()).transpose();
+      EXPECT_NEAR(D, 0.5 * (c / h) * 0.003 * 0.003, 1e-9 * D);
+      // B feels the opposite force at its material point, on the line of the normal: no net
+      // force, no net torque.
+      const auto [force, torque] = net_force_and_torque(g, pair.q);
+      EXPECT_LT(force.norm(), 1e-12 * g.norm());
+      EXPECT_LT(torque.norm(), 1e-11 * g.norm() * (1.0 + pair.q.points[0].norm() + pair.q.points[1].norm()));
+    }
+  }
+}
+
+TEST(BodyDamping, NoLaggedContactNoDamping) {
+  std::mt19937 rng(146);
+  const Pair apart = make_pair(shapes(rng).front(), -0.05, 1.0, 2.5, 1e4, rng);
+  BodyDamping term;
+  static_cast<BodySample&>(term) = apart.term;
+  static_cast<NormalDashpot&>(term) = NormalDashpot{3e-3, 1e-3};
+  term.begin_step(apart.q, Step{});
+  EXPECT_EQ(term.normal_force, 0.0);
+  State q = apart.q;
+  q.points[0] += Vector3(0.01, 0.02, -0.03);
+  LocalGradient<4> g;
+  LocalHessian<4> H;
+  EXPECT_EQ(term.evaluate(q, &g, &H), 0.0);
+  EXPECT_TRUE(g.isZero(0.0));
+  EXPECT_TRUE(H.isZero(0.0));
+  BodyDamping::Residual r;
+  BodyDamping::ResidualJacobian J;
+  term.residual(q, r, &J);
+  EXPECT_TRUE(r.isZero(0.0));
+  EXPECT_TRUE(J.isZero(0.0));
+  EXPECT_TRUE(term.previous_jacobian(q, apart.q).isZero(0.0));
+}
+
+TEST(BodyDamping, ResidualFormReproducesValueAndGradient) {
+  std::mt19937 rng(147);
+  for (const auto& shape : shapes(rng)) {
+    for (const double normal_move : {-0.004, 0.0, 0.003}) {
+      const DampingPair c = damping_pair(shape, 1.3, 0.4, 0.02, normal_move, rng);
+      LocalGradient<4> g;
+      const double D = c.term.evaluate(c.q, &g, nullptr);
+      BodyDamping::Residual r;
+      BodyDamping::ResidualJacobian J;
+      c.term.residual(c.q, r, &J);
+      EXPECT_NEAR(0.5 * r.squaredNorm(), D, 1e-13 * D);
+      EXPECT_TRUE((J.transpose() * r).isApprox(g, 1e-12));
+      EXPECT_TRUE(fd::check_vector_jacobian(fd::residual_of(c.term), c.q, kDofs, J));
+    }
+  }
+}
+
+TEST(BodyDamping, MixedBlockOfTheLaggedStepMatchesFiniteDifferences) {
+  // Through û, n and the previous poses (begin_step re-run at every perturbed q_{k−1}; the
+  // sample is 2 cm deep, far from the zone's switch).
+  std::mt19937 rng(148);
+  int checked = 0;
+  for (const auto& shape : shapes(rng)) {
+    for (const double angle_a : kAngles) {
+      for (const double angle_b : kAngles) {
+        SCOPED_TRACE(trace("angles of A and B", angle_a, angle_b));
+        const DampingPair c = damping_pair(shape, angle_a, angle_b, 0.02, -0.004, rng);
+        const Eigen::MatrixXd J = c.term.previous_jacobian(c.q, c.previous);
+        EXPECT_TRUE(fd::check_vector_jacobian(fd::lagged_gradient(c.term, c.q), c.previous, kDofs, J));
+        ++checked;
+      }
+    }
+  }
+  EXPECT_EQ(checked, 3 * 9 * 9);
+}
+
+TEST(BodyDamping, TinyAndHugeTimeStepsAndDampingsKeepDerivativesExact) {
+  // D is quadratic in the state for any c/h, from 1e-3 (c = 1e-3, h = 1 s) to 1e12 (c = 1e6,
+  // h = 1e-6 s): the derivatives scale with it and stay exact (relative).
+  std::mt19937 rng(149);
+  const auto shape = shapes(rng)[1];
+  for (const double h : {1e-6, 1e-3, 1.0}) {
+    for (const double c : {1e-3, 1.0, 1e6}) {
+      SCOPED_TRACE(trace("h c", h, c));
+      const DampingPair d = damping_pair(shape, 2.0, 1.0, 0.01, -0.004, rng, h, c);
+      EXPECT_TRUE(fd::check_term(d.term, d.q, kDofs));
+      EXPECT_TRUE(fd::check_vector_jacobian(fd::lagged_gradient(d.term, d.q), d.previous, kDofs,
+                                            d.term.previous_jacobian(d.q, d.previous)));
     }
   }
 }

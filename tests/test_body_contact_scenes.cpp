@@ -213,6 +213,20 @@ TEST(BodyContactAdjoint, TheBilliardGradientRunsBackThroughFrictionBetweenTheBal
   EXPECT_TRUE(test::gradient_agrees(scene));
 }
 
+// ... and through the dashpot between them (BodyDamping, c = 20 N·s/m on both balls' samples:
+// ζ ≈ 0.05 per sample), under backward Euler and the trapezoidal rule (the history terms'
+// blocks beside the dashpot's).
+TEST(BodyContactAdjoint, TheBilliardGradientRunsBackThroughDampingBetweenTheBalls) {
+  for (const Integrator integrator : {Integrator::kBackwardEuler, Integrator::kTrapezoidal}) {
+    SCOPED_TRACE(to_string(integrator));
+    Scene scene =
+        load_scene(std::filesystem::path(LIEDYN_SOURCE_DIR) / "problems/scenes/optimization/billiard.json");
+    scene.model.integrator = integrator;
+    for (RigidBody& b : scene.model.bodies) b.contact.damping = 20.0;
+    EXPECT_TRUE(test::gradient_agrees(scene));
+  }
+}
+
 // "collides_with" and "ignores": a ball told to ignore another passes through it, one told
 // to ignore the floor falls through it, and a pair touches only when both agree.
 TEST(BodyContactScenes, CollidesWithAndIgnoresNarrowWhatTouches) {

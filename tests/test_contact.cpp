@@ -392,7 +392,7 @@ DampingCase damping_case(const std::shared_ptr<const Collider>& collider, double
   c.term.collider = collider;
   c.term.radius = 0.1;
   c.term.stiffness = 1e4;
-  c.term.damping = 30.0;
+  c.term.time_constant = 30.0 / c.term.stiffness;  // c = 30 N·s/m
   c.term.time_step = h;
   const BodySample b = body_sample(place_sample(*collider, c.term.radius - depth, rng), angle, rng);
   c.term.at = b.at;
@@ -429,7 +429,7 @@ TEST(ContactDamping, IsTheDashpotForceOnTheNormalVelocityAndNothingOutsideTheZon
   term.collider = plane;
   term.radius = 0.05;
   term.stiffness = 1e3;
-  term.damping = 40.0;
+  term.time_constant = 40.0 / term.stiffness;  // c = 40 N·s/m
   term.time_step = 1e-3;
   term.at = {0, -1, Vector3::Zero()};
   term.offsets = {0, -1};
@@ -503,7 +503,7 @@ TEST(ContactDamping, TinyAndHugeTimeStepsAndDampingsKeepDerivativesExact) {
     for (double c : {1e-3, 1.0, 1e6}) {
       SCOPED_TRACE(trace("h c", h, c));
       DampingCase d = damping_case(plane, 2.0, 0.02, -0.005, 0.01, h, rng);
-      d.term.damping = c;
+      d.term.time_constant = c / d.term.stiffness;
       EXPECT_TRUE(fd::check_term(d.term, d.q, kBodyDofs));
       EXPECT_TRUE(fd::check_vector_jacobian(fd::lagged_gradient(d.term, d.q), d.previous, kBodyDofs,
                                             d.term.previous_jacobian(d.q, d.previous)));

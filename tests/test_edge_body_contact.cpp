@@ -321,26 +321,29 @@ TEST(EdgeBodyContact, AnEdgeLyingOnAFacePressesWithKPerEdgeAsANodeSample) {
 // ----------------------------------------------------------------------------------------
 // Friction.
 
-template <int N>
-struct FrictionCase {
-  BasicEdgeBodyFriction<N> term;
+template <class Term>
+struct LaggedCase {
+  Term term;
   State previous, q;
 };
+template <int N>
+using FrictionCase = LaggedCase<BasicEdgeBodyFriction<N>>;
+using DampingCase = LaggedCase<EdgeBodyDamping>;
 
 // make_edge's contact (Gauss point 1 at 0.02 deep, the edge leaving at slope 0.3: several
 // points touch) at the previous state; then B moved and turned by a small rigid motion and
 // the edge carried with it, plus a slip `slip` along the touching point's lagged tangent plane
 // and `normal_move` along its normal: each Gauss point slips by about `slip` relative to the
-// point of B it touched (exactly on a flat face).
-template <int N>
-FrictionCase<N> friction_case(const std::shared_ptr<const Collider>& shape, double angle_b, double slip,
-                              double epsilon, double stiffness, std::mt19937& rng, double normal_move = 0.002,
-                              Region region = Region::kAnywhere) {
+// point of B it touched (exactly on a flat face). The term's law is `law`.
+template <class Term, class Law>
+LaggedCase<Term> lagged_case(const std::shared_ptr<const Collider>& shape, double angle_b, double slip,
+                             const Law& law, double stiffness, std::mt19937& rng, double normal_move = 0.002,
+                             Region region = Region::kAnywhere) {
+  constexpr int N = Term::kQuadraturePoints;
   const EdgeCase<N> start = smooth_edge<N>(shape, 1, 0.02, angle_b, stiffness, 0.3, rng, region);
-  FrictionCase<N> c;
+  LaggedCase<Term> c;
   static_cast<EdgeBodySample&>(c.term) = start.term;
-  c.term.coefficient = 0.4;
-  c.term.epsilon = epsilon;
+  static_cast<Law&>(c.term) = law;
   c.previous = start.q;
   c.term.begin_step(c.previous, Step{});
   const Vector3 n = c.term.lagged[1].normal;
@@ -353,6 +356,14 @@ FrictionCase<N> friction_case(const std::shared_ptr<const Collider>& shape, doub
     c.q.points[i] = c.q.points[0] + turn * (c.previous.points[i] - c.previous.points[0]) + move;
   }
   return c;
+}
+
+template <int N>
+FrictionCase<N> friction_case(const std::shared_ptr<const Collider>& shape, double angle_b, double slip,
+                              double epsilon, double stiffness, std::mt19937& rng, double normal_move = 0.002,
+                              Region region = Region::kAnywhere) {
+  return lagged_case<BasicEdgeBodyFriction<N>>(shape, angle_b, slip, SlipFriction{0.4, epsilon}, stiffness, rng,
+                                               normal_move, region);
 }
 
 // The tangential slip y_q of every Gauss point in contact (the lagged law's u = P d).
@@ -470,8 +481,7 @@ TEST(EdgeBodyFriction, NoLaggedContactNoFriction) {
   const EdgeCase<4> apart = make_edge<4>(shape, 0, -0.05, 1.0, 1e4, 0.6, rng);
   EdgeBodyFriction term;
   static_cast<EdgeBodySample&>(term) = apart.term;
-  term.coefficient = 0.4;
-  term.epsilon = 1e-3;
+  static_cast<SlipFriction&>(term) = SlipFriction{0.4, 1e-3};
   term.begin_step(apart.q, Step{});
   for (const LaggedContact& l : term.lagged) EXPECT_EQ(l.normal_force, 0.0);
   State q = apart.q;
@@ -607,6 +617,125 @@ TEST(EdgeBodyFriction, TinyAndHugeTimeStepsKeepDerivativesExactAndTheForceBounde
       for (const LaggedContact& l : c.term.lagged) mu_lambda += c.term.coefficient * l.normal_force;
       EXPECT_LE((g.segment<3>(0) + g.segment<3>(3)).norm(), mu_lambda * (1.0 + 1e-9));
       EXPECT_TRUE(H.allFinite());
+    }
+  }
+}
+
+// ----------------------------------------------------------------------------------------
+// Damping (the dashpot law of lib/dissipation_law.hpp per Gauss point).
+
+// τ = c/k = 30/1e4 s, h = 1 ms.
+DampingCase damping_case(const std::shared_ptr<const Collider>& shape, double angle_b, double normal_move,
+                         std::mt19937& rng, double h = 1e-3, double c = 30.0, Region region = Region::kAnywhere) {
+  return lagged_case<EdgeBodyDamping>(shape, angle_b, 0.02, NormalDashpot{c / 1e4, h}, 1e4, rng, normal_move, region);
+}
+
+TEST(EdgeBodyDamping, LieDerivativesMatchFiniteDifferences) {
+  std::mt19937 rng(164);
+  int checked = 0;
+  for (const auto& shape : shapes(rng)) {
+    for (const double angle_b : kAngles) {
+      for (const double normal_move : {-0.004, 0.003}) {
+        SCOPED_TRACE(trace("angle of B, normal move", angle_b, normal_move));
+        const DampingCase c = damping_case(shape, angle_b, normal_move, rng);
+        EXPECT_TRUE(fd::check_term(c.term, c.q, kDofs));
+        ++checked;
+      }
+    }
+  }
+  EXPECT_EQ(checked, 4 * 9 * 2);
+}
+
+TEST(EdgeBodyDamping, AnEdgeOnAFaceFeelsItsShareOfTheMaterialsDashpot) {
+  // An edge on the box's face moved 3 mm into it: each touching Gauss point's dashpot is
+  // τ = c/k times its stiffness w_q ℓ̄ κ, so the force on the edge is τ ℓ̄ κ v_n n Σ_touching w_q,
+  // v_n = 3 mm/h, equal and opposite on B and torque-free. (The builder's κ = k/ℓ̄ makes an
+  // edge touching all along, Σ_q w_q = 1, feel the c of a node sample of its material.)
+  std::mt19937 rng(165);
+  const auto box = shapes(rng)[2];
+  const QuadratureRule& rule = gauss_legendre(4);
+  for (int attempt = 0; attempt < 50; ++attempt) {
+    DampingCase d = damping_case(box, 1.0, -0.003, rng);
+    Vector3 n0 = Vector3::Zero();
+    bool one_face = true;
+    double weight = 0.0;
+    for (int k = 0; k < 4; ++k) {
+      const LaggedContact& l = d.term.lagged[k];
+      if (l.normal_force == 0.0) continue;
+      if (n0.isZero()) n0 = l.normal;
+      one_face = one_face && l.normal.isApprox(n0, 1e-12);
+      weight += rule.weights[k];
+    }
+    if (!one_face) continue;
+    // Without the sideways slide: the edge moved by exactly −3 mm along n relative to B.
+    const Matrix3 turn = d.q.rotations[0] * d.previous.rotations[0].transpose();
+    for (int i : {1, 2}) {
+      d.q.points[i] = d.q.points[0] + turn * (d.previous.points[i] - d.previous.points[0]) - 0.003 * n0;
+    }
+    LocalGradient<4> g;
+    d.term.evaluate(d.q, &g, nullptr);
+    const Vector3 on_edge = -(g.segment<3>(0) + g.segment<3>(3));
+    const double tau = 30.0 / 1e4;
+    const double expected = weight * d.term.rest_length * d.term.stiffness * tau * 0.003 / 1e-3;
+    EXPECT_TRUE(on_edge.isApprox(expected * n0, 1e-9)) << on_edge.transpose() << " against " << expected;
+    const auto [force, torque] = net_force_and_torque(g, d.q);
+    EXPECT_LT(force.norm(), 1e-12 * g.norm());
+    EXPECT_LT(torque.norm(), 1e-11 * g.norm() * (1.0 + d.q.points[0].norm() + d.q.points[1].norm()));
+    return;
+  }
+  ADD_FAILURE() << "no placement on a single face of the box";
+}
+
+TEST(EdgeBodyDamping, ResidualFormHasOneResidualPerGaussPoint) {
+  std::mt19937 rng(166);
+  for (const auto& shape : shapes(rng)) {
+    for (const double normal_move : {-0.004, 0.0, 0.003}) {
+      const DampingCase c = damping_case(shape, 1.3, normal_move, rng);
+      LocalGradient<4> g;
+      const double D = c.term.evaluate(c.q, &g, nullptr);
+      EdgeBodyDamping::Residual r;
+      EdgeBodyDamping::ResidualJacobian J;
+      c.term.residual(c.q, r, &J);
+      static_assert(EdgeBodyDamping::kResiduals == 4);
+      for (int k = 0; k < 4; ++k) {
+        if (c.term.lagged[k].normal_force == 0.0) {
+          EXPECT_EQ(r(k), 0.0);
+        }
+      }
+      EXPECT_NEAR(0.5 * r.squaredNorm(), D, 1e-13 * D);
+      EXPECT_TRUE((J.transpose() * r).isApprox(g, 1e-12));
+      EXPECT_TRUE(fd::check_vector_jacobian(fd::residual_of(c.term), c.q, kDofs, J));
+    }
+  }
+}
+
+TEST(EdgeBodyDamping, MixedBlockOfTheLaggedStepMatchesFiniteDifferences) {
+  std::mt19937 rng(167);
+  int checked = 0;
+  for (const auto& shape : shapes(rng)) {
+    for (const Region region : regions(*shape)) {
+      for (const double angle_b : kAngles) {
+        SCOPED_TRACE(trace("angle of B, region", angle_b, static_cast<int>(region)));
+        const DampingCase c = damping_case(shape, angle_b, -0.004, rng, 1e-3, 30.0, region);
+        const Eigen::MatrixXd J = c.term.previous_jacobian(c.q, c.previous);
+        EXPECT_TRUE(fd::check_vector_jacobian(fd::lagged_gradient(c.term, c.q), c.previous, kDofs, J));
+        ++checked;
+      }
+    }
+  }
+  EXPECT_EQ(checked, (1 + 3 + 3 + 1) * 9);
+}
+
+TEST(EdgeBodyDamping, TinyAndHugeTimeStepsAndDampingsKeepDerivativesExact) {
+  std::mt19937 rng(168);
+  const auto shape = shapes(rng)[1];
+  for (const double h : {1e-6, 1e-3, 1.0}) {
+    for (const double c : {1e-3, 1.0, 1e6}) {
+      SCOPED_TRACE(trace("h c", h, c));
+      const DampingCase d = damping_case(shape, 2.0, -0.004, rng, h, c);
+      EXPECT_TRUE(fd::check_term(d.term, d.q, kDofs));
+      EXPECT_TRUE(fd::check_vector_jacobian(fd::lagged_gradient(d.term, d.q), d.previous, kDofs,
+                                            d.term.previous_jacobian(d.q, d.previous)));
     }
   }
 }

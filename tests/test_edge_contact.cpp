@@ -886,10 +886,13 @@ TEST(EdgeContact, GapReachingZeroIsC1WithAHessianJump) {
 // ---------------------------------------------------------------------------------------
 // Friction between the edges (EdgeFriction).
 
-struct FrictionPair {
-  EdgeFriction term;
+template <class Term>
+struct LaggedEdgePair {
+  Term term;
   State previous, q;
 };
+using FrictionPair = LaggedEdgePair<EdgeFriction>;
+using DampingPair = LaggedEdgePair<EdgeDamping>;
 
 // The sliding-regime slip y_q = ‖P W_q‖ of every sample with a lagged normal force, from the
 // header's definitions (W = Σ_i α_i(t̄) x_i − ŵ).
@@ -912,16 +915,16 @@ std::vector<double> slips(const FrictionPair& f) {
   return out;
 }
 
-// c's contact lagged at its state (q_{k−1}), μ 0.4 for a's samples and 0.25 for b's; then the
+// c's contact lagged at its state (q_{k−1}) under the laws `law` (a's samples', b's); then the
 // four nodes carried by a small rigid motion (which alone makes each sample slip a little,
 // its lagged normal staying put), and a's two nodes moved by `slip` ⟂ the first touching
 // sample's normal and `normal_move` along it.
-FrictionPair friction_pair(const Pair<4>& c, double slip, double epsilon, std::mt19937& rng,
-                           double turn_angle = 0.02, double normal_move = 1e-3) {
-  FrictionPair f;
+template <class Term, class Law>
+LaggedEdgePair<Term> lagged_edge_pair(const Pair<4>& c, double slip, const std::array<Law, 2>& law, std::mt19937& rng,
+                                      double turn_angle = 0.02, double normal_move = 1e-3) {
+  LaggedEdgePair<Term> f;
   static_cast<EdgeEdgeSample&>(f.term) = c.term;
-  f.term.coefficient = {0.4, 0.25};
-  f.term.epsilon = {epsilon, epsilon};
+  f.term.law = law;
   f.previous = c.q;
   f.term.begin_step(f.previous, Step{});
   Vector3 n = Vector3::UnitZ();
@@ -939,6 +942,13 @@ FrictionPair friction_pair(const Pair<4>& c, double slip, double epsilon, std::m
   const Vector3 move = slip * fd::random_perpendicular(n, rng) + normal_move * n;
   for (int i : {0, 1}) f.q.points[c.term.nodes[i]] += move;
   return f;
+}
+
+// μ 0.4 for a's samples and 0.25 for b's.
+FrictionPair friction_pair(const Pair<4>& c, double slip, double epsilon, std::mt19937& rng,
+                           double turn_angle = 0.02, double normal_move = 1e-3) {
+  return lagged_edge_pair<EdgeFriction>(c, slip, std::array{SlipFriction{0.4, epsilon}, SlipFriction{0.25, epsilon}},
+                                        rng, turn_angle, normal_move);
 }
 
 // friction_pair on `c`, drawn again until every touching sample's slip is on the side of the
@@ -1068,7 +1078,7 @@ TEST(EdgeFriction, SlidingForceIsMuLambdaAgainstTheSlipOnEachSideAndEqualAndOppo
   EXPECT_TRUE(on_a.isApprox(-expected * along, 1e-12)) << on_a.transpose();
   EXPECT_LT((on_a + on_b).norm(), 1e-12 * expected);
   // Without μ on b's side, only a's samples rub.
-  f.term.coefficient = {0.4, 0.0};
+  f.term.law[1].coefficient = 0.0;
   f.term.evaluate(f.q, &g, nullptr);
   EXPECT_TRUE((-(g.segment<3>(0) + g.segment<3>(3))).isApprox(-0.4 * 0.5 * 0.8 * k * gap * along, 1e-12));
 }
@@ -1157,6 +1167,139 @@ TEST(EdgeFriction, MixedBlockOfTheLaggedStepMatchesFiniteDifferences) {
     }
   }
   EXPECT_EQ(checked, 8 * 2);
+}
+
+// ---------------------------------------------------------------------------------------
+// Damping between the edges (EdgeDamping: the dashpot law of lib/dissipation_law.hpp per
+// sample, on the same relative displacement W as friction).
+
+// τ = 3 ms for a's samples and 1 ms for b's (c = τ k), h = 1 ms unless given.
+DampingPair damping_pair(const Pair<4>& c, std::mt19937& rng, double normal_move = -1e-3, double h = 1e-3,
+                         double scale = 1.0) {
+  return lagged_edge_pair<EdgeDamping>(c, 0.01, std::array{NormalDashpot{3e-3 * scale, h}, NormalDashpot{1e-3 * scale, h}},
+                                       rng, 0.02, normal_move);
+}
+
+TEST(EdgeDamping, DerivativesMatchFiniteDifferencesInEveryConfiguration) {
+  // Parallel, collinear end to end, touching at the ends at an angle, crossing, random;
+  // approaching and receding.
+  std::mt19937 rng(170);
+  int checked = 0;
+  fd::TermCheckOptions options;
+  options.gradient.require_nonzero = fd::NonZero::kAny;
+  options.hessian.require_nonzero = fd::NonZero::kAny;
+  for (const auto& [name, c] : friction_configurations(rng)) {
+    for (const double normal_move : {-1e-3, 2e-3}) {
+      SCOPED_TRACE(name + trace(", normal move", normal_move));
+      const DampingPair f = damping_pair(c, rng, normal_move);
+      EXPECT_TRUE(fd::check_term(f.term, f.q, dofs_of(f.term), options));
+      // The Hessian Σ α_i α_j r n nᵀ is positive semi-definite.
+      LocalHessian<4> H;
+      f.term.evaluate(f.q, nullptr, &H);
+      EXPECT_GE(Eigen::SelfAdjointEigenSolver<LocalHessian<4>>(H).eigenvalues().minCoeff(), -1e-12 * H.norm());
+      ++checked;
+    }
+  }
+  EXPECT_EQ(checked, 8 * 2);
+}
+
+TEST(EdgeDamping, ParallelEdgesApproachingFeelBothSidesDashpotsEqualAndOpposite) {
+  // Equal parallel edges 0.15 apart, fully overlapping, a moved δ = 1 mm towards b: every
+  // sample's normal is the same and its W has n·W = δ, so with Σ_q w_q = 1 the force on a is
+  // (τ_a ½ ℓ̄_a + τ_b ½ ℓ̄_b) k δ/h away from b (each side's samples with its own τ), and b
+  // feels the opposite.
+  std::mt19937 rng(171);
+  const double k = 1e4, delta = 1e-3, h = 1e-3;
+  Pair<4> c = edge_pair(moved(parallel(0.0, 1.0, 0.15), rng), k);
+  c.term.rest_length_a = 0.8;
+  c.term.rest_length_b = 1.2;
+  DampingPair f = lagged_edge_pair<EdgeDamping>(c, 0.0, std::array{NormalDashpot{3e-3, h}, NormalDashpot{1e-3, h}}, rng,
+                                                0.0, 0.0);
+  const Vector3 n = f.term.lagged[0].normal;  // from b's axis to a's sample
+  for (int i : {0, 1}) f.q.points[c.term.nodes[i]] -= delta * n;
+  LocalGradient<4> g;
+  f.term.evaluate(f.q, &g, nullptr);
+  const Vector3 on_a = -(g.segment<3>(0) + g.segment<3>(3));
+  const Vector3 on_b = -(g.segment<3>(6) + g.segment<3>(9));
+  const double expected = (3e-3 * 0.5 * 0.8 + 1e-3 * 0.5 * 1.2) * k * delta / h;
+  EXPECT_TRUE(on_a.isApprox(expected * n, 1e-12)) << on_a.transpose();
+  EXPECT_LT((on_a + on_b).norm(), 1e-12 * expected);
+  // Sliding along each other (n·W = 0) costs nothing: the dashpot is normal only.
+  f.q = f.previous;
+  const Vector3 along = (f.q.points[c.term.nodes[1]] - f.q.points[c.term.nodes[0]]).normalized();
+  for (int i : {0, 1}) f.q.points[c.term.nodes[i]] += 0.05 * along;
+  EXPECT_NEAR(f.term.evaluate(f.q, &g, nullptr), 0.0, 1e-18);
+  EXPECT_LT(g.norm(), 1e-12 * expected);
+}
+
+TEST(EdgeDamping, NoLaggedContactNoDampingAndNoneOnTheAxis) {
+  std::mt19937 rng(172);
+  const Pair<4> apart = edge_pair(moved(parallel(0.0, 1.0, 0.5), rng));
+  const Pair<4> on_axis = edge_pair(parallel(0.0, 1.0, 0.0));
+  for (const Pair<4>* c : {&apart, &on_axis}) {
+    const DampingPair f = damping_pair(*c, rng);
+    for (const LaggedEdgeSample& l : f.term.lagged) EXPECT_EQ(l.normal_force, 0.0);
+    LocalGradient<4> g;
+    LocalHessian<4> H;
+    EXPECT_EQ(f.term.evaluate(f.q, &g, &H), 0.0);
+    EXPECT_TRUE(g.isZero(0.0));
+    EXPECT_TRUE(H.isZero(0.0));
+    EXPECT_TRUE(f.term.previous_jacobian(f.q, f.previous).isZero(0.0));
+    EdgeDamping::Residual r;
+    EdgeDamping::ResidualJacobian J;
+    f.term.residual(f.q, r, &J);
+    EXPECT_TRUE(r.isZero(0.0));
+    EXPECT_TRUE(J.isZero(0.0));
+  }
+}
+
+TEST(EdgeDamping, ResidualFormHasOneResidualPerSample) {
+  std::mt19937 rng(173);
+  static_assert(EdgeDamping::kResiduals == 8);
+  for (const auto& [name, c] : friction_configurations(rng)) {
+    SCOPED_TRACE(name);
+    const DampingPair f = damping_pair(c, rng);
+    LocalGradient<4> g;
+    const double D = f.term.evaluate(f.q, &g, nullptr);
+    EdgeDamping::Residual r;
+    EdgeDamping::ResidualJacobian J;
+    f.term.residual(f.q, r, &J);
+    EXPECT_NEAR(0.5 * r.squaredNorm(), D, 1e-13 * D);
+    EXPECT_TRUE((J.transpose() * r).isApprox(g, 1e-12));
+    fd::FdOptions o;
+    o.require_nonzero = fd::NonZero::kAny;
+    EXPECT_TRUE(fd::check_vector_jacobian(fd::residual_of(f.term), f.q, dofs_of(f.term), J, o));
+  }
+}
+
+TEST(EdgeDamping, MixedBlockOfTheLaggedStepMatchesFiniteDifferences) {
+  // Through every sample's t̄, ŵ and n at q_{k−1}, in every configuration, and at tiny and huge
+  // time steps and dampings (D is quadratic in the state for any τ/h: relative checks).
+  std::mt19937 rng(174);
+  int checked = 0;
+  fd::FdOptions o;
+  o.require_nonzero = fd::NonZero::kAny;
+  for (const auto& [name, c] : friction_configurations(rng)) {
+    SCOPED_TRACE(name);
+    const DampingPair f = damping_pair(c, rng);
+    const Eigen::MatrixXd J = f.term.previous_jacobian(f.q, f.previous);
+    EXPECT_TRUE(fd::check_vector_jacobian(fd::lagged_gradient(f.term, f.q), f.previous, dofs_of(f.term), J, o));
+    Eigen::MatrixXd still_b = J;
+    still_b.rightCols<6>().setZero();
+    EXPECT_FALSE(fd::check_vector_jacobian(fd::lagged_gradient(f.term, f.q), f.previous, dofs_of(f.term), still_b, o));
+    ++checked;
+  }
+  EXPECT_EQ(checked, 8);
+  const Pair<4> c = edge_pair(moved(parallel(0.3, 1.3, 0.15), rng));
+  for (const double h : {1e-6, 1e-3, 1.0}) {
+    for (const double scale : {1e-6, 1.0, 1e3}) {
+      SCOPED_TRACE(trace("h, τ scale", h, scale));
+      const DampingPair f = damping_pair(c, rng, -1e-3, h, scale);
+      EXPECT_TRUE(fd::check_term(f.term, f.q, dofs_of(f.term), fd::TermCheckOptions{}));
+      EXPECT_TRUE(fd::check_vector_jacobian(fd::lagged_gradient(f.term, f.q), f.previous, dofs_of(f.term),
+                                            f.term.previous_jacobian(f.q, f.previous), o));
+    }
+  }
 }
 
 }  // namespace

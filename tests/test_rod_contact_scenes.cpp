@@ -172,7 +172,13 @@ TEST(RodContactAdjoint, TheGradientRunsBackThroughContactAndFrictionBetweenRods)
     }
     return std::pair{forward.state().points[s.model.rod_point(1, 3)], closest};
   };
-  for (const Scene* s : {&on_floor, &frictional}) {
+  // And with a dashpot between the rods (EdgeDamping, c = 0.5 N·s/m on both).
+  const Scene damped = [&] {
+    Scene s = frictional;
+    for (RodSpec& rod : s.model.rods) rod.contact.damping = 0.5;
+    return s;
+  }();
+  for (const Scene* s : {&on_floor, &frictional, &damped}) {
     ASSERT_LT(run(*s).second, 0.0);  // the rods touch: the check runs through their contact
     EXPECT_TRUE(test::gradient_agrees(*s));
   }
@@ -297,28 +303,34 @@ TEST(RodContactScenes, ARodDroppedOnABoxRestsOnItAndPushesABall) {
 }
 
 // The adjoint through contact between a rod and a body: the rod thrown onto a box resting on
-// the floor, γ its initial node velocities.
+// the floor, γ its initial node velocities; and with the rod's contact damped (c = 2 N·s/m:
+// EdgeBodyDamping on its edges, BodyDamping at its tips, the floor's ContactDamping), whose
+// mixed blocks then enter the backward pass.
 TEST(RodContactAdjoint, TheGradientRunsBackThroughARodOnABody) {
-  const Scene scene = parse_scene(R"({"time_step": 0.002, "frames": 80, "gravity": [0, 0, -9.81],
+  for (const std::string damping : {"", R"(, "damping": 2)"}) {
+    SCOPED_TRACE(damping);
+    const Scene scene = parse_scene(R"({"time_step": 0.002, "frames": 80, "gravity": [0, 0, -9.81],
       "solver": {"tolerance": 1e-12, "max_iterations": 100},
       "colliders": [{"type": "plane"}],
       "bodies": [{"name": "box", "density": 500, "position": [0, 0, 0.0505],
                   "contact": {"stiffness": 1e4, "radius": 0.001,
                               "shape": {"type": "box", "half_extents": [0.1, 0.1, 0.05]}, "sample_spacing": 0.05}}],
-      "rods": [)" + rod_json("thrown", "[-0.25, 0.02, 0.13]", "[0.25, 0.02, 0.13]", R"(, "contact": {"stiffness": 2e3})") + R"(],
+      "rods": [)" + rod_json("thrown", "[-0.25, 0.02, 0.13]", "[0.25, 0.02, 0.13]",
+                             R"(, "contact": {"stiffness": 2e3)" + damping + "}") + R"(],
       "optimization": {
         "parameters": [{"kind": "rod_node_velocities", "rod": "thrown"}],
         "objective": [{"term": "point_targets", "rod": "thrown", "frame": -1,
                        "polyline": [[0.1, -0.2, 0.2], [0.1, 0.2, 0.2]]}]}})",
-                                  "rod_on_box_adjoint.json");
-  Simulator forward(scene.model, scene.solver);
-  int touching = 0;
-  for (int k = 0; k < scene.frames; ++k) {
-    forward.step();
-    touching += forward.contact_pairs() > 1;  // the box on the floor, and the rod on the box
+                                    "rod_on_box_adjoint.json");
+    Simulator forward(scene.model, scene.solver);
+    int touching = 0;
+    for (int k = 0; k < scene.frames; ++k) {
+      forward.step();
+      touching += forward.contact_pairs() > 1;  // the box on the floor, and the rod on the box
+    }
+    ASSERT_GT(touching, 5);
+    EXPECT_TRUE(test::gradient_agrees(scene));
   }
-  ASSERT_GT(touching, 5);
-  EXPECT_TRUE(test::gradient_agrees(scene));
 }
 
 // The bundled polyp (contact/polyp.json): the endoscope of tube_insertion.json rides over a
