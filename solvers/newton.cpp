@@ -218,6 +218,8 @@ StepReport Newton<System>::iterate(State& q, int max_iterations) {
     if (!std::isfinite(delta_.sum())) return fail(StepStatus::kNonFinite);
     report.step_norm = delta_.template lpNorm<Eigen::Infinity>();
     if (!regularized && report.step_norm <= options_.tolerance) {
+      // Converged; the step just solved for is taken too (newton.hpp: take_final_step).
+      if (max_iterations > 0) retract(q, 1.0);
       report.status = StepStatus::kConverged;
       return report;
     }
@@ -282,6 +284,8 @@ StepReport Newton<System>::iterate(State& q, int max_iterations) {
     if (regularized) ++report.regularized_iterations;
     if (estimate && alpha == 1.0 && std::abs((psi_trial - psi) / predicted - 1.0) <= kModelAgreement &&
         converged_by_estimate(q, chart, psi_trial, report)) {
+      delta_ = -correction_;  // the estimate's step δ̂, taken too (newton.hpp: take_final_step)
+      retract(q, 1.0);
       return report;
     }
   }

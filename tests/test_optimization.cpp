@@ -1088,12 +1088,14 @@ double gradcheck_error(const std::string& out) {
 
 // Every bundled optimisation scene (letters included) passes gradcheck under the three time
 // integrators, its integrator set from the command line (one test per integrator, so that they
-// run side by side). The forward tolerance is set to 1e-13: at the scenes' own (1e-10, 1e-12)
+// run side by side). The forward tolerance is set to 1e-14: at the scenes' own (1e-10, 1e-12)
 // the differences of the loss measure the forward solver's noise (the letters at their
-// defaults: up to 1.2 relative), not the gradient (docs/design.md §8.5). 12 sampled parameters per scene. Some need more than
-// that: the die through contact under the second-order integrators (GradcheckOfTheBouncingDie-
-// ConvergesAsTheStepShrinks) and the two tip-curve rods under backward Euler and BDF2
-// (GradcheckOfTheTipCurveRodsFollowsTheForwardTolerance).
+// defaults: up to 1.2 relative), not the gradient (docs/design.md §8.5); at 1e-13 the rod
+// thrown across a rod with friction still does under BDF2 (1.0e-5, 2.6e-6 at 1e-14). 12
+// sampled parameters per scene. Some need more than that: the die through contact under the
+// second-order integrators (GradcheckOfTheBouncingDieConvergesAsTheStepShrinks) and the two
+// tip-curve rods under backward Euler and BDF2 (GradcheckOfTheTipCurveRodsDoesNotDependOnThe-
+// ForwardTolerance).
 class OptimizationCliIntegrator : public OptimizationCli,
                                   public ::testing::WithParamInterface<const char*> {};
 
@@ -1115,7 +1117,7 @@ TEST_P(OptimizationCliIntegrator, GradcheckPassesOnEveryBundledOptimisationScene
     }
     SCOPED_TRACE(scene.filename().string() + " " + integrator);
     const Result r = run({"gradcheck", scene.string(), "--sample", "12", "--step", "1e-5",
-                          "--set", "integrator=" + integrator, "--set", "solver.tolerance=1e-13"});
+                          "--set", "integrator=" + integrator, "--set", "solver.tolerance=1e-14"});
     EXPECT_EQ(r.exit_code, 0) << r.out << r.err;
     const double error = gradcheck_error(r.out);
     EXPECT_GE(error, 0.0) << r.out;
@@ -1163,10 +1165,12 @@ TEST_F(OptimizationCli, GradcheckOfTheBouncingDieConvergesAsTheStepShrinks) {
 
 // The tip-curve rods under backward Euler and BDF2 (cable tensions, rest Darboux vectors per
 // frame): the controls of the first frames move the final tip by little (gradient entries 1e-2
-// of the largest), and the differences of the loss still carry the forward solver's noise at
-// tolerance 1e-13. Measured at 1e-13 and 1e-15: backward Euler cable arm 1.0e-3, 1.5e-5, rest
-// shape 1.2e-5, 1.4e-7; BDF2 1.1e-3, 1.6e-5 and 5.6e-5, 3.9e-6.
-TEST_F(OptimizationCli, GradcheckOfTheTipCurveRodsFollowsTheForwardTolerance) {
+// of the largest), and the differences of 1e-5 leave errors above the 1e-5 of the test above
+// whatever the forward tolerance: measured at 1e-13 and 1e-15, backward Euler cable arm 1.45e-5
+// and 1.45e-5, rest shape 2.4e-7 and 2.4e-7; BDF2 8.4e-6, 6.2e-6 and 1.8e-7, 1.8e-7. They did
+// depend on it before Newton took its final step (newton.hpp: take_final_step): 1.0e-3 and
+// 1.5e-5 for the cable arm, the forward solver's noise at 1e-13 in the differences.
+TEST_F(OptimizationCli, GradcheckOfTheTipCurveRodsDoesNotDependOnTheForwardTolerance) {
   for (const std::string integrator : {"backward_euler", "bdf2"}) {
     for (const char* name : {"cable_tip_curve.json", "rest_shape_tip_curve.json"}) {
       const std::string scene = (kSourceDir / "problems/scenes/optimization" / name).string();
@@ -1178,8 +1182,9 @@ TEST_F(OptimizationCli, GradcheckOfTheTipCurveRodsFollowsTheForwardTolerance) {
         std::cout << "[ measured ] " << name << " " << integrator << " forward tolerance "
                   << tolerance << ": max_rel_error " << errors.back() << "\n";
       }
-      EXPECT_LT(errors[1], 0.1 * errors[0]) << name << " " << integrator;
-      EXPECT_LT(errors[1], 1e-4) << name << " " << integrator;
+      EXPECT_GE(errors[1], 0.0) << name << " " << integrator;
+      EXPECT_LT(errors[0], 2.0 * errors[1]) << name << " " << integrator;
+      EXPECT_LT(errors[0], 1e-4) << name << " " << integrator;
     }
   }
 }
