@@ -33,6 +33,7 @@
 #include "loads.hpp"
 #include "model.hpp"
 #include "rod_terms.hpp"
+#include "so3.hpp"
 #include "spring.hpp"
 
 namespace liedyn {
@@ -214,14 +215,20 @@ class IncrementalPotential {
   // Trapezoidal integrator (lib/history.hpp, docs/design.md §14.1). The step's equations
   // C + c = 0 have the Jacobian H + K in q_k: H the assembled Lie Hessian (with every
   // history reference moved to q_k, rereference_history), K = ½ hat(c) on each rotation
-  // block, from the history field c being constant in the world. history_skew: out = K v.
+  // block, from the history field c being constant in the world. for_each_history_skew:
+  // f(o, K_o) for K's blocks, o the rotation's offset; history_skew: out = K v.
+  template <class Function>
+  void for_each_history_skew(Function&& f) const {
+    for (const RotationHistory& t : terms<RotationHistory>()) {
+      f(t.offsets[0], Matrix3(so3::hat(0.5 * t.field)));
+    }
+  }
   template <class In, class Out>
   void history_skew(const In& v, Out& out) const {
     out = Out::Zero(v.size());
-    for (const RotationHistory& t : terms<RotationHistory>()) {
-      const int o = t.offsets[0];
-      out.template segment<3>(o) = 0.5 * t.field.cross(Vector3(v.template segment<3>(o)));
-    }
+    for_each_history_skew([&](int o, const Matrix3& K) {
+      out.template segment<3>(o) = K * v.template segment<3>(o);
+    });
   }
   // The mixed blocks of what the integrator reads beyond backward Euler's x̃ and R̃, for the
   // step set up by begin_step(previous, previous_step, frame, &step_before) and converged at q:

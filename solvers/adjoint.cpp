@@ -15,19 +15,24 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-// The trapezoidal adjoint's fixed point (backward): relative change at which it stops, and
-// the rounds it may take (each one solve with H's factorisation).
+// The trapezoidal adjoint's fixed point (backward, on CHOLMOD's symmetric factorisation):
+// relative change at which it stops, and the rounds it may take (each one solve with H's
+// factorisation).
 constexpr double kSkewTolerance = 1e-13;
 constexpr int kMaxSkewIterations = 200;
 
-// H_k of one component, factorised, and solves with it (the linear system the forward Newton
-// solver would pick for the component's size).
+// The step's Jacobian of one component, factorised, and solves with its transpose (the linear
+// system the forward Newton solver would pick for the component's size): H_k, or under the
+// trapezoidal integrator H_k + K where the system factorises it (linear_system.hpp).
 class HessianSolve {
  public:
   virtual ~HessianSolve() = default;
-  // Assembles and factorises the exact Lie Hessian at q; false if not positive definite.
+  // Assembles the exact Lie Hessian at q and factorises it, with K if the potential has one
+  // and the system can (includes_skew()); false if not positive definite (with K: a pivot
+  // that is not positive).
   virtual bool factorize(const IncrementalPotential& potential, const State& q) = 0;
-  // x = H⁻¹ b.
+  virtual bool includes_skew() const = 0;
+  // x = H⁻¹ b, or (H + K)⁻ᵀ b = (H − K)⁻¹ b.
   virtual void solve(const Eigen::VectorXd& b, Eigen::VectorXd& x) = 0;
 };
 
@@ -37,17 +42,21 @@ class SystemSolve final : public HessianSolve {
   explicit SystemSolve(const Component& c) : system_(c) {}
   bool factorize(const IncrementalPotential& potential, const State& q) override {
     system_.assemble(potential, q, nullptr);
+    skew_ = potential.has_rotation_history() && system_.can_factorize_skew();
+    if (skew_) system_.set_history_skew(&potential);
     return system_.hessian_finite() && system_.factorize(0.0);
   }
+  bool includes_skew() const override { return skew_; }
   void solve(const Eigen::VectorXd& b, Eigen::VectorXd& x) override {
     b_ = b;
-    system_.solve_linear(b_, x_);
+    system_.solve_linear_transposed(b_, x_);
     x = x_;
   }
 
  private:
   System system_;
   typename System::Vector b_, x_;
+  bool skew_ = false;
 };
 
 std::unique_ptr<HessianSolve> make_hessian_solve(const Component& c) {
@@ -205,7 +214,8 @@ void DifferentiableSimulation::backward(const Model& model, const Eigen::VectorX
       }
       if (exact > 0) {
         // Exact joints: [M Jᵀ; J 0] [z; μ] = [b; 0] with M = K + ρJᵀJ the assembled
-        // Lagrangian Hessian (docs/design.md §8.6): z = z₀ − Y μ, Y = M⁻¹Jᵀ, (J Y) μ = J z₀.
+        // Lagrangian Hessian (docs/design.md §8.6; transposed with the trapezoidal history's
+        // skew part where the factorisation holds it): z = z₀ − Y μ, Y = M⁻¹Jᵀ, (J Y) μ = J z₀.
         // J Y is singular for a hinge (its 3 rows hold 2 constraints): the least-squares μ
         // of a consistent system.
         J.resize(3 * exact, components[c].dofs);
@@ -229,12 +239,13 @@ void DifferentiableSimulation::backward(const Model& model, const Eigen::VectorX
       for (const DofBlock& r : components[c].rotations) {
         b.segment<3>(r.offset) = -rhs.segment<3>(tangent_rotation(q, r.index));
       }
-      solve_step(b, z);  // H z = −(a + Δa)
-      if (potential.has_rotation_history()) {
-        // Trapezoidal: the step's Jacobian is H + K with K = ½ hat(c) skew
-        // (IncrementalPotential::history_skew), so the adjoint solves (H − K) z = b, by the
-        // fixed point z ← z₀ + H⁻¹ K z on H's factorisation. It contracts by ‖H⁻¹K‖, as the
-        // forward step's re-solves did (design §14.1).
+      // Trapezoidal: the step's Jacobian is H + K with K = ½ hat(c) skew
+      // (IncrementalPotential::history_skew), so the adjoint solves (H + K)ᵀ z = (H − K) z = b:
+      // directly where the factorisation holds K, else (CHOLMOD) by the fixed point below.
+      solve_step(b, z);  // (H − K) z = −(a + Δa), or H z = −(a + Δa)
+      if (potential.has_rotation_history() && !solve.includes_skew()) {
+        // The fixed point z ← z₀ + H⁻¹ K z on H's factorisation. It contracts by ‖H⁻¹K‖, as
+        // the forward step's re-solves did (design §14.1).
         z0 = z;
         double change = 0.0;
         for (int i = 0;; ++i) {

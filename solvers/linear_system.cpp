@@ -67,6 +67,61 @@ void cholesky_fixed_solve(const Eigen::Matrix<double, N, N>& F,
 }
 
 
+// LU factorisation without pivoting of A = H + μI + K, H symmetric and K skew (why none is
+// needed: banded_cholesky.hpp), for a fixed size N (unrolled) or a dynamic one. Doolittle
+// order, row j of U then column j of L, each entry a dot product over the columns before it.
+// F receives L's strict lower triangle (unit diagonal implied), U's strict upper triangle and,
+// on its diagonal, the reciprocals of the pivots U_jj. False at a pivot that is not positive.
+template <int N, class Matrix>
+bool lu_skew(const Matrix& H, double mu, const Matrix& K, Matrix& F) {
+  const int n = N == Eigen::Dynamic ? static_cast<int>(H.rows()) : N;
+  LIEDYN_UNROLL
+  for (int j = 0; j < n; ++j) {
+    double pivot = H(j, j) + mu;
+    LIEDYN_UNROLL
+    for (int k = 0; k < j; ++k) pivot -= F(j, k) * F(k, j);
+    if (!(pivot > 0.0)) return false;
+    const double inverse = 1.0 / pivot;
+    F(j, j) = inverse;
+    LIEDYN_UNROLL
+    for (int i = j + 1; i < n; ++i) {
+      double u = H(j, i) + K(j, i);  // U_ji
+      double l = H(i, j) + K(i, j);  // L_ij U_jj
+      LIEDYN_UNROLL
+      for (int k = 0; k < j; ++k) {
+        u -= F(j, k) * F(k, i);
+        l -= F(i, k) * F(k, j);
+      }
+      F(j, i) = u;
+      F(i, j) = l * inverse;
+    }
+  }
+  return true;
+}
+
+// Solves L U x = b (transposed: Uᵀ Lᵀ x = b) with the factors F of lu_skew.
+template <int N, bool kTransposed, class Matrix, class Vector>
+void lu_skew_solve(const Matrix& F, const Vector& b, Vector& x) {
+  const int n = N == Eigen::Dynamic ? static_cast<int>(F.rows()) : N;
+  x = b;
+  // Entry (i, k) off the diagonal of the factors solved with: L and U, or Uᵀ and Lᵀ.
+  const auto entry = [&](int i, int k) { return kTransposed ? F(k, i) : F(i, k); };
+  LIEDYN_UNROLL
+  for (int i = 0; i < n; ++i) {  // L y = b, or Uᵀ y = b
+    double s = x(i);
+    LIEDYN_UNROLL
+    for (int k = 0; k < i; ++k) s -= entry(i, k) * x(k);
+    x(i) = kTransposed ? s * F(i, i) : s;
+  }
+  LIEDYN_UNROLL
+  for (int i = n - 1; i >= 0; --i) {  // U x = y, or Lᵀ x = y
+    double s = x(i);
+    LIEDYN_UNROLL
+    for (int k = i + 1; k < n; ++k) s -= entry(i, k) * x(k);
+    x(i) = kTransposed ? s : s * F(i, i);
+  }
+}
+
 // A sink that records the block positions of one assembly: the pattern.
 struct BlockRecorder {
   std::vector<std::pair<int, int>> blocks;
@@ -86,6 +141,7 @@ template <int N>
 DenseSystem<N>::DenseSystem(const Component& component)
     : g_(component.dofs),
       H_(component.dofs, component.dofs),
+      K_(component.dofs, component.dofs),
       factor_(component.dofs, component.dofs),
       llt_(component.dofs) {}
 
@@ -100,7 +156,17 @@ double DenseSystem<N>::hessian_scale() const {
 }
 
 template <int N>
+void DenseSystem<N>::set_history_skew(const IncrementalPotential* potential) {
+  skew_ = potential != nullptr;
+  if (!skew_) return;
+  K_.setZero();
+  potential->for_each_history_skew(
+      [&](int o, const Matrix3& K) { K_.template block<3, 3>(o, o) = K; });
+}
+
+template <int N>
 bool DenseSystem<N>::factorize(double mu) {
+  if (skew_) return lu_skew<N>(H_, mu, K_, factor_);
   if constexpr (N != Eigen::Dynamic) {
     return cholesky_fixed<N>(H_, mu, factor_);
   } else {
@@ -119,10 +185,21 @@ void DenseSystem<N>::solve(Vector& delta) {
 
 template <int N>
 void DenseSystem<N>::solve_linear(const Vector& b, Vector& x) {
-  if constexpr (N != Eigen::Dynamic) {
+  if (skew_) {
+    lu_skew_solve<N, false>(factor_, b, x);
+  } else if constexpr (N != Eigen::Dynamic) {
     cholesky_fixed_solve<N>(factor_, b, x);
   } else {
     x = llt_.solve(b);
+  }
+}
+
+template <int N>
+void DenseSystem<N>::solve_linear_transposed(const Vector& b, Vector& x) {
+  if (skew_) {
+    lu_skew_solve<N, true>(factor_, b, x);
+  } else {
+    solve_linear(b, x);
   }
 }
 
@@ -570,8 +647,24 @@ double condition_number(const Eigen::MatrixXd& H) {
   return magnitudes.maxCoeff() / magnitudes.minCoeff();
 }
 
+void SparseSystem::set_history_skew(const IncrementalPotential* potential) {
+  if (!can_factorize_skew()) throw std::logic_error("SparseSystem: K needs the banded path");
+  skew_ = potential != nullptr;
+  if (!skew_) return;
+  // K's blocks sit on the diagonal: their strict lower triangles, written in place (each
+  // block is one rotation's, every entry of the band outside them stays 0 from resize()).
+  double* w = band_.skew_values();
+  potential->for_each_history_skew([&](int o, const Matrix3& K) {
+    for (int c = 0; c < 3; ++c) {
+      for (int r = c + 1; r < 3; ++r) w[band_.index(o + r, o + c)] = K(r, c);
+    }
+  });
+}
+
 bool SparseSystem::factorize(double mu) {
-  if (factorization_ == Factorization::kBanded) return band_.factorize(mu);
+  if (factorization_ == Factorization::kBanded) {
+    return skew_ ? band_.factorize_skew(mu) : band_.factorize(mu);
+  }
   Cholmod& c = *cholmod_;
   double beta[2] = {mu, 0.0};  // factorise A + βI
   const int ok = cholmod_factorize_p(c.A, beta, nullptr, 0, c.L, &c.common);
@@ -582,6 +675,12 @@ bool SparseSystem::factorize(double mu) {
 void SparseSystem::solve(Vector& delta) {
   solve_linear(g_, delta);
   delta = -delta;
+}
+
+void SparseSystem::solve_linear_transposed(const Vector& b, Vector& solution) {
+  if (factorization_ != Factorization::kBanded) return solve_linear(b, solution);  // symmetric
+  solution = b;
+  band_.solve_transposed(solution.data());
 }
 
 void SparseSystem::solve_linear(const Vector& b, Vector& solution) {

@@ -22,10 +22,25 @@
 //   const Vector& gradient() const;
 //   bool hessian_finite() const;
 //   double hessian_scale() const;                   // max |H_ii|
-//   bool factorize(double mu);                      // H + μI positive definite?
-//   void solve(Vector& delta) ;                     // δ = −(H + μI)⁻¹ g, last factorisation
-//   void solve_linear(const Vector& b, Vector& x);  // x = (H + μI)⁻¹ b (the adjoint's solves)
+//   bool can_factorize_skew() const;                // can M include K (below)?
+//   void set_history_skew(const IncrementalPotential* potential);  // M = H + μI + K from
+//                                                   // now on, or H + μI (nullptr)
+//   bool factorize(double mu);                      // M = H + μI: positive definite?
+//   void solve(Vector& delta) ;                     // δ = −M⁻¹ g, last factorisation
+//   void solve_linear(const Vector& b, Vector& x);  // x = M⁻¹ b
+//   void solve_linear_transposed(const Vector& b, Vector& x);  // x = M⁻ᵀ b (the adjoint's)
 //   void dense_hessian(Eigen::MatrixXd& H) const;   // H, dense and symmetric (for analysis)
+//
+// The trapezoidal integrator's Newton matrix is H + K, K = ½ hat(c) skew on each rotation
+// block (IncrementalPotential::history_skew, solvers/newton.hpp). set_history_skew takes the
+// potential's K into every later factorisation, which then factorises H + μI + K by LU without
+// pivoting (banded_cholesky.hpp says why none is needed and what its pivots prove), one
+// factorisation for all the solves of an iteration, with M⁻ᵀ from the same factors. Dense
+// and banded systems can; CHOLMOD's path cannot and stays symmetric: CHOLMOD factorises
+// symmetric matrices only, and a nonsymmetric one would need a sparse LU (both triangles of
+// the reordered matrix, another SuiteSparse library: KLU or UMFPACK, their own analysis and
+// solves), not written. There Newton and the adjoint keep their fixed-point iterations on
+// H's factorisation.
 
 #include <Eigen/Cholesky>
 #include <Eigen/Core>
@@ -56,15 +71,22 @@ class DenseSystem {
   const Vector& gradient() const { return g_; }
   bool hessian_finite() const;
   double hessian_scale() const;
+  bool can_factorize_skew() const { return true; }
+  void set_history_skew(const IncrementalPotential* potential);
   bool factorize(double mu);
   void solve(Vector& delta);
   void solve_linear(const Vector& b, Vector& x);
+  void solve_linear_transposed(const Vector& b, Vector& x);
   void dense_hessian(Eigen::MatrixXd& H) const { H = H_; }
 
  private:
   Vector g_;
   Matrix H_;
-  Matrix factor_;  // fixed size: the Cholesky factor of H + μI; dynamic: H + μI for llt_
+  Matrix K_;       // the history's skew part, with set_history_skew
+  bool skew_ = false;
+  // Fixed size: the Cholesky factor of H + μI; dynamic: H + μI for llt_. With K: the LU
+  // factors of H + μI + K (lu_skew in linear_system.cpp).
+  Matrix factor_;
   Eigen::LLT<Matrix> llt_;
 };
 
@@ -105,9 +127,13 @@ class SparseSystem {
   const Vector& gradient() const { return g_; }
   bool hessian_finite() const;
   double hessian_scale() const;
+  // Banded (known after the first assembly, which chooses the factorisation).
+  bool can_factorize_skew() const { return factorization() == Factorization::kBanded; }
+  void set_history_skew(const IncrementalPotential* potential);
   bool factorize(double mu);
   void solve(Vector& delta);
   void solve_linear(const Vector& b, Vector& x);
+  void solve_linear_transposed(const Vector& b, Vector& x);
   void dense_hessian(Eigen::MatrixXd& H) const;
 
   // Known after the first assembly (kUndecided before).
@@ -132,6 +158,7 @@ class SparseSystem {
   Vector g_;
   Factorization factorization_ = Factorization::kUndecided;  // chosen or imposed
   bool built_ = false;  // pattern known (after the first assembly)
+  bool skew_ = false;   // banded, with set_history_skew: factorises H + μI + K
   BandedCholesky band_;
   std::unique_ptr<Cholmod> cholmod_;  // null when the banded factorisation is used
   int assembly_threads_ = 1;          // as requested (0: automatic)

@@ -128,15 +128,22 @@ double Newton<System>::hessian_condition() const {
 }
 
 template <class System>
-bool Newton<System>::factorize(StepReport& report, bool& regularized) {
+bool Newton<System>::factorize_and_solve(StepReport& report, bool& regularized) {
+  // With K the factorisation's success does not prove H + μI positive definite: δ must also
+  // descend, gᵀδ = −δᵀ(H + μI)δ < 0 (newton.hpp), or be 0 (g = 0).
+  const auto step_found = [&] {
+    system_.solve(delta_);
+    if (!skew_factorized_) return true;
+    return system_.gradient().dot(delta_) < 0.0 || delta_.isZero(0.0);
+  };
   regularized = false;
   ++report.factorizations;
-  if (system_.factorize(0.0)) return true;
+  if (system_.factorize(0.0) && step_found()) return true;
   const double scale = std::max(system_.hessian_scale(), std::numeric_limits<double>::min());
   regularized = true;
   for (double mu = 1e-8 * scale; mu < 1e12 * scale; mu *= 10.0) {
     ++report.factorizations;
-    if (system_.factorize(mu)) return true;
+    if (system_.factorize(mu) && step_found()) return true;
   }
   return false;
 }
@@ -182,6 +189,8 @@ StepReport Newton<System>::iterate(State& q, int max_iterations) {
   // Ψ then changes from one iteration to the next (not within the line search), which the
   // stall test below tolerates: ‖g‖ and ‖δ‖ count as progress too.
   const bool follow_history = component_.potential.has_rotation_history();
+  const bool skew = follow_history && options_.rotation == RotationParameterization::kLie;
+  bool whole_steps = true;  // every line search so far took the whole step
   for (;;) {
     if (follow_history) component_.potential.rereference_history(q);
     using Clock = std::chrono::steady_clock;
@@ -204,12 +213,14 @@ StepReport Newton<System>::iterate(State& q, int max_iterations) {
     if (!std::isfinite(psi + g.sum()) || !system_.hessian_finite()) {
       return fail(StepStatus::kNonFinite);
     }
+    // The trapezoidal integrator, Lie rotations (newton.hpp): (H + K) δ = −g, factorised where
+    // the system can (after a damped step H δ = −g), else by the fixed-point steps.
+    const bool direct = skew && system_.can_factorize_skew();
+    skew_factorized_ = direct && whole_steps;
+    if (direct) system_.set_history_skew(skew_factorized_ ? &component_.potential : nullptr);
     bool regularized = false;
-    if (!factorize(report, regularized)) return fail(StepStatus::kNonFinite);
-    system_.solve(delta_);
-    if (follow_history && options_.rotation == RotationParameterization::kLie) {
-      correct_for_history_skew();
-    }
+    if (!factorize_and_solve(report, regularized)) return fail(StepStatus::kNonFinite);
+    if (skew && !direct) correct_for_history_skew();
     if (options_.measure_time) {
       const auto t2 = Clock::now();
       report.assembly_seconds += std::chrono::duration<double>(t1 - t0).count();
@@ -252,16 +263,19 @@ StepReport Newton<System>::iterate(State& q, int max_iterations) {
       return report;
     }
 
-    const double slope = g.dot(delta_);  // < 0: H (or H + μI) is positive definite
+    const double slope = g.dot(delta_);  // < 0: H (or H + μI) positive definite (or along δ)
     // The estimated check needs the gradient at the full step, taken with its value in one
     // pass. Only for H's own Newton step (not regularised), and where its decrease of Ψ can be
-    // measured: for Newton's step the model predicts Ψ(q ⊕ δ) − Ψ(q) = gᵀδ + ½ δᵀHδ = ½ gᵀδ.
-    // And where it may succeed: Newton's steps shrink quadratically, ‖δ̂‖∞ ≈ C ‖δ‖∞², with C
-    // as the last estimate found it (0 before any): no estimate predicted above 10× the
-    // tolerance is attempted (it would cost a gradient and a solve for nothing).
+    // measured: for Newton's step the model predicts Ψ(q ⊕ δ) − Ψ(q) = gᵀδ + ½ δᵀHδ = ½ gᵀδ
+    // (with K too: gᵀδ = −δᵀHδ). And where it may succeed: Newton's steps shrink
+    // quadratically, ‖δ̂‖∞ ≈ C ‖δ‖∞², with C as the last estimate found it (0 before any): no
+    // estimate predicted above 10× the tolerance is attempted (it would cost a gradient and a
+    // solve for nothing). Not with H alone where the equations' matrix is H + K (after a damped
+    // step, newton.hpp): its δ̂ would lack the part H⁻¹Kδ̂.
     const double predicted = 0.5 * slope;
     const bool estimate = options_.convergence_check == ConvergenceCheck::kEstimated &&
-                          !regularized && -predicted > kMeasurableDecrease * roundoff &&
+                          !regularized && (skew_factorized_ || !direct) &&
+                          -predicted > kMeasurableDecrease * roundoff &&
                           contraction_ * report.step_norm * report.step_norm <=
                               kHopefulEstimate * options_.tolerance;
     save(q);
@@ -281,6 +295,7 @@ StepReport Newton<System>::iterate(State& q, int max_iterations) {
       if (alpha < options_.min_step_length) return fail(StepStatus::kLineSearchFailed);
     }
     ++report.iterations;
+    whole_steps = whole_steps && alpha == 1.0;
     if (regularized) ++report.regularized_iterations;
     if (estimate && alpha == 1.0 && std::abs((psi_trial - psi) / predicted - 1.0) <= kModelAgreement &&
         converged_by_estimate(q, chart, psi_trial, report)) {
@@ -303,7 +318,7 @@ bool Newton<System>::converged_by_estimate(const State& q, const RotationVectorC
   if (chart != nullptr) chart->to_chart_gradient(trial_gradient_);
   if (!std::isfinite(trial_gradient_.sum())) return false;
   system_.solve_linear(trial_gradient_, correction_);  // −δ̂, with the last factorisation
-  if (follow_history && options_.rotation == RotationParameterization::kLie) {
+  if (follow_history && options_.rotation == RotationParameterization::kLie && !skew_factorized_) {
     // As correct_for_history_skew: −δ̂ ← −δ̂₀ − H⁻¹K(−δ̂).
     delta0_ = correction_;
     for (int m = 0; m < kSkewCorrections; ++m) {

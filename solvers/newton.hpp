@@ -32,7 +32,7 @@
 // An estimate is tried only where the last one's contraction C (‖δ̂‖ ≈ C ‖δ‖²) predicts at
 // most 10× the tolerance: early iterations of a long solve cannot succeed.
 // Under the trapezoidal integrator g(q₁) is taken with the torque fields re-referenced at q₁
-// (what the next iteration would assemble) and δ̂ gets the skew corrections of δ. Not
+// (what the next iteration would assemble) and δ̂ solves with H + K as δ does (below). Not
 // estimated: regularised steps, decreases within 100× Ψ's round-off (not measurable).
 // take_final_step: the step that ends a solve (δ at a converged iterate, or the estimate δ̂)
 // is below the tolerance, but it is known and taking it costs a retraction, no assembly: the
@@ -64,6 +64,26 @@
 // factorisation fails, H + μI is factorised with μ = 10⁻⁸·max|H_ii| growing tenfold until
 // it succeeds; such iterations are counted in StepReport::regularized_iterations and a
 // regularised step never counts as converged.
+//
+// The trapezoidal integrator (lib/history.hpp), Lie rotations: the step's equations have the
+// Jacobian H + K, K = ½ hat(c) on each rotation with a history field c — the skew part of the
+// fields' derivative, which the symmetric H lacks —, and Newton solves (H + K) δ = −g. Dense
+// and banded systems factorise H + μI + K itself, by LU without pivoting (linear_system.hpp),
+// once per iteration for δ and δ̂. Its positive pivots do not prove H + μI positive definite
+// (banded_cholesky.hpp), so such a step must also descend: gᵀδ = −δᵀ(H + μI)δ < 0 (the
+// slope of Ψ along δ, K adding nothing to it), or μ grows as for a failed factorisation. An
+// indefinite H whose negative curvature lies off δ is then not regularised: the step is
+// Newton's on the equations, it descends, and Ψ's model along it is right. Once a line search
+// has had to shorten the step, the rest of the solve takes Ψ's own Newton steps, H δ = −g
+// (Cholesky), re-referenced at every iteration (a fixed point contracting by ‖H⁻¹K‖): the
+// equations' step differs from the minimiser of Ψ's model by H⁻¹Kδ, and where K is large
+// against H (bodies stacked in contact, hard impacts) it need not serve the line search on Ψ —
+// there K at every iteration stalls many more steps, as the fixed point below keeps H's step
+// where its series does not settle. A smooth step takes whole steps and keeps K; the
+// estimated check is not made on H's factorisation alone. CHOLMOD's path
+// factorises H only, and (H + K) δ = −g is solved by kSkewCorrections fixed-point steps
+// δ ← δ₀ − H⁻¹Kδ on H's factorisation instead (correct_for_history_skew). Rotation vectors
+// and quaternions iterate without K (StepSolver::solve re-solves).
 //
 // Memory: all buffers are sized in the constructor (the sparse pattern at the first
 // assembly); later solves allocate nothing (tests/allocation_test.cpp).
@@ -108,18 +128,18 @@ class Newton final : public StepSolver {
  private:
   // At most max_iterations updates (0: only the test at q, which is left unchanged).
   StepReport iterate(State& q, int max_iterations);
-  // Factorises H, regularising if needed; false if even the regularised matrix fails.
-  bool factorize(StepReport& report, bool& regularized);
+  // Factorises H (with K where skew_factorized_) and solves for δ, regularising if needed;
+  // false if even the regularised matrix fails.
+  bool factorize_and_solve(StepReport& report, bool& regularized);
   void save(const State& q);
   // |λ|max/|λ|min of the assembled Hessian (an infinite value if singular).
   double hessian_condition() const;
   void restore(State& q);
   void retract(State& q, double alpha);
-  // The trapezoidal integrator (lib/history.hpp), Lie rotations: δ from (H + K) δ = −g
-  // instead of H δ = −g, K = ½ hat(c) on each rotation with a history field c — the skew part
-  // of the fields' derivative, which the symmetric H lacks — by kSkewCorrections fixed-point
-  // steps δ ← δ₀ − H⁻¹ K δ on H's factorisation. Each leaves an error ‖H⁻¹K‖ times the last;
-  // without them every Newton iteration would.
+  // The trapezoidal integrator on a system that cannot factorise H + K (CHOLMOD, above): δ
+  // from (H + K) δ = −g by kSkewCorrections fixed-point steps δ ← δ₀ − H⁻¹ K δ on H's
+  // factorisation. Each leaves an error ‖H⁻¹K‖ times the last; without them every Newton
+  // iteration would.
   void correct_for_history_skew();
   static constexpr int kSkewCorrections = 2;
   // The estimated convergence check at the accepted full step (above), whose Ψ and Lie
@@ -139,6 +159,7 @@ class Newton final : public StepSolver {
   Vector delta0_, skew_, correction_;  // correct_for_history_skew's and the estimate's scratch
   Vector trial_gradient_;              // g at the line search's full step (the estimate)
   double contraction_ = 0.0;           // C in ‖δ̂‖∞ ≈ C ‖δ‖∞², from the last estimate
+  bool skew_factorized_ = false;       // the factorisation includes K (above)
   ComponentSnapshot saved_, entry_;  // line-search backtracking; restore on failure
   // Rotation vectors: the chart (current and saved r's and J_l(r)'s).
   RotationVectorChart chart_;
