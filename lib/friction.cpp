@@ -2,6 +2,7 @@
 
 #include <cmath>
 
+#include "dissipation_law.hpp"
 #include "point_pair.hpp"
 #include "so3.hpp"
 
@@ -34,26 +35,21 @@ Matrix3 SmoothedSlip::curvature(const Matrix3& P) const {
   return A;
 }
 
-SmoothedSlip Friction::slip(const Vector3& p) const {
-  const Vector3 w = p - previous_position;
-  return SmoothedSlip(w - normal.dot(w) * normal, epsilon);
-}
-
+// The law of dissipation_law.hpp on d = p − p̂ (the sample's displacement over the step).
 double Friction::evaluate(const State& q, LocalGradient<2>* g, LocalHessian<2>* H) const {
   if (normal_force == 0.0) {
     if (g != nullptr) g->setZero();
     if (H != nullptr) H->setZero();
     return 0.0;
   }
-  const SmoothedSlip s = slip(at.position(q));
-  const double scale = coefficient * normal_force;  // μλ
-  if (g != nullptr || H != nullptr) {
-    const Vector3 f = scale * s.phi1 * s.u;
-    Matrix3 K = Matrix3::Zero();
-    if (H != nullptr) K = scale * s.curvature(Matrix3::Identity() - normal * normal.transpose());
-    attached_point_derivatives(at.lever(q), f, K, g, H);
-  }
-  return scale * s.f0;
+  Vector3 f;
+  Matrix3 K = Matrix3::Zero();
+  const bool derivatives = g != nullptr || H != nullptr;
+  const double D = SlipFriction{coefficient, epsilon}.evaluate(at.position(q) - previous_position, normal_force,
+                                                               normal, stiffness, derivatives ? &f : nullptr,
+                                                               H != nullptr ? &K : nullptr);
+  if (derivatives) attached_point_derivatives(at.lever(q), f, K, g, H);
+  return D;
 }
 
 void Friction::residual(const State& q, Residual& r, ResidualJacobian* J) const {
@@ -63,17 +59,13 @@ void Friction::residual(const State& q, Residual& r, ResidualJacobian* J) const 
 Eigen::Matrix<double, 6, 6> Friction::previous_jacobian(const State& q,
                                                         const State& previous) const {
   if (normal_force == 0.0) return Eigen::Matrix<double, 6, 6>::Zero();
-  const Vector3 p = at.position(q);
-  const SmoothedSlip s = slip(p);
   SdfValue lagged;
   const Matrix3 dn = normal_jacobian(previous_position, normal, lagged);
-  const Matrix3 P = Matrix3::Identity() - normal * normal.transpose();
-  const Vector3 w = p - previous_position;
-  const Matrix3 du = -P - (normal * w.transpose() + normal.dot(w) * Matrix3::Identity()) * dn;
-  const Matrix3 A = s.jacobian();  // ∂(φ₁ u)/∂u
-  // λ = k(ρ − φ(p̂)) > 0 here, so ∂λ/∂p̂ = −k G.
-  const Vector3 dlambda = -stiffness * lagged.gradient;
-  const Matrix3 df = coefficient * (s.phi1 * s.u * dlambda.transpose() + normal_force * A * du);
+  // d = p − p̂: ∂d/∂p̂ = −I; λ = k(ρ − φ(p̂)) > 0 here, so ∂λ/∂p̂ = −k Gᵀ.
+  const Matrix3 dd = -Matrix3::Identity();
+  const Eigen::RowVector3d dlambda = -stiffness * lagged.gradient.transpose();
+  const Matrix3 df = SlipFriction{coefficient, epsilon}.force_jacobian(at.position(q) - previous_position,
+                                                                       normal_force, normal, stiffness, dd, dlambda, dn);
   return previous_block(q, previous, df);
 }
 

@@ -99,8 +99,6 @@ struct Friction : ContactSample {
                         const LocalGradient<kBlocks>& z, Eigen::VectorXd& a_previous,
                         Eigen::VectorXd& da_previous) const;
 
- private:
-  SmoothedSlip slip(const Vector3& p) const;  // of the sample at p: u = P (p − p̂)
 };
 
 }  // namespace liedyn
