@@ -135,11 +135,12 @@ class IncrementalPotential {
       return true;
     }
   }
-  // Trapezoidal: moves every rotation history's reference to q (RotationHistory::rereference)
-  // and returns the largest angle one moved, 0 without any (StepSolver::solve re-solves while
-  // it exceeds the tolerance).
-  double rereference_history(const State& q);
-  // The same, with g the Lie gradient at q about the old references (value_and_gradient's):
+  // Trapezoidal: moves every rotation history's reference to q (RotationHistory::rereference).
+  void rereference_history(const State& q);
+  // The largest angle rereference_history(q) would move a reference, 0 without any
+  // (StepSolver::solve re-solves while it exceeds the tolerance).
+  double history_reference_distance(const State& q) const;
+  // The same move, with g the Lie gradient at q about the old references (value_and_gradient's):
   // each history term's part of g is replaced by its gradient about the new reference (its
   // field), so that g becomes what an assembly at q would give (Newton's estimated check).
   template <class Vector>

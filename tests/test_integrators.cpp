@@ -76,12 +76,19 @@ TEST(RotationHistoryTerm, GradientIsTheFieldAtTheReferenceAndReferencingMovesIt)
     LocalHessian<1> H;
     term.evaluate(q, &g, &H);
     EXPECT_GT((g - term.field).norm(), 1e-2 * term.field.norm()) << a;  // 0.2 rad away
-    EXPECT_NEAR(term.rereference(q), 0.2, 1e-12) << a;
+    EXPECT_NEAR(term.reference_distance(q), 0.2, 1e-12) << a;
+    term.rereference(q);
     EXPECT_EQ(term.reference, q.rotations[0]);
+    EXPECT_EQ(term.evaluate(q, &g, &H), 0.0) << a;
+    EXPECT_EQ(g, term.field) << a;
+    EXPECT_EQ(H, LocalHessian<1>::Zero()) << a;
+    EXPECT_EQ(term.reference_distance(q), 0.0);
+    // A reference off R by round-off only: the formula's values, within round-off of those.
+    term.reference = so3::orthonormalize(so3::exp(Vector3(1e-15, 0.0, 0.0)) * q.rotations[0]);
     term.evaluate(q, &g, &H);
     EXPECT_LE((g - term.field).norm(), 8 * kEps * term.field.norm()) << a;
     EXPECT_LE(H.norm(), 8 * kEps * term.field.norm()) << a;
-    EXPECT_LE(term.rereference(q), 8 * kEps);
+    EXPECT_LE(term.reference_distance(q), 8 * kEps);
   }
 }
 
