@@ -8,7 +8,7 @@
 // whose nodes and edges are numbered along it (node, edge, node, …) has b = 8, whatever its
 // length: factorising costs about n b(b + 3)/2 multiply–adds (≈ 42k for the 963 free DOFs of
 // the helix scene) and the two triangular solves 2 n b, all on contiguous memory. Without
-// pivoting the LU's factors keep the band too (about n b(b + 1) multiply–adds).
+// pivoting the LU's factors keep the band too, at twice the multiply–adds, n b(b + 3).
 //
 // Storage (LAPACK's lower band layout): A_ij, j ≤ i ≤ j + b, at values()[j (b + 1) + i − j],
 // i.e. column j holds its diagonal then the b entries below it. W is given by its strict lower
