@@ -63,6 +63,8 @@ struct RotationHistory {
   Vector3 field = Vector3::Zero();          // c
   Matrix3 reference = Matrix3::Identity();  // R_ref
 
+  // At R = R_ref (where Newton assembles, the reference moved to its iterate) exactly 0, c and
+  // 0: P = I without the round-off of R R_refᵀ.
   double evaluate(const State& q, LocalGradient<1>* g, LocalHessian<1>* H) const;
   // Its potential folded into the rotational inertia −tr(R Ĵ R̃ᵀ) (Ĵ = J/h², invertible) of
   // the same rotation: c·vee(R R_refᵀ) = −½ tr(ĉ R R_refᵀ) = −tr(R Ĵ Sᵀ) with
@@ -70,8 +72,10 @@ struct RotationHistory {
   // so the two are −tr(R Ĵ (R̃ + S)ᵀ), one least-squares residual (RotationalInertia::residual;
   // the Ceres back-end, which would otherwise need a non-square residual for the field).
   Matrix3 inertia_shift(const Matrix3& J_over_h2_inverse) const;
-  // Moves R_ref to the rotation in q and returns the angle it moved, |log(R R_refᵀ)|.
-  double rereference(const State& q);
+  // Moves R_ref to the rotation in q.
+  void rereference(const State& q) { reference = q.rotations[rotation]; }
+  // The angle rereference(q) would move R_ref, |log(R R_refᵀ)| (0 where R is R_ref).
+  double reference_distance(const State& q) const;
 };
 
 }  // namespace liedyn

@@ -155,9 +155,15 @@ void IncrementalPotential::set_integrator(Integrator integrator, int dofs) {
   }
 }
 
-double IncrementalPotential::rereference_history(const State& q) {
+void IncrementalPotential::rereference_history(const State& q) {
+  for (RotationHistory& t : terms<RotationHistory>()) t.rereference(q);
+}
+
+double IncrementalPotential::history_reference_distance(const State& q) const {
   double moved = 0.0;
-  for (RotationHistory& t : terms<RotationHistory>()) moved = std::max(moved, t.rereference(q));
+  for (const RotationHistory& t : terms<RotationHistory>()) {
+    moved = std::max(moved, t.reference_distance(q));
+  }
   return moved;
 }
 

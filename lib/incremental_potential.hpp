@@ -135,11 +135,12 @@ class IncrementalPotential {
       return true;
     }
   }
-  // Trapezoidal: moves every rotation history's reference to q (RotationHistory::rereference)
-  // and returns the largest angle one moved, 0 without any (StepSolver::solve re-solves while
-  // it exceeds the tolerance).
-  double rereference_history(const State& q);
-  // The same, with g the Lie gradient at q about the old references (value_and_gradient's):
+  // Trapezoidal: moves every rotation history's reference to q (RotationHistory::rereference).
+  void rereference_history(const State& q);
+  // The largest angle rereference_history(q) would move a reference, 0 without any
+  // (StepSolver::solve re-solves while it exceeds the tolerance).
+  double history_reference_distance(const State& q) const;
+  // The same move, with g the Lie gradient at q about the old references (value_and_gradient's):
   // each history term's part of g is replaced by its gradient about the new reference (its
   // field), so that g becomes what an assembly at q would give (Newton's estimated check).
   template <class Vector>
@@ -436,15 +437,17 @@ double IncrementalPotential::add_terms(const State& q, Vector& g, Sink& sink, Pa
     for (std::size_t t = begin; t < end; ++t) {
       const Term& term = terms[t];
       double term_value = term.evaluate(q, &g_local, kHessian ? &H_local : nullptr);
-      if (const double w = weight(term); w != 1.0) {
+      // The weight multiplies the value and gradient here, and each Hessian block as the sink
+      // takes it (a banded sink reads only the blocks on and below the diagonal).
+      const double w = weight(term);
+      if (w != 1.0) {
         term_value *= w;
         g_local *= w;
-        if constexpr (kHessian) H_local *= w;
       }
       value += term_value;
       if (kHessian && magnitude != nullptr) {
         const double ambient_gradient =
-            std::sqrt(2.0 * std::abs(term_value) * H_local.diagonal().cwiseAbs().sum());
+            std::sqrt(2.0 * std::abs(term_value) * w * H_local.diagonal().cwiseAbs().sum());
         roundoff_sum += std::abs(term_value) +
                         (g_local.template lpNorm<1>() + ambient_gradient) * position_scale;
       }
@@ -458,7 +461,12 @@ double IncrementalPotential::add_terms(const State& q, Vector& g, Sink& sink, Pa
           static_for<B>([&](auto j) {
             const int oj = term.offsets[j];
             if (oj < 0) return;
-            sink.add(oi, oj, H_local.template block<3, 3>(3 * i, 3 * j));
+            const auto block = H_local.template block<3, 3>(3 * i, 3 * j);
+            if (w == 1.0) {
+              sink.add(oi, oj, block);
+            } else {
+              sink.add(oi, oj, w * block);
+            }
           });
         }
       });

@@ -8,7 +8,7 @@
 // whose nodes and edges are numbered along it (node, edge, node, …) has b = 8, whatever its
 // length: factorising costs about n b(b + 3)/2 multiply–adds (≈ 42k for the 963 free DOFs of
 // the helix scene) and the two triangular solves 2 n b, all on contiguous memory. Without
-// pivoting the LU's factors keep the band too (about n b(b + 1) multiply–adds).
+// pivoting the LU's factors keep the band too, at twice the multiply–adds, n b(b + 3).
 //
 // Storage (LAPACK's lower band layout): A_ij, j ≤ i ≤ j + b, at values()[j (b + 1) + i − j],
 // i.e. column j holds its diagonal then the b entries below it. W is given by its strict lower
@@ -70,22 +70,23 @@ class BandedCholesky {
   void solve_transposed(double* x) const;
 
  private:
-  // The kernels for a half-bandwidth known at compile time (kB > 0) or not (kB = 0); kSkew:
-  // with W (L D U) or without (L D Lᵀ).
-  template <int kB, bool kSkew>
+  // The kernels for a half-bandwidth known at compile time (kB > 0) or not (kB = 0): L D Lᵀ,
+  // L D U, and the solves with factors whose entries are kStep apart (banded_cholesky.cpp).
+  template <int kB>
   bool factorize_band(double mu);
   template <int kB>
+  bool factorize_skew_band(double mu);
+  template <int kB, int kStep>
   void solve_band(double* x, const double* lower, const double* upper) const;
-  template <bool kSkew>
-  bool factorize_any(double mu);
+  template <int kStep>
   void solve_any(double* x, const double* lower, const double* upper) const;
 
   int n_ = 0;
   int b_ = 0;
   std::vector<double> a_;              // A's lower band
   std::vector<double> w_;              // W's strict lower band
-  std::vector<double> l_;              // D_j, then L's strict lower band, per column
-  std::vector<double> u_;              // U's strict upper band, per row (after a slot)
+  std::vector<double> l_;              // L D Lᵀ: D_j, then L's strict lower band, per column
+  std::vector<double> lu_;             // L D U: (D_j, D_j), then (L_{j+r,j}, U_{j,j+r}) pairs
   std::vector<double> inverse_pivot_;  // 1 / D_j, so that the solves multiply
   std::vector<double> scratch_;        // 2b entries, for bandwidths not compiled in
   bool skew_ = false;                  // the last factorisation was factorize_skew()'s

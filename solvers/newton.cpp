@@ -214,7 +214,7 @@ StepReport Newton<System>::iterate(State& q, int max_iterations) {
       return fail(StepStatus::kNonFinite);
     }
     // The trapezoidal integrator, Lie rotations (newton.hpp): (H + K) δ = −g, factorised where
-    // the system can (after a damped step H δ = −g), else by the fixed-point steps.
+    // the system can (H δ = −g once a step was damped), else by the fixed-point steps.
     const bool direct = skew && system_.can_factorize_skew();
     skew_factorized_ = direct && whole_steps;
     if (direct) system_.set_history_skew(skew_factorized_ ? &component_.potential : nullptr);

@@ -189,7 +189,8 @@ StepReport StepSolver::solve(State& q) {
     if (!report.state_updated() || !P.has_rotation_history()) break;
     // The trapezoidal integrator's torque fields are exact where their reference is
     // (lib/history.hpp): solve again from the new reference until it no longer moves.
-    const double moved = P.rereference_history(q);
+    const double moved = P.history_reference_distance(q);
+    P.rereference_history(q);
     report.history_moved = moved;
     if (moved <= tolerance_) break;
     if (report.history_updates == kMaxHistoryUpdates) {

@@ -19,7 +19,8 @@ namespace {
 
 const std::filesystem::path kScenes = std::filesystem::path(LIEDYN_SOURCE_DIR) / "problems/scenes";
 
-// Scenes with one component at every step, and what to set on them: a rigid body, rods (one
+// Scenes with one component at every step, and what to set on them: rigid bodies (the free
+// body's trapezoidal steps take one iteration with H + K factorised, newton.hpp), rods (one
 // with shear, one clamped), a body on a plane with friction (the Hessian jumps at contact),
 // under the three integrators.
 struct Case {
@@ -34,6 +35,7 @@ const std::vector<Case> kCases = {
     {"timoshenko_beam.json", {"frames=100", "integrator=bdf2"}, true},
     {"timoshenko_beam.json", {"frames=100", "integrator=trapezoidal"}, true},
     {"butterfly_bolt.json", {"frames=200", "integrator=trapezoidal"}, true},
+    {"free_body.json", {"frames=200", "integrator=trapezoidal"}, true},
     {"rod_pendulum.json", {"frames=100"}, false},
     {"contact/die_throw.json", {"frames=300"}, false},
     {"contact/die_throw.json", {"frames=300", "solver.rotation=quat"}, false},
