@@ -33,5 +33,8 @@ integrators=backward_euler,trapezoidal,bdf2
 "$liedyn" sweep "$scenes/contact/tube_insertion.json" --out "$out/tube_insertion" --repeat 3 \
   --quiet --set integrator=$integrators --set time_step=0.002,0.001,0.0005 \
   --set solver.tolerance=1e-5,1e-7,1e-9 > "$out/tube_insertion.txt"
+# The report reads each sweep's sweep.csv; its sweep.json and checkpoint.json (what --resume and
+# sweep-merge read) are not part of the documentation.
+rm -f "$out"/*/sweep.json "$out"/*/checkpoint.json
 python3 "$root/scripts/speed_accuracy_report.py" "$out" "$root/docs/speed-accuracy.md"
 echo "wrote $root/docs/speed-accuracy.md"
