@@ -579,6 +579,18 @@ void add_joint_terms(const Model& model, const std::vector<bool>& key, const Dof
       bend.has_frame_offset = so3::distance(bend.frame_offset, Matrix3::Identity()) > 0.0;
       bend.rest_darboux = darboux_vector(da.frames[edge_a], carried, bend.rest_length);
       p.add(bend);
+      // Its damping (rod_damping.hpp), as at an interior node: the two rods' mean η.
+      const Vector3 eta = 0.5 * (model.rods[ra].bending_damping + model.rods[rb].bending_damping);
+      if (!model.static_equilibrium && eta != Vector3::Zero()) {
+        RodBendTwistDamping damping;
+        damping.offsets = bend.offsets;
+        damping.damping = eta;
+        damping.time_step = model.time_step;
+        damping.set(bend.edge0, bend.edge1, bend.rest_length);
+        damping.form.has_frame_offset = bend.has_frame_offset;
+        damping.form.frame_offset = bend.frame_offset;
+        p.add(damping);
+      }
     }
     if (j.has_limits) {  // one term per bound (joint_limits.hpp), as exact or elastic as the joint
       const auto add_bounds = [&](auto limit, double compliance, double inertia_of_ends) {

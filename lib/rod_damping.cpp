@@ -63,7 +63,8 @@ void RodBendTwistDamping::set(int edge0, int edge1, double bending_length) {
 }
 
 void RodBendTwistDamping::begin_step(const State& previous, const Step&) {
-  form.rest_darboux = darboux_vector(previous.rotations[form.edge0], previous.rotations[form.edge1],
+  Matrix3 storage;
+  form.rest_darboux = darboux_vector(previous.rotations[form.edge0], form.rotation1(previous, storage),
                                      form.rest_length);
 }
 
@@ -72,7 +73,8 @@ Eigen::Matrix<double, 6, 6> RodBendTwistDamping::previous_jacobian(const State& 
   Eigen::Matrix<double, 6, 3> d_rest;
   form.parameter_jacobians(q, &d_rest, nullptr);  // ∂C/∂ω̂
   const Matrix3& Ra = previous.rotations[form.edge0];
-  const Matrix3 C = previous.rotations[form.edge1] * Ra.transpose();
+  Matrix3 storage;
+  const Matrix3 C = form.rotation1(previous, storage) * Ra.transpose();
   const Matrix3 dw = Ra.transpose() * (0.5 * (C.trace() * Matrix3::Identity() - C)) / form.rest_length;
   Eigen::Matrix<double, 6, 6> out;
   out.leftCols<3>() = -d_rest * dw;  // ∂ω̂/∂θ̂_a = −R̂_aᵀ Ĝ/w

@@ -14,7 +14,10 @@
 //   Bend and twist at interior node i, blocks (θ_{i−1}, θ_i); η = (η₁, η₂, η₃) [N·m²·s]:
 //     D = ½ w (ω − ω̂)ᵀ (η/h) (ω − ω̂),   ω = vee(R_aᵀ R_b)/w,  ω̂ the same at q_{k−1}:
 //     RodBendTwist (rod_terms.hpp) with stiffness η/h and rest Darboux vector ω̂; its moment
-//     is η ω̇. w is the node's bending length (lib/rod.hpp), as for the elastic term.
+//     is η ω̇. w is the node's bending length (lib/rod.hpp), as for the elastic term. Across
+//     a splice's junction the form sees b's first frame times the junction's twist T, as the
+//     elastic term there does (RodBendTwist::frame_offset): R_b T in place of R_b throughout,
+//     ω̂ included; a left perturbation of R_b is one of R_b T, so the formulas below hold.
 //
 // For a rod whose damping is proportional to its stiffness, η = β K (a Rayleigh damping
 // C = β K on the bending modes), a mode of angular frequency ω_n has the damping ratio
@@ -30,7 +33,7 @@
 //   stretch: with n = e/L, n̂ = ê/L̂ and k = η_s/(l h), C = (−f, f), f = k (L − L̂) n, so
 //     ∂f/∂(x̂_i, x̂_{i+1}) = −k n (−n̂ᵀ, n̂ᵀ)  (through L̂ only);
 //   bend: ∂C/∂ω̂ = (W K, −W K) (RodBendTwist::parameter_jacobians, K = η/h) and
-//     ∂ω̂/∂(θ̂_a, θ̂_b) = (−R̂_aᵀ Ĝ, R̂_aᵀ Ĝ)/w,  Ĝ = ½ (tr Ĉ I − Ĉ),  Ĉ = R̂_b R̂_aᵀ
+//     ∂ω̂/∂(θ̂_a, θ̂_b) = (−R̂_aᵀ Ĝ, R̂_aᵀ Ĝ)/w,  Ĝ = ½ (tr Ĉ I − Ĉ),  Ĉ = R̂_b (T) R̂_aᵀ
 //     (rod_terms.hpp, first order of ω). Δq_{k−1} does not enter either.
 
 #include "rod_terms.hpp"
@@ -79,7 +82,7 @@ struct RodBendTwistDamping {
   // The elastic form it evaluates: edges, w, stiffness η/h, rest Darboux ω̂ (begin_step).
   RodBendTwist form;
 
-  // Sets form's edges, bending length and η/h.
+  // Sets form's edges, bending length and η/h (a junction's frame offset is set on form).
   void set(int edge0, int edge1, double bending_length);
   void begin_step(const State& previous, const Step& previous_step);
   double evaluate(const State& q, LocalGradient<2>* g, LocalHessian<2>* H) const {

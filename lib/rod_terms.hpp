@@ -182,8 +182,7 @@ struct RodBendTwist {
   // r = √l K^½ Δω; J = [−W, W], W = K^½ R_aᵀ G/√l (see the top). Needs K ≥ 0.
   void residual(const State& q, Residual& r, ResidualJacobian* J) const;
 
- private:
-  // R_i, or R_i T (in `storage`) with a frame offset.
+  // R_i, or R_i T (in `storage`) with a frame offset: the frame of edge i the term sees.
   const Matrix3& rotation1(const State& q, Matrix3& storage) const {
     if (!has_frame_offset) return q.rotations[edge1];
     storage = q.rotations[edge1] * frame_offset;

@@ -124,14 +124,19 @@ struct BendDampingCase {
 };
 
 // Two edge frames at rotations of kAngles, `previous_angle` apart at q_{k−1}; now both turned
-// and `change` radians further apart about a random axis.
+// and `change` radians further apart about a random axis. `junction_angle` ≠ 0: the second
+// frame is seen times a constant T of that angle, as across a splice's junction.
 BendDampingCase bend_case(double frame_angle, double previous_angle, double change, double eta_scale,
-                          double h, std::mt19937& rng) {
+                          double h, std::mt19937& rng, double junction_angle = 0.0) {
   BendDampingCase c;
   c.term.offsets = {0, 3};
   c.term.damping = eta_scale * Vector3(1.0, 1.7, 0.6);  // bend, bend, twist: all distinct
   c.term.time_step = h;
   c.term.set(0, 1, 0.1);
+  if (junction_angle != 0.0) {
+    c.term.form.has_frame_offset = true;
+    c.term.form.frame_offset = so3::exp(junction_angle * random_unit(rng));
+  }
   const Matrix3 Ra = rotation_at(frame_angle, rng);
   c.previous.rotations = {Ra, Ra * so3::exp(previous_angle * random_unit(rng))};
   c.term.begin_step(c.previous, Step{});
@@ -163,7 +168,20 @@ TEST(RodBendTwistDamping, DerivativesResidualAndMixedBlockMatchFiniteDifferences
       ++checked;
     }
   }
-  EXPECT_EQ(checked, static_cast<int>(kAngles.size()) * 5 + 4);
+  // Across a splice's junction (b's frame times T, in ω̂ too): at rest over the step the
+  // term vanishes (to round-off), and its derivatives and mixed block hold as above.
+  for (double frame_angle : kAngles) {
+    for (double junction_angle : {1e-4, 0.7, std::numbers::pi - 1e-6}) {
+      SCOPED_TRACE(trace("frame angle, junction angle", frame_angle, junction_angle));
+      const BendDampingCase c = bend_case(frame_angle, 0.4, 0.3, 1.0, 1e-3, rng, junction_angle);
+      expect_lagged_term_checks(c.term, c.q, c.previous, kEdges, 1e-12);
+      LocalGradient<2> g;
+      EXPECT_LE(c.term.evaluate(c.previous, &g, nullptr), 1e-20);
+      EXPECT_LE(g.norm(), 1e-12);
+      ++checked;
+    }
+  }
+  EXPECT_EQ(checked, static_cast<int>(kAngles.size()) * 8 + 4);
 }
 
 TEST(RodBendTwistDamping, ResistsWithEtaTimesTheCurvatureRate) {

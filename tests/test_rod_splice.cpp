@@ -133,6 +133,39 @@ TEST(RodSplice, AFreeSplicedRodFliesAsOneRod) {
   EXPECT_GT((one.back().nodes[0] - Vector3(0, 0, 0)).norm(), 1e-2);  // it moved
 }
 
+// The corner rod of the angle tests: nodes `first` … `last` of one rod of 12 edges, 6 along x
+// and 6 turned 40° about z and rising; an isotropic section (K₁ = K₂).
+std::string bent(const std::string& name, int first, int last, const std::string& extra) {
+  std::string nodes = R"("nodes": [)";
+  for (int i = first; i <= last; ++i) {
+    const Vector3 x = i <= 6 ? Vector3(0.05 * i, 0, 0)
+                             : Vector3(0.3, 0, 0) + 0.05 * (i - 6) * Vector3(std::cos(0.7), std::sin(0.7), 0.2).normalized();
+    nodes += (i > first ? ", [" : "[") + std::to_string(x.x()) + ", " + std::to_string(x.y()) + ", " + std::to_string(x.z()) + "]";
+  }
+  return R"({ "name": ")" + name + R"(", )" + nodes + R"(], "mass": )" + std::to_string(0.05 * (last - first) / 12.0) +
+         R"(, "radius": 0.005,
+      "stretch_stiffness": 1000, "shear_stiffness": 1000, "bending_stiffness": [0.005, 0.005, 0.003] )" +
+         extra + " }";
+}
+const std::string kTipOfB = R"(, "node_forces": [ { "node": 6, "force": [0, 0.05, -0.2] } ])";
+
+// The twist T between b's first frame and the one rod's frame there (see the angle test).
+Matrix3 junction_twist(const std::string& one_text, const std::string& two_text) {
+  const Scene two = parse_scene(two_text, "s.json");
+  const Scene one = parse_scene(one_text, "r.json");
+  return two.model.initial_state().rotations[6].transpose() * one.model.initial_state().rotations[6];
+}
+
+// The largest difference over every frame, b's frames compared times T.
+double largest_difference(const std::vector<Shape>& one, std::vector<Shape> two, const Matrix3& T) {
+  double worst = 0.0;
+  for (std::size_t k = 0; k < one.size(); ++k) {
+    for (int e = 6; e < 12; ++e) two[k].frames[e] = two[k].frames[e] * T;
+    worst = std::max(worst, largest_difference(one[k], two[k]));
+  }
+  return worst;
+}
+
 // Two rods meeting at an angle (b turned 40° about z from a, and its end rising): one rod
 // would carry a's last frame across the corner by parallel transport, b's own first frame is
 // its own transport from the z axis, and the two differ by a twist T about b's first edge.
@@ -140,38 +173,43 @@ TEST(RodSplice, AFreeSplicedRodFliesAsOneRod) {
 // isotropic section (K₁ = K₂: b's own terms do not see the twist; with K₁ ≠ K₂ b's
 // cross-section is its own, turned by T from one rod's). b's frames are compared times T.
 TEST(RodSplice, TwoRodsMeetingAtAnAngleAreOneBentRod) {
-  const auto nodes = [](int first, int last) {
-    std::string text = R"("nodes": [)";
-    for (int i = first; i <= last; ++i) {
-      const Vector3 x = i <= 6 ? Vector3(0.05 * i, 0, 0)
-                               : Vector3(0.3, 0, 0) + 0.05 * (i - 6) * Vector3(std::cos(0.7), std::sin(0.7), 0.2).normalized();
-      text += (i > first ? ", [" : "[") + std::to_string(x.x()) + ", " + std::to_string(x.y()) + ", " + std::to_string(x.z()) + "]";
-    }
-    return text + "]";
-  };
-  const auto bent = [&](const std::string& name, int first, int last, const std::string& extra) {
-    return R"({ "name": ")" + name + R"(", )" + nodes(first, last) + R"(, "mass": )" +
-           std::to_string(0.05 * (last - first) / 12.0) + R"(, "radius": 0.005,
-      "stretch_stiffness": 1000, "shear_stiffness": 1000, "bending_stiffness": [0.005, 0.005, 0.003] )" +
-           extra + " }";
-  };
-  const std::string kTipOfB = R"(, "node_forces": [ { "node": 6, "force": [0, 0.05, -0.2] } ])";
   for (const char* mode : {"static", "dynamic"}) {
     SCOPED_TRACE(mode);
+    const std::string one_text = scene(mode, bent("r", 0, 12, kClamp + kTipOfOne));
+    const std::string two_text = scene(mode, bent("a", 0, 6, kClamp) + ", " + bent("b", 6, 12, kTipOfB), kSplice);
     std::vector<Shape> one, two;
-    run(scene(mode, bent("r", 0, 12, kClamp + kTipOfOne)), &one);
-    run(scene(mode, bent("a", 0, 6, kClamp) + ", " + bent("b", 6, 12, kTipOfB), kSplice), &two);
-    const Scene start = parse_scene(scene(mode, bent("a", 0, 6, kClamp) + ", " + bent("b", 6, 12, kTipOfB), kSplice), "s.json");
-    const Scene start_one = parse_scene(scene(mode, bent("r", 0, 12, kClamp + kTipOfOne)), "r.json");
-    const Matrix3 T = start.model.initial_state().rotations[6].transpose() * start_one.model.initial_state().rotations[6];
+    run(one_text, &one);
+    run(two_text, &two);
+    const Matrix3 T = junction_twist(one_text, two_text);
     EXPECT_GT(so3::distance(T, Matrix3::Identity()), 0.05);  // the frames differ: a twist
-    double worst = 0.0;
-    for (std::size_t k = 0; k < one.size(); ++k) {
-      for (int e = 6; e < 12; ++e) two[k].frames[e] = two[k].frames[e] * T;
-      worst = std::max(worst, largest_difference(one[k], two[k]));
-    }
-    EXPECT_LT(worst, kAgreement);
+    EXPECT_LT(largest_difference(one, two, T), kAgreement);
+    const Scene start_one = parse_scene(one_text, "r.json");
     EXPECT_GT((one.back().nodes[12] - start_one.model.initial_state().points[12]).norm(), 1e-2);
+  }
+}
+
+// With internal damping (lib/rod_damping.hpp) on both rods, the junction is damped as an
+// interior node (the rods' mean η, b's frame times T): the pair is the one damped rod, straight
+// and at an angle. Without the junction's damping term the two differ by DAMPING_GAP.
+TEST(RodSplice, DampedRodsSplicedAreOneDampedRod) {
+  const std::string eta = R"(, "bending_damping": [1e-3, 8e-4, 6e-4], "stretch_damping": 0.2)";
+  const std::string straight_one = scene("dynamic", rod("r", 0, 0.6, 12, kClamp + kTipOfOne + eta));
+  const std::string straight_two =
+      scene("dynamic", rod("a", 0, 0.3, 6, kClamp + eta) + ", " + rod("b", 0.3, 0.6, 6, kTip + eta), kSplice);
+  const std::string corner_one = scene("dynamic", bent("r", 0, 12, kClamp + kTipOfOne + eta));
+  const std::string corner_two =
+      scene("dynamic", bent("a", 0, 6, kClamp + eta) + ", " + bent("b", 6, 12, kTipOfB + eta), kSplice);
+  for (const auto& [one_text, two_text] : {std::pair{straight_one, straight_two}, std::pair{corner_one, corner_two}}) {
+    std::vector<Shape> one, two, undamped;
+    run(one_text, &one);
+    run(two_text, &two);
+    const Matrix3 T = junction_twist(one_text, two_text);
+    EXPECT_LT(largest_difference(one, two, T), kAgreement);
+    // The damping changes the motion by far more than the agreement.
+    std::string plain = one_text;
+    plain.replace(plain.find(eta), eta.size(), "");
+    run(plain, &undamped);
+    EXPECT_GT(largest_difference(one, undamped, Matrix3::Identity()), 1e3 * kAgreement);
   }
 }
 
