@@ -190,9 +190,10 @@ TEST(RodSplice, TwoRodsMeetingAtAnAngleAreOneBentRod) {
 
 // With internal damping (lib/rod_damping.hpp) on both rods, the junction is damped as an
 // interior node (the rods' mean η, b's frame times T): the pair is the one damped rod, straight
-// and at an angle. Without the junction's damping term the two differ by DAMPING_GAP.
+// and at an angle (η₁ = η₂: as for K, b's own terms see its own cross-section). Without the
+// junction's damping term the two differ by 4.9 and 6.9 cm.
 TEST(RodSplice, DampedRodsSplicedAreOneDampedRod) {
-  const std::string eta = R"(, "bending_damping": [1e-3, 8e-4, 6e-4], "stretch_damping": 0.2)";
+  const std::string eta = R"(, "bending_damping": [1e-3, 1e-3, 6e-4], "stretch_damping": 0.2)";
   const std::string straight_one = scene("dynamic", rod("r", 0, 0.6, 12, kClamp + kTipOfOne + eta));
   const std::string straight_two =
       scene("dynamic", rod("a", 0, 0.3, 6, kClamp + eta) + ", " + rod("b", 0.3, 0.6, 6, kTip + eta), kSplice);
@@ -200,6 +201,7 @@ TEST(RodSplice, DampedRodsSplicedAreOneDampedRod) {
   const std::string corner_two =
       scene("dynamic", bent("a", 0, 6, kClamp + eta) + ", " + bent("b", 6, 12, kTipOfB + eta), kSplice);
   for (const auto& [one_text, two_text] : {std::pair{straight_one, straight_two}, std::pair{corner_one, corner_two}}) {
+    SCOPED_TRACE(one_text == straight_one ? "straight" : "at an angle");
     std::vector<Shape> one, two, undamped;
     run(one_text, &one);
     run(two_text, &two);
