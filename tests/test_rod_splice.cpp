@@ -207,11 +207,17 @@ TEST(RodSplice, DampedRodsSplicedAreOneDampedRod) {
     run(two_text, &two);
     const Matrix3 T = junction_twist(one_text, two_text);
     EXPECT_LT(largest_difference(one, two, T), kAgreement);
-    // The damping changes the motion by far more than the agreement.
+    // The damping changes the motion by far more than the agreement: the one rod's tip with
+    // and without it.
     std::string plain = one_text;
     plain.replace(plain.find(eta), eta.size(), "");
     run(plain, &undamped);
-    EXPECT_GT(largest_difference(one, undamped, Matrix3::Identity()), 1e3 * kAgreement);
+    ASSERT_EQ(undamped.size(), one.size());
+    double change = 0.0;
+    for (std::size_t k = 0; k < one.size(); ++k) {
+      change = std::max(change, (one[k].nodes[12] - undamped[k].nodes[12]).norm());
+    }
+    EXPECT_GT(change, 1e3 * kAgreement);
   }
 }
 
