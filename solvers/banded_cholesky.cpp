@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstddef>
+#include <type_traits>
 
 namespace liedyn {
 
@@ -47,6 +48,21 @@ bool for_each_band_column(int n, int b, Column&& column) {
     if (!column(j, b, n - 1 - j)) return false;
   }
   return true;
+}
+
+// Calls f(std::integral_constant<int, kB>{}) with kB = b where b is a bandwidth compiled in
+// (rods have b = 8, chains of rigid bodies b = 11), else kB = 0: the same code with runtime
+// trip counts.
+template <class F>
+decltype(auto) with_compiled_bandwidth(int b, F&& f) {
+  switch (b) {
+    case 8:
+      return f(std::integral_constant<int, 8>{});
+    case 11:
+      return f(std::integral_constant<int, 11>{});
+    default:
+      return f(std::integral_constant<int, 0>{});
+  }
 }
 
 }  // namespace
@@ -194,42 +210,19 @@ void BandedCholesky::solve_band(double* x, const double* lower, const double* up
   for (; j >= 0; --j) unrolled ? backward(j, kB) : backward(j, b);
 }
 
-// Rods have b = 8, chains of rigid bodies b = 11: compiled in; other bandwidths run the
-// same code with runtime trip counts.
 bool BandedCholesky::factorize(double mu) {
   skew_ = false;
-  switch (b_) {
-    case 8:
-      return factorize_band<8>(mu);
-    case 11:
-      return factorize_band<11>(mu);
-    default:
-      return factorize_band<0>(mu);
-  }
+  return with_compiled_bandwidth(b_, [&](auto kB) { return factorize_band<kB()>(mu); });
 }
 
 bool BandedCholesky::factorize_skew(double mu) {
   skew_ = true;
-  switch (b_) {
-    case 8:
-      return factorize_skew_band<8>(mu);
-    case 11:
-      return factorize_skew_band<11>(mu);
-    default:
-      return factorize_skew_band<0>(mu);
-  }
+  return with_compiled_bandwidth(b_, [&](auto kB) { return factorize_skew_band<kB()>(mu); });
 }
 
 template <int kStep>
 void BandedCholesky::solve_any(double* x, const double* lower, const double* upper) const {
-  switch (b_) {
-    case 8:
-      return solve_band<8, kStep>(x, lower, upper);
-    case 11:
-      return solve_band<11, kStep>(x, lower, upper);
-    default:
-      return solve_band<0, kStep>(x, lower, upper);
-  }
+  with_compiled_bandwidth(b_, [&](auto kB) { solve_band<kB(), kStep>(x, lower, upper); });
 }
 
 void BandedCholesky::solve(double* x) const {
