@@ -7,21 +7,12 @@
 
 namespace liedyn {
 
-namespace {
-
-const Matrix3& end_rotation(const State& q, int rotation) {
-  static const Matrix3 kIdentity = Matrix3::Identity();
-  return rotation < 0 ? kIdentity : q.rotations[rotation];
-}
-
-}  // namespace
-
 void HingeAngle::begin_step(const State& previous_state) { previous = value(previous_state, nullptr, nullptr); }
 
 double HingeAngle::value(const State& q, LocalGradient<2>* g, LocalHessian<2>* H) const {
-  const Matrix3& R_a = end_rotation(q, rotation_a);
+  const Matrix3& R_a = rotation_or_identity(q, rotation_a);
   const Vector3 n = R_a * axis_a, u = R_a * reference_a, v = u.cross(n);
-  const Vector3 w = end_rotation(q, rotation_b) * reference_b;
+  const Vector3 w = rotation_or_identity(q, rotation_b) * reference_b;
   const double x = u.dot(w), y = v.dot(w), rho2 = x * x + y * y;
   // The branch nearest the angle at the start of the step (header).
   constexpr double kTwoPi = 2.0 * std::numbers::pi;

@@ -9,12 +9,6 @@ namespace liedyn {
 
 namespace {
 
-// R of an end: the state's rotation, or the identity for the world.
-const Matrix3& end_rotation(const State& q, int rotation) {
-  static const Matrix3 kIdentity = Matrix3::Identity();
-  return rotation < 0 ? kIdentity : q.rotations[rotation];
-}
-
 // c(t) of H_φ = I + c hat(φ)² (header), with its series below t = 1e-3, where the closed form
 // loses digits to cancellation (1/t² against cot(t/2)/(2t)).
 double weld_curvature_coefficient(double t) {
@@ -202,13 +196,13 @@ double JointAlignment::evaluate(const State& q, LocalGradient<2>* g, LocalHessia
   if (adjoint) {  // + ∇²(λᵀ(a − b)): λ·(½ θ × (θ × a)) is the rotated-point curvature
     const double value = lagrangian(*this, q, g, H);
     if (H != nullptr) {
-      H->block<3, 3>(0, 0) += rotated_point_curvature(end_rotation(q, rotation_a) * axis_a, multiplier);
-      H->block<3, 3>(3, 3) += rotated_point_curvature(end_rotation(q, rotation_b) * axis_b, -multiplier);
+      H->block<3, 3>(0, 0) += rotated_point_curvature(rotation_or_identity(q, rotation_a) * axis_a, multiplier);
+      H->block<3, 3>(3, 3) += rotated_point_curvature(rotation_or_identity(q, rotation_b) * axis_b, -multiplier);
     }
     return value;
   }
-  const Vector3 a = end_rotation(q, rotation_a) * (axis_a + shift);
-  const Vector3 b = end_rotation(q, rotation_b) * axis_b;
+  const Vector3 a = rotation_or_identity(q, rotation_a) * (axis_a + shift);
+  const Vector3 b = rotation_or_identity(q, rotation_b) * axis_b;
   const double ab = a.dot(b);
   if (g != nullptr) {
     const Vector3 axb = a.cross(b);
@@ -229,20 +223,20 @@ double JointAlignment::evaluate(const State& q, LocalGradient<2>* g, LocalHessia
 }
 
 Vector3 JointAlignment::force(const State& q) const {
-  return stiffness * (end_rotation(q, rotation_a) * (axis_a + shift) -
-                      end_rotation(q, rotation_b) * axis_b);
+  return stiffness * (rotation_or_identity(q, rotation_a) * (axis_a + shift) -
+                      rotation_or_identity(q, rotation_b) * axis_b);
 }
 
 Vector3 JointAlignment::constraint(const State& q, ConstraintJacobian* J) const {
-  const Vector3 a = end_rotation(q, rotation_a) * axis_a;
-  const Vector3 b = end_rotation(q, rotation_b) * axis_b;
+  const Vector3 a = rotation_or_identity(q, rotation_a) * axis_a;
+  const Vector3 b = rotation_or_identity(q, rotation_b) * axis_b;
   if (J != nullptr) *J << -so3::hat(a), so3::hat(b);
   return a - b;
 }
 
 void JointAlignment::residual(const State& q, Residual& r, ResidualJacobian* J) const {
-  const Vector3 a = end_rotation(q, rotation_a) * (axis_a + shift);
-  const Vector3 b = end_rotation(q, rotation_b) * axis_b;
+  const Vector3 a = rotation_or_identity(q, rotation_a) * (axis_a + shift);
+  const Vector3 b = rotation_or_identity(q, rotation_b) * axis_b;
   const double s = std::sqrt(stiffness);
   r = s * (a - b);
   if (J != nullptr) {
@@ -260,8 +254,8 @@ void JointAlignment::update_multiplier(const State& q) {
 }
 
 Vector3 JointWeld::relative_rotation(const State& q, Matrix3* E) const {
-  const Matrix3 relative = end_rotation(q, rotation_a) * frame_a * shift *
-                           (end_rotation(q, rotation_b) * frame_b).transpose();
+  const Matrix3 relative = rotation_or_identity(q, rotation_a) * frame_a * shift *
+                           (rotation_or_identity(q, rotation_b) * frame_b).transpose();
   if (E != nullptr) *E = relative;
   return so3::log(relative);
 }
@@ -271,8 +265,8 @@ double JointWeld::violation(const State& q) const {
 }
 
 void JointWeld::update_multiplier(const State& q) {
-  const Matrix3 F_a = end_rotation(q, rotation_a) * frame_a;
-  const Matrix3 F_b = end_rotation(q, rotation_b) * frame_b;
+  const Matrix3 F_a = rotation_or_identity(q, rotation_a) * frame_a;
+  const Matrix3 F_b = rotation_or_identity(q, rotation_b) * frame_b;
   shift = so3::orthonormalize(F_b.transpose() * F_a * shift);
 }
 
@@ -280,8 +274,8 @@ double JointWeld::evaluate(const State& q, LocalGradient<2>* g, LocalHessian<2>*
   if (adjoint) {  // + ∇²(λᵀφ) (header)
     const double value = lagrangian(*this, q, g, H);
     if (H != nullptr) {
-      const Matrix3 E = end_rotation(q, rotation_a) * frame_a *
-                        (end_rotation(q, rotation_b) * frame_b).transpose();
+      const Matrix3 E = rotation_or_identity(q, rotation_a) * frame_a *
+                        (rotation_or_identity(q, rotation_b) * frame_b).transpose();
       const Vector3 phi = so3::log(E);
       const Matrix3 J_inverse = so3::left_jacobian_inverse(phi);
       const double t = phi.norm();
@@ -326,8 +320,8 @@ double JointWeld::evaluate(const State& q, LocalGradient<2>* g, LocalHessian<2>*
 Vector3 JointWeld::force(const State& q) const { return stiffness * relative_rotation(q); }
 
 Vector3 JointWeld::constraint(const State& q, ConstraintJacobian* J) const {
-  const Matrix3 F_a = end_rotation(q, rotation_a) * frame_a;
-  const Matrix3 F_b = end_rotation(q, rotation_b) * frame_b;
+  const Matrix3 F_a = rotation_or_identity(q, rotation_a) * frame_a;
+  const Matrix3 F_b = rotation_or_identity(q, rotation_b) * frame_b;
   const Matrix3 E = F_a * F_b.transpose();
   const Vector3 phi = so3::log(E);
   if (J != nullptr) {

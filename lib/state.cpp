@@ -2,6 +2,11 @@
 
 namespace liedyn {
 
+const Matrix3& rotation_or_identity(const State& q, int rotation) {
+  static const Matrix3 kIdentity = Matrix3::Identity();
+  return rotation < 0 ? kIdentity : q.rotations[rotation];
+}
+
 Vector3 AttachedPoint::position(const State& q) const {
   if (point < 0) return local;
   return q.points[point] + lever(q);

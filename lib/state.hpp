@@ -20,6 +20,9 @@ struct State {
   std::vector<Matrix3> rotations;
 };
 
+// R of a joint's end: State::rotations[rotation], or the identity for the world (rotation = −1).
+const Matrix3& rotation_or_identity(const State& q, int rotation);
+
 struct Step {
   std::vector<Vector3> points;     // Δx
   std::vector<Matrix3> rotations;  // ΔR
