@@ -873,7 +873,6 @@ std::string format_sweep(const SweepResult& result) {
     headings.emplace_back(h);
   }
   std::vector<std::vector<std::string>> lines{headings};
-  bool idle_on_front = false;
   for (std::size_t i = 0; i < result.runs.size(); ++i) {
     const SweepRun& r = result.runs[i];
     std::vector<std::string> line = r.settings;
@@ -884,11 +883,7 @@ std::string format_sweep(const SweepResult& result) {
          {r.position_error, r.orientation_error, r.energy_drift, r.gradient_error}) {
       line.push_back(std::isnan(v) ? "-" : format_number(v, 3));
     }
-    // A run that took no iteration costs nothing because it computed nothing (the state
-    // never moved): cheapest on the front, but not a trade anyone can use.
-    const bool idle = r.newton_iterations == 0 && !r.failed;
-    idle_on_front |= idle && front[i];
-    line.push_back(r.failed ? "FAILED" : front[i] ? (idle ? "*0" : "*") : "");
+    line.push_back(r.failed ? "FAILED" : front[i] ? "*" : "");
     lines.push_back(line);
   }
   std::vector<std::size_t> widths(headings.size(), 0);
@@ -907,10 +902,6 @@ std::string format_sweep(const SweepResult& result) {
     os << "\n";
   }
   os << "front: on the Pareto front of wall time against " << primary_metric(result).key << "\n";
-  if (idle_on_front) {
-    os << "*0: on the front only because it took no iteration at all: the tolerance is loose "
-          "enough that the state never moved (a trap, not a trade)\n";
-  }
   for (const SweepRun& r : result.runs) {
     if (r.failed)
       os << "failed: " << describe(result.axis_names, r.settings) << ": " << r.failure << "\n";
