@@ -20,10 +20,6 @@ std::string index_field(const std::string& array, std::size_t i, const std::stri
   return array + "[" + std::to_string(i) + "]" + (member.empty() ? "" : "." + member);
 }
 
-void require_finite(const Eigen::MatrixXd& m, const std::string& field) {
-  if (!m.allFinite()) throw ModelError(field, "must be finite (found NaN or Inf)");
-}
-
 // The inertia terms of a dynamic step hold m/h² and J/h² (lib/inertia.hpp): finite values can
 // still overflow there (a rod edge of 1e200 m, a time step of 1e-200 s), and a non-finite
 // inertia term fails only later, when the simulator is built.
@@ -140,6 +136,10 @@ ModelError::ModelError(std::string field, std::string reason)
     : std::invalid_argument(field + ": " + reason),
       field_(std::move(field)),
       reason_(std::move(reason)) {}
+
+void require_finite(const Eigen::MatrixXd& m, const std::string& field) {
+  if (!m.allFinite()) throw ModelError(field, "must be finite (found NaN or Inf)");
+}
 
 const char* to_string(Integrator integrator) {
   switch (integrator) {

@@ -39,6 +39,9 @@ class ModelError : public std::invalid_argument {
   std::string field_, reason_;
 };
 
+// Throws ModelError(field, …) unless every entry of m is finite.
+void require_finite(const Eigen::MatrixXd& m, const std::string& field);
+
 struct RigidBody {
   std::string name;
   double mass = 1.0;                              // kg, > 0

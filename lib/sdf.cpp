@@ -216,10 +216,6 @@ std::string number(double v) {
   return s.str();
 }
 
-void require_finite(const Eigen::MatrixXd& m, const std::string& field) {
-  if (!m.allFinite()) throw ModelError(field, "must be finite (found NaN or Inf)");
-}
-
 void require_positive(double v, const std::string& field) {
   if (!std::isfinite(v) || !(v > 0.0)) {
     throw ModelError(field, "must be a finite positive number of metres (found " + number(v) + ")");
