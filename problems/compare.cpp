@@ -15,8 +15,6 @@
 namespace liedyn {
 namespace {
 
-constexpr double kNaN = CompareRow::kNaN;
-
 // The diagnostics run: per-frame iterations and gradient norms, and the condition number of
 // the first Hessian at the sampled frames (Newton; the other back-ends leave it NaN).
 void diagnose(const Scene& scene, SolverOptions options, int condition_every, CompareRow& row) {
@@ -33,7 +31,7 @@ void diagnose(const Scene& scene, SolverOptions options, int condition_every, Co
     f.first_gradient_norm = report.first_gradient_norm;
     f.second_gradient_norm = report.second_gradient_norm;
     f.final_gradient_norm = report.gradient_norm;
-    f.condition = sampled ? report.first_hessian_condition : kNaN;
+    f.condition = sampled ? report.first_hessian_condition : CompareRow::kNaN;
     if (sampled && std::isfinite(f.condition)) {
       condition_sum += f.condition;
       ++row.condition_frames;
@@ -42,7 +40,7 @@ void diagnose(const Scene& scene, SolverOptions options, int condition_every, Co
     row.max_final_gradient_norm = std::fmax(row.max_final_gradient_norm, f.final_gradient_norm);
     row.per_frame.push_back(f);
   }
-  row.condition_mean = row.condition_frames > 0 ? condition_sum / row.condition_frames : kNaN;
+  row.condition_mean = row.condition_frames > 0 ? condition_sum / row.condition_frames : CompareRow::kNaN;
 }
 
 // Largest differences over the frames both trajectories have; left NaN if there are none.
