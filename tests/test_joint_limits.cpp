@@ -36,9 +36,8 @@ using fd::random_perpendicular;
 using fd::random_unit;
 using fd::rotation_at;
 using fd::trace;
-
-constexpr double kPi = std::numbers::pi;
-constexpr double kEps = std::numeric_limits<double>::epsilon();
+using fd::kPi;
+using fd::kEps;
 
 // Relative turns of the hinge: the extremes of atan2's branch (π) and of a turn (2π), and one
 // on the second turn, reached through `previous`.

@@ -55,9 +55,8 @@ using fd::random_perpendicular;
 using fd::random_unit;
 using fd::rotation_at;
 using fd::trace;
-
-constexpr double kPi = std::numbers::pi;
-constexpr double kEps = std::numeric_limits<double>::epsilon();
+using fd::kPi;
+using fd::kEps;
 
 // The relative angles tested: the weld's angle of E, the hinge's angle between the axes.
 const std::vector<double> kRelativeAngles = {0.0, 1e-9, 1e-4, 0.5, 2.0, kPi - 1e-6};

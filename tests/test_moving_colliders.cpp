@@ -39,7 +39,7 @@
 namespace liedyn {
 namespace {
 
-constexpr double kInf = std::numeric_limits<double>::infinity();
+using fd::kInf;
 constexpr double kGravity = 9.81;
 
 Collider make_collider(const Shape& shape, bool inside, const Vector3& position = Vector3::Zero(),

@@ -55,10 +55,10 @@ using fd::rotation_at;
 using fd::trace;
 using fd::power_of_two_near;
 using fd::random_perpendicular;
-
-constexpr double kPi = std::numbers::pi;
-constexpr double kEps = std::numeric_limits<double>::epsilon();
-constexpr double kDeg = kPi / 180.0;
+using fd::kPi;
+using fd::kEps;
+using fd::kDeg;
+using fd::body_inertia;
 
 // ----------------------------------------------------------------------------------------
 // One test case of a term's residual form, and the three checks.
@@ -308,12 +308,6 @@ TEST(TranslationalInertiaResidual, MasslessPointNeedsNoLoad) {
 
 // ----------------------------------------------------------------------------------------
 // Rotational inertia  ‖(R − R̃) J^½‖²_F/(2h²).
-
-// A body-frame inertia tensor obeying the triangle inequality (1 + 1.6 > 2.2), rotated.
-Matrix3 body_inertia(double scale, std::mt19937& rng) {
-  const Matrix3 Q = rotation_at(1.3, rng);
-  return scale * Q * Eigen::Vector3d(1.0, 1.6, 2.2).asDiagonal() * Q.transpose();
-}
 
 enum class Shape { kBody, kThinRod };
 

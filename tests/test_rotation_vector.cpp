@@ -35,8 +35,8 @@ namespace {
 using rotvec::Matrix3;
 using rotvec::Vector3;
 using Matrix93 = Eigen::Matrix<double, 9, 3>;
-constexpr double kPi = std::numbers::pi;
-constexpr double kEps = std::numeric_limits<double>::epsilon();
+using fd::kPi;
+using fd::kEps;
 
 // 2 and 4 are the series switches of rotation_vector.cpp (t, and t/2 in exp_jacobian).
 const std::vector<double> kAngles = {

@@ -22,8 +22,8 @@ namespace {
 
 using so3::Matrix3;
 using so3::Vector3;
-constexpr double kPi = std::numbers::pi;
-constexpr double kEps = std::numeric_limits<double>::epsilon();
+using fd::kPi;
+using fd::kEps;
 
 // Angles up to π: log's domain.
 // 9.9e-5/1.01e-4 and 0.099/0.101 straddle the Taylor-branch switches of so3.cpp, where a
