@@ -47,7 +47,7 @@
 #include "models.hpp"
 #include "rod_models.hpp"
 
-namespace liedyn {
+namespace liedyn::adjoint_terms_tests {
 namespace {
 
 using fd::kAngles;
@@ -1256,4 +1256,4 @@ TEST(AdjointTermPotential, ParameterAdjointIsTransposedParameterJacobianTimesZ) 
 }
 
 }  // namespace
-}  // namespace liedyn
+}  // namespace liedyn::adjoint_terms_tests

@@ -29,7 +29,7 @@
 #include "solvers/simulator.hpp"
 #include "trajectory_compare.hpp"
 
-namespace liedyn {
+namespace liedyn::integrators_tests {
 namespace {
 
 using fd::kAngles;
@@ -1029,4 +1029,4 @@ TEST(SetState, RefusesWhatIsNotAState) {
 }
 
 }  // namespace
-}  // namespace liedyn
+}  // namespace liedyn::integrators_tests

@@ -29,7 +29,7 @@
 #include "lib/joint_limits.hpp"
 #include "lib/so3.hpp"
 
-namespace liedyn {
+namespace liedyn::joint_limits_tests {
 namespace {
 
 using fd::random_perpendicular;
@@ -488,4 +488,4 @@ TEST(JointLimitTerm, AdjointLagrangianIsActiveExactlyWhereTheMultiplierIsPositiv
 }
 
 }  // namespace
-}  // namespace liedyn
+}  // namespace liedyn::joint_limits_tests

@@ -48,7 +48,7 @@
 #include "lib/joint_terms.hpp"
 #include "lib/so3.hpp"
 
-namespace liedyn {
+namespace liedyn::joint_terms_tests {
 namespace {
 
 using fd::random_perpendicular;
@@ -1367,4 +1367,4 @@ TEST(JointTermConstraint, ShiftsAreInEndABodyCoordinates) {
 }
 
 }  // namespace
-}  // namespace liedyn
+}  // namespace liedyn::joint_terms_tests

@@ -36,7 +36,7 @@
 #include "problems/scene.hpp"
 #include "solvers/simulator.hpp"
 
-namespace liedyn {
+namespace liedyn::moving_colliders_tests {
 namespace {
 
 using fd::kInf;
@@ -632,4 +632,4 @@ TEST(MovingColliders, TheGradientRunsThroughContactWithAMovingPlane) {
 }
 
 }  // namespace
-}  // namespace liedyn
+}  // namespace liedyn::moving_colliders_tests

@@ -22,7 +22,7 @@
 #include "lib/so3.hpp"
 #include "manifolds/quaternion.hpp"
 
-namespace liedyn {
+namespace liedyn::quaternion_tests {
 namespace {
 
 using quat::Matrix3;
@@ -411,4 +411,4 @@ TEST(QuaternionRetract, ZeroStepIsIdentityAndNormNeverDrifts) {
 }
 
 }  // namespace
-}  // namespace liedyn
+}  // namespace liedyn::quaternion_tests

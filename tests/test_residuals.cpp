@@ -45,7 +45,7 @@
 #include "lib/so3.hpp"
 #include "lib/spring.hpp"
 
-namespace liedyn {
+namespace liedyn::residuals_tests {
 namespace {
 
 using fd::kAngles;
@@ -1013,4 +1013,4 @@ TEST(ResidualChecks, RejectBrokenResidualForms) {
 }
 
 }  // namespace
-}  // namespace liedyn
+}  // namespace liedyn::residuals_tests

@@ -29,7 +29,7 @@
 #include "lib/so3.hpp"
 #include "manifolds/rotation_vector.hpp"
 
-namespace liedyn {
+namespace liedyn::rotation_vector_tests {
 namespace {
 
 using rotvec::Matrix3;
@@ -370,4 +370,4 @@ TEST(RotationVector, WrapKeepsTheRotationWithAngleAtMostPi) {
 }
 
 }  // namespace
-}  // namespace liedyn
+}  // namespace liedyn::rotation_vector_tests

@@ -39,7 +39,7 @@
 #include "lib/sdf.hpp"
 #include "lib/so3.hpp"
 
-namespace liedyn {
+namespace liedyn::sdf_tests {
 namespace {
 
 using fd::random_unit;
@@ -1304,4 +1304,4 @@ TEST(Sdf, CatmullRomRejectsBadInput) {
 }
 
 }  // namespace
-}  // namespace liedyn
+}  // namespace liedyn::sdf_tests

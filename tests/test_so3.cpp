@@ -17,7 +17,7 @@
 #include "fd_check.hpp"
 #include "lib/so3.hpp"
 
-namespace liedyn {
+namespace liedyn::so3_tests {
 namespace {
 
 using so3::Matrix3;
@@ -360,4 +360,4 @@ TEST(So3, DistanceIsTheGeodesicAngle) {
 }
 
 }  // namespace
-}  // namespace liedyn
+}  // namespace liedyn::so3_tests

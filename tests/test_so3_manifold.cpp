@@ -46,7 +46,7 @@
 #include "trajectory_compare.hpp"
 #include "solvers/step_solver.hpp"
 
-namespace liedyn {
+namespace liedyn::so3_manifold_tests {
 namespace {
 
 using Vector4 = Eigen::Vector4d;
@@ -789,4 +789,4 @@ TEST(SO3ManifoldCeres, ManifoldAndChartAgreeOnACantilever) {
 }
 
 }  // namespace
-}  // namespace liedyn
+}  // namespace liedyn::so3_manifold_tests

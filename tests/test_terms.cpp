@@ -29,7 +29,7 @@
 #include "lib/so3.hpp"
 #include "lib/spring.hpp"
 
-namespace liedyn {
+namespace liedyn::terms_tests {
 namespace {
 
 using fd::kAngles;
@@ -645,4 +645,4 @@ TEST(TermCapabilities, EveryTermTypeHasExactlyItsCapabilities) {
 }
 
 }  // namespace
-}  // namespace liedyn
+}  // namespace liedyn::terms_tests
