@@ -401,6 +401,8 @@ TEST(RotationalInertiaResidual, JacobianTransposeResidualIsLieGradient) {
   });
 }
 
+#undef ROTATIONAL_TRACE
+
 TEST(RotationalInertiaResidual, ResidualLayoutIsColumnMajor) {
   // r(3k + i) = ((R − R̃) J^½/h)(i, k), as documented for the Ceres back-end.
   std::mt19937 rng(1003);
@@ -588,6 +590,8 @@ TEST(SpringResidual, JacobianTransposeResidualIsLieGradient) {
   });
 }
 
+#undef SPRING_TRACE
+
 TEST(SpringResidual, CoincidentEndsWithPositiveRestLength) {
   // d = 0, L > 0: V = ½kL², evaluate() returns g = 0 (length_spring); the residual keeps the
   // value, r = −√k L e_x, with J = 0 so that Jᵀr = 0 = g (spring.hpp).
@@ -766,6 +770,8 @@ TEST(RodShearResidual, JacobianTransposeResidualIsLieGradient) {
   });
 }
 
+#undef ROD_TRACE
+
 TEST(RodShearResidual, CoincidentNodes) {
   // e = 0: evaluate() takes d = 0 in c(1 − dᵀt), Ψ = c, g = 0; r = −√(2c) t, J = 0.
   RodShear t;
@@ -872,6 +878,8 @@ TEST(RodBendTwistResidual, JacobianTransposeResidualIsLieGradient) {
     EXPECT_TRUE(check_gradient(c));
   });
 }
+
+#undef BEND_TRACE
 
 // ----------------------------------------------------------------------------------------
 // The checks reject the mistakes they are there for. A term whose residual form is broken on
