@@ -565,4 +565,12 @@ inline std::string trace(const char* what, double a, double b = 0.0, double c = 
   return s.str();
 }
 
+// "angle a, axis x y z" at full precision, for SCOPED_TRACE.
+inline std::string where(double angle, const Vector3& axis) {
+  std::ostringstream s;
+  s.precision(17);
+  s << "angle " << angle << ", axis " << axis.transpose();
+  return s.str();
+}
+
 }  // namespace liedyn::fd
