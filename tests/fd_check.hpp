@@ -511,6 +511,15 @@ template <class Term>
 }
 
 // ---------------------------------------------------------------------------------------
+// Constants shared by the suites, defined once: each test file's own copy would be a
+// redefinition where a unity build compiles several test files as one.
+
+inline constexpr double kPi = std::numbers::pi;
+inline constexpr double kEps = std::numeric_limits<double>::epsilon();
+inline constexpr double kDeg = kPi / 180.0;  // one degree in radians
+inline constexpr double kInf = std::numeric_limits<double>::infinity();
+
+// ---------------------------------------------------------------------------------------
 // Test points shared by the term suites.
 
 // Rotation angles every term is evaluated at: 0, tiny, the Taylor-branch switch, ordinary,
@@ -533,6 +542,12 @@ inline Matrix3 rotation_at(double angle, std::mt19937& rng) {
   return so3::exp(angle * random_unit(rng));
 }
 
+// A body-frame inertia tensor obeying the triangle inequality (1 + 1.6 > 2.2), rotated.
+inline Matrix3 body_inertia(double scale, std::mt19937& rng) {
+  const Matrix3 Q = rotation_at(1.3, rng);
+  return scale * Q * Eigen::Vector3d(1.0, 1.6, 2.2).asDiagonal() * Q.transpose();
+}
+
 // A random unit vector perpendicular to the unit vector n.
 inline Vector3 random_perpendicular(const Vector3& n, std::mt19937& rng) {
   const Vector3 u = random_unit(rng);
@@ -547,6 +562,14 @@ inline std::string trace(const char* what, double a, double b = 0.0, double c = 
   std::ostringstream s;
   s.precision(17);
   s << what << " " << a << " " << b << " " << c;
+  return s.str();
+}
+
+// "angle a, axis x y z" at full precision, for SCOPED_TRACE.
+inline std::string where(double angle, const Vector3& axis) {
+  std::ostringstream s;
+  s.precision(17);
+  s << "angle " << angle << ", axis " << axis.transpose();
   return s.str();
 }
 

@@ -17,7 +17,7 @@
 #include "rod_models.hpp"
 #include "solvers/gradient_check.hpp"
 
-namespace liedyn {
+namespace liedyn::adjoint_tests {
 namespace {
 
 // A thrown box (the die of paper Fig. 8, without contact): gravity, 30 frames.
@@ -246,4 +246,4 @@ INSTANTIATE_TEST_SUITE_P(
     });
 
 }  // namespace
-}  // namespace liedyn
+}  // namespace liedyn::adjoint_tests

@@ -47,7 +47,7 @@
 #include "models.hpp"
 #include "rod_models.hpp"
 
-namespace liedyn {
+namespace liedyn::adjoint_terms_tests {
 namespace {
 
 using fd::kAngles;
@@ -57,15 +57,9 @@ using fd::random_unit;
 using fd::random_vector;
 using fd::rotation_at;
 using fd::trace;
-
-constexpr double kPi = std::numbers::pi;
-constexpr double kDeg = kPi / 180.0;
-
-// A body-frame inertia tensor obeying the triangle inequality (1 + 1.6 > 2.2), rotated.
-Matrix3 body_inertia(double scale, std::mt19937& rng) {
-  const Matrix3 Q = rotation_at(1.3, rng);
-  return scale * Q * Eigen::Vector3d(1.0, 1.6, 2.2).asDiagonal() * Q.transpose();
-}
+using fd::kPi;
+using fd::kDeg;
+using fd::body_inertia;
 
 Step as_step(const State& s) {
   Step step;
@@ -1262,4 +1256,4 @@ TEST(AdjointTermPotential, ParameterAdjointIsTransposedParameterJacobianTimesZ) 
 }
 
 }  // namespace
-}  // namespace liedyn
+}  // namespace liedyn::adjoint_terms_tests

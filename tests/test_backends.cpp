@@ -25,7 +25,7 @@
 #include "solvers/simulator.hpp"
 #include "trajectory_compare.hpp"
 
-namespace liedyn {
+namespace liedyn::backends_tests {
 namespace {
 
 const std::filesystem::path kScenes = std::filesystem::path(LIEDYN_SOURCE_DIR) / "problems/scenes";
@@ -219,4 +219,4 @@ TEST(Backends, CeresFailureSurfaces) {
 }
 
 }  // namespace
-}  // namespace liedyn
+}  // namespace liedyn::backends_tests

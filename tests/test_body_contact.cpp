@@ -29,7 +29,7 @@
 #include "lib/sdf.hpp"
 #include "lib/so3.hpp"
 
-namespace liedyn {
+namespace liedyn::body_contact_tests {
 namespace {
 
 using test::box_mesh;
@@ -718,4 +718,4 @@ TEST(BodyDamping, TinyAndHugeTimeStepsAndDampingsKeepDerivativesExact) {
 }
 
 }  // namespace
-}  // namespace liedyn
+}  // namespace liedyn::body_contact_tests

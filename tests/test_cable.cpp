@@ -39,9 +39,8 @@ using fd::random_unit;
 using fd::random_vector;
 using fd::rotation_at;
 using fd::trace;
-
-constexpr double kPi = std::numbers::pi;
-constexpr double kEps = std::numeric_limits<double>::epsilon();
+using fd::kPi;
+using fd::kEps;
 
 const std::vector<double> kTensions = {1e-9, 1.0, 1e6};             // N
 const std::vector<double> kLengths = {1e-6, 1e-3, 0.1, 1.0, 10.0};  // m

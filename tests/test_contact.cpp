@@ -30,7 +30,7 @@
 #include "lib/sdf.hpp"
 #include "lib/so3.hpp"
 
-namespace liedyn {
+namespace liedyn::contact_tests {
 namespace {
 
 using fd::kAngles;
@@ -558,4 +558,4 @@ TEST(RegionForce, PushesOnlyPointsThatWereInsideAndMatchesFiniteDifferences) {
 }
 
 }  // namespace
-}  // namespace liedyn
+}  // namespace liedyn::contact_tests

@@ -24,7 +24,7 @@
 #include "solvers/gradient_check.hpp"
 #include "solvers/simulator.hpp"
 
-namespace liedyn {
+namespace liedyn::contact_scenes_tests {
 namespace {
 
 constexpr double kPi = std::numbers::pi;
@@ -647,4 +647,4 @@ TEST(ContactAdjoint, RodNodeVelocitiesThroughAFrictionalFloor) {
 }
 
 }  // namespace
-}  // namespace liedyn
+}  // namespace liedyn::contact_scenes_tests

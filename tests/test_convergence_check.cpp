@@ -14,7 +14,7 @@
 #include "solvers/newton.hpp"
 #include "solvers/simulator.hpp"
 
-namespace liedyn {
+namespace liedyn::convergence_check_tests {
 namespace {
 
 const std::filesystem::path kScenes = std::filesystem::path(LIEDYN_SOURCE_DIR) / "problems/scenes";
@@ -149,4 +149,4 @@ TEST(ConvergenceCheck, SceneKeyIsParsedAndAnUnknownValueNamed) {
 }
 
 }  // namespace
-}  // namespace liedyn
+}  // namespace liedyn::convergence_check_tests

@@ -40,7 +40,7 @@
 #include "problems/scene.hpp"
 #include "solvers/simulator.hpp"
 
-namespace liedyn {
+namespace liedyn::edge_body_contact_tests {
 namespace {
 
 using fd::kAngles;
@@ -947,4 +947,4 @@ TEST(EdgeBodyContactAdjoint, TheGradientRunsBackThroughEdgesSlidingOnABody) {
 }
 
 }  // namespace
-}  // namespace liedyn
+}  // namespace liedyn::edge_body_contact_tests

@@ -40,7 +40,7 @@
 #include "lib/so3.hpp"
 #include "lib/term.hpp"
 
-namespace liedyn {
+namespace liedyn::edge_contact_tests {
 namespace {
 
 using fd::trace;
@@ -1303,4 +1303,4 @@ TEST(EdgeDamping, MixedBlockOfTheLaggedStepMatchesFiniteDifferences) {
 }
 
 }  // namespace
-}  // namespace liedyn
+}  // namespace liedyn::edge_contact_tests

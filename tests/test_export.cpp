@@ -22,7 +22,7 @@
 
 #include "cli_fixture.hpp"
 
-namespace liedyn {
+namespace liedyn::export_tests {
 namespace {
 
 namespace fs = std::filesystem;
@@ -601,4 +601,4 @@ TEST_F(ExportCli, BadInputIsRefusedNamingTheFile) {
 }
 
 }  // namespace
-}  // namespace liedyn
+}  // namespace liedyn::export_tests

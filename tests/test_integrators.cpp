@@ -29,7 +29,7 @@
 #include "solvers/simulator.hpp"
 #include "trajectory_compare.hpp"
 
-namespace liedyn {
+namespace liedyn::integrators_tests {
 namespace {
 
 using fd::kAngles;
@@ -37,9 +37,9 @@ using fd::random_unit;
 using fd::random_vector;
 using fd::rotation_at;
 using fd::trace;
+using fd::kEps;
 
 const std::filesystem::path kScenes = std::filesystem::path(LIEDYN_SOURCE_DIR) / "problems/scenes";
-constexpr double kEps = std::numeric_limits<double>::epsilon();
 
 // ---------------------------------------------------------------------------------------
 // History terms.
@@ -1029,4 +1029,4 @@ TEST(SetState, RefusesWhatIsNotAState) {
 }
 
 }  // namespace
-}  // namespace liedyn
+}  // namespace liedyn::integrators_tests

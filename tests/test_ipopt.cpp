@@ -23,7 +23,7 @@
 #include "solvers/newton.hpp"
 #include "solvers/simulator.hpp"
 
-namespace liedyn {
+namespace liedyn::ipopt_tests {
 namespace {
 
 // A free asymmetric body tumbling about all three axes, oriented far from the identity (so
@@ -505,4 +505,4 @@ TEST(IpoptStep, UnwritableOutputFileIsAnOptionError) {
 }
 
 }  // namespace
-}  // namespace liedyn
+}  // namespace liedyn::ipopt_tests

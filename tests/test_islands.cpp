@@ -34,7 +34,7 @@ const char* const kScene = R"({
       "mass": 0.1, "radius": 0.01, "stretch_stiffness": 3000, "shear_stiffness": 1200,
       "bending_stiffness": [0.08, 0.08, 0.06], "fixed_nodes": [0] } ] })";
 
-State run(const Scene& scene, Backend backend, int threads) {
+State final_state(const Scene& scene, Backend backend, int threads) {
   SolverOptions options = scene.solver;
   options.backend = backend;
   options.island_threads = threads;
@@ -54,9 +54,9 @@ TEST(Islands, TwoThreadsGiveTheSameTrajectoryBitForBit) {
   ASSERT_EQ(build_components(scene.model).size(), 5u);  // a+b, free, r0, r1, r2
   for (const Backend backend : {Backend::kNewton, Backend::kCeres}) {
     SCOPED_TRACE(to_string(backend));
-    const State one = run(scene, backend, 1);
+    const State one = final_state(scene, backend, 1);
     for (const int threads : {2, 0}) {
-      const State many = run(scene, backend, threads);
+      const State many = final_state(scene, backend, threads);
       for (std::size_t i = 0; i < one.points.size(); ++i) EXPECT_EQ(one.points[i], many.points[i]) << i;
       for (std::size_t i = 0; i < one.rotations.size(); ++i) {
         EXPECT_EQ(one.rotations[i], many.rotations[i]) << i;

@@ -23,7 +23,7 @@
 #include "lib/joint_terms.hpp"
 #include "lib/so3.hpp"
 
-namespace liedyn {
+namespace liedyn::joint_adjoint_tests {
 namespace {
 
 using fd::kAngles;
@@ -390,4 +390,4 @@ TEST(JointLineTerm, ViolationIsTheDistanceFromTheLineTimesItsLength) {
 }
 
 }  // namespace
-}  // namespace liedyn
+}  // namespace liedyn::joint_adjoint_tests

@@ -30,7 +30,6 @@
 namespace liedyn {
 namespace {
 
-constexpr double kPi = std::numbers::pi;
 constexpr double kG = 9.81;
 
 // The angle of a rotation about y, for rotations about y (R = exp(θ y)).
@@ -128,7 +127,7 @@ TEST(JointLimits, ACartFallsOntoItsSlidersStopAndRestsThereOnItsWeight) {
 // turn and beyond before meeting the stop at hi = 3π + 0.5. It must stop there, not at the
 // wrap of hi into (−π, π] (0.5 − π), and then hold the motor's torque.
 TEST(JointLimits, AHingeLimitBeyondAFullTurnStopsAWheelAfterItsTurns) {
-  const double hi = 3.0 * kPi + 0.5;
+  const double hi = 3.0 * std::numbers::pi + 0.5;
   const Scene scene = parse_scene(R"({ "time_step": 0.005, "frames": 200,
     "solver": { "tolerance": 1e-11, "max_iterations": 100 },
     "bodies": [ { "name": "wheel", "mass": 1, "inertia": [0.02, 0.02, 0.01] } ],

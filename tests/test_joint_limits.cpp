@@ -29,16 +29,15 @@
 #include "lib/joint_limits.hpp"
 #include "lib/so3.hpp"
 
-namespace liedyn {
+namespace liedyn::joint_limits_tests {
 namespace {
 
 using fd::random_perpendicular;
 using fd::random_unit;
 using fd::rotation_at;
 using fd::trace;
-
-constexpr double kPi = std::numbers::pi;
-constexpr double kEps = std::numeric_limits<double>::epsilon();
+using fd::kPi;
+using fd::kEps;
 
 // Relative turns of the hinge: the extremes of atan2's branch (π) and of a turn (2π), and one
 // on the second turn, reached through `previous`.
@@ -489,4 +488,4 @@ TEST(JointLimitTerm, AdjointLagrangianIsActiveExactlyWhereTheMultiplierIsPositiv
 }
 
 }  // namespace
-}  // namespace liedyn
+}  // namespace liedyn::joint_limits_tests

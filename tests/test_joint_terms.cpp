@@ -48,16 +48,15 @@
 #include "lib/joint_terms.hpp"
 #include "lib/so3.hpp"
 
-namespace liedyn {
+namespace liedyn::joint_terms_tests {
 namespace {
 
 using fd::random_perpendicular;
 using fd::random_unit;
 using fd::rotation_at;
 using fd::trace;
-
-constexpr double kPi = std::numbers::pi;
-constexpr double kEps = std::numeric_limits<double>::epsilon();
+using fd::kPi;
+using fd::kEps;
 
 // The relative angles tested: the weld's angle of E, the hinge's angle between the axes.
 const std::vector<double> kRelativeAngles = {0.0, 1e-9, 1e-4, 0.5, 2.0, kPi - 1e-6};
@@ -1368,4 +1367,4 @@ TEST(JointTermConstraint, ShiftsAreInEndABodyCoordinates) {
 }
 
 }  // namespace
-}  // namespace liedyn
+}  // namespace liedyn::joint_terms_tests

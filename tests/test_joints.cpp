@@ -24,7 +24,7 @@
 #include "solvers/simulator.hpp"
 #include "solvers/step_solver.hpp"
 
-namespace liedyn {
+namespace liedyn::joints_tests {
 namespace {
 
 namespace fs = std::filesystem;
@@ -837,4 +837,4 @@ TEST_F(JointsCli, GradcheckPassesThroughEveryJointTypeElasticAndExact) {
 }
 
 }  // namespace
-}  // namespace liedyn
+}  // namespace liedyn::joints_tests

@@ -16,8 +16,6 @@
 namespace liedyn {
 namespace {
 
-constexpr double kPi = std::numbers::pi;
-
 TEST(KinematicMotion, VelocitiesMoveFromTheInitialPoseAtConstantRates) {
   KinematicMotion m;
   m.linear_velocity = Vector3(1.0, -2.0, 0.5);
@@ -95,8 +93,8 @@ TEST(KinematicMotion, ValidateNamesTheFieldOfEachBadMotion) {
     m.keyframes = std::move(keys);
     return m;
   };
-  const Matrix3 half_turn = so3::exp(Vector3(0.0, 0.0, kPi));
-  const Matrix3 near_half = so3::exp(Vector3(0.0, 0.0, kPi - 1e-3));
+  const Matrix3 half_turn = so3::exp(Vector3(0.0, 0.0, std::numbers::pi));
+  const Matrix3 near_half = so3::exp(Vector3(0.0, 0.0, std::numbers::pi - 1e-3));
   EXPECT_EQ(field_of(keyed({{1.0, Vector3::Zero(), near_half}})), "accepted");
   EXPECT_EQ(field_of(keyed({{0.0, Vector3::Zero(), Matrix3::Identity()}})), "bodies[2].kinematic.keyframes[0].time");
   EXPECT_EQ(field_of(keyed({{1.0, Vector3::Zero(), Matrix3::Identity()}, {1.0, Vector3::Zero(), Matrix3::Identity()}})),

@@ -11,7 +11,7 @@
 namespace liedyn {
 namespace {
 
-std::string rod_scene(int edges, int frames, bool optimization) {
+std::string cantilever_scene(int edges, int frames, bool optimization) {
   nlohmann::json s = {
       {"time_step", 0.001},
       {"frames", frames},
@@ -34,7 +34,7 @@ std::string rod_scene(int edges, int frames, bool optimization) {
 }
 
 TEST(MemoryBudget, EstimateFollowsDofsAndKeptFrames) {
-  const Scene scene = parse_scene(rod_scene(20000, 1000, false), "rod.json");
+  const Scene scene = parse_scene(cantilever_scene(20000, 1000, false), "rod.json");
   const MemoryEstimate step_only = estimate_memory(scene, 0);
   EXPECT_EQ(step_only.trajectory, 0u);
   // 20001 points and 20000 rotations: 120003 DOFs at 480 bytes above 16 MB.
@@ -45,7 +45,7 @@ TEST(MemoryBudget, EstimateFollowsDofsAndKeptFrames) {
 }
 
 TEST(MemoryBudget, ARunOverTheLimitIsRefusedNamingTheEstimate) {
-  const Scene scene = parse_scene(rod_scene(20000, 1000000, true), "big.json");
+  const Scene scene = parse_scene(cantilever_scene(20000, 1000000, true), "big.json");
   try {
     admit_memory(scene, 1, std::uint64_t{24} << 30);
     ADD_FAILURE() << "1e6 frames of a 20001-node rod must not be admitted in 24 GiB";
@@ -71,7 +71,7 @@ TEST(MemoryBudget, ByteSizes) {
 TEST(MemoryBudget, ExplicitNodesDrawOnTheRodBudget) {
   // Two generated rods of 1e6 edges take the whole budget; three explicit nodes more used to
   // pass (explicit node arrays bypassed it).
-  nlohmann::json s = nlohmann::json::parse(rod_scene(1000000, 1, false));
+  nlohmann::json s = nlohmann::json::parse(cantilever_scene(1000000, 1, false));
   nlohmann::json second = s["rods"][0];
   second["name"] = "second";
   s["rods"].push_back(second);
@@ -97,7 +97,7 @@ class MemoryCli : public test::CliFixture {
 };
 
 TEST_F(MemoryCli, OptimizeRefusesWhatCannotFit) {
-  { std::ofstream(dir_ / "big.json") << rod_scene(20000, 1000000, true); }
+  { std::ofstream(dir_ / "big.json") << cantilever_scene(20000, 1000000, true); }
   const Result r = run({"optimize", "big.json", "--out", "out", "--memory-limit", "8G"});
   EXPECT_EQ(r.exit_code, 2) << r.out << r.err;
   EXPECT_NE(r.err.find("big.json: --memory-limit: the run needs about"), std::string::npos) << r.err;

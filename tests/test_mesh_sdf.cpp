@@ -1079,7 +1079,7 @@ TEST(GridSdfBudget, AFineGridOfALargeMeshInASceneIsRefusedNamingCellSize) {
 
 // A closed tetrahedron (outward faces) with its first vertex line replaced by `first`, and
 // `before` in front: the bad line is line 1 + (lines in `before`).
-std::string tetrahedron(const std::string& first, const std::string& before = "") {
+std::string tetrahedron_obj(const std::string& first, const std::string& before = "") {
   return before + first + "\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n";
 }
 
@@ -1109,7 +1109,7 @@ TEST(ObjMeshFiles, DevicesAndFifosAreNotRead) {
 
 TEST(ObjMeshNumbers, TheTetrahedronLoads) {
   TempDir dir;
-  const TriangleMesh m = load_obj_mesh(dir.write("ok.obj", tetrahedron("v 0 0 0")));
+  const TriangleMesh m = load_obj_mesh(dir.write("ok.obj", tetrahedron_obj("v 0 0 0")));
   EXPECT_EQ(m.vertices.size(), 4u);
   EXPECT_EQ(m.triangles.size(), 4u);
   // Forms tinyobjloader and from_chars both read: signs, leading or trailing points,
@@ -1129,15 +1129,15 @@ TEST(ObjMeshNumbers, NonNumbersAndNonFiniteCoordinatesNameTheFileAndLine) {
     std::string expected;  // in the message, after the file name
   };
   const Case cases[] = {
-      {"nan.obj", tetrahedron("v nan 0 0"), "line 1: vertex 1 (1-based): x = 'nan' is not finite"},
-      {"abc.obj", tetrahedron("v 0 abc 0", "# a comment\n\n"),
+      {"nan.obj", tetrahedron_obj("v nan 0 0"), "line 1: vertex 1 (1-based): x = 'nan' is not finite"},
+      {"abc.obj", tetrahedron_obj("v 0 abc 0", "# a comment\n\n"),
        "line 3: vertex 1 (1-based): y = 'abc' is not a number"},
-      {"inf.obj", tetrahedron("v 0 0 -inf"), "line 1: vertex 1 (1-based): z = '-inf' is not finite"},
-      {"huge.obj", tetrahedron("v 1e999 0 0"), "line 1: vertex 1 (1-based): x = '1e999' is not finite"},
-      {"hex.obj", tetrahedron("v 0x10 0 0"), "line 1: vertex 1 (1-based): x = '0x10' is not a number"},
-      {"dots.obj", tetrahedron("v 1.5.3 0 0"), "line 1: vertex 1 (1-based): x = '1.5.3' is not a number"},
-      {"signs.obj", tetrahedron("v +-1 0 0"), "line 1: vertex 1 (1-based): x = '+-1' is not a number"},
-      {"missing.obj", tetrahedron("v 0 0"), "line 1: vertex 1 (1-based): has 2 coordinates"},
+      {"inf.obj", tetrahedron_obj("v 0 0 -inf"), "line 1: vertex 1 (1-based): z = '-inf' is not finite"},
+      {"huge.obj", tetrahedron_obj("v 1e999 0 0"), "line 1: vertex 1 (1-based): x = '1e999' is not finite"},
+      {"hex.obj", tetrahedron_obj("v 0x10 0 0"), "line 1: vertex 1 (1-based): x = '0x10' is not a number"},
+      {"dots.obj", tetrahedron_obj("v 1.5.3 0 0"), "line 1: vertex 1 (1-based): x = '1.5.3' is not a number"},
+      {"signs.obj", tetrahedron_obj("v +-1 0 0"), "line 1: vertex 1 (1-based): x = '+-1' is not a number"},
+      {"missing.obj", tetrahedron_obj("v 0 0"), "line 1: vertex 1 (1-based): has 2 coordinates"},
       // The second vertex, on line 2 (CR line ends count as tinyobjloader counts them).
       {"second.obj", "v 0 0 0\rv 1 NaN 0\rv 0 1 0\rv 0 0 1\rf 1 3 2\rf 1 2 4\rf 1 4 3\rf 2 3 4\r",
        "line 2: vertex 2 (1-based): y = 'NaN' is not finite"},
@@ -1153,17 +1153,17 @@ TEST(ObjMeshNumbers, NonNumbersAndNonFiniteCoordinatesNameTheFileAndLine) {
 TEST(ObjMeshNumbers, NulBytesAreRefused) {
   TempDir dir;
   // After the vertices (tinyobjloader would stop reading the line there), and inside a number.
-  const fs::path after = dir.write("nul.obj", tetrahedron("v 0 0 0") + std::string("f 1 2\0 3\n", 9));
+  const fs::path after = dir.write("nul.obj", tetrahedron_obj("v 0 0 0") + std::string("f 1 2\0 3\n", 9));
   std::string msg = loader_error(after);
   EXPECT_NE(msg.find(in_file(after, "line 9: a NUL byte")), std::string::npos) << msg;
-  const fs::path inside = dir.write("nul2.obj", tetrahedron(std::string("v 0 0 1\0", 8) + "5"));
+  const fs::path inside = dir.write("nul2.obj", tetrahedron_obj(std::string("v 0 0 1\0", 8) + "5"));
   msg = loader_error(inside);
   EXPECT_NE(msg.find("line 1: a NUL byte (byte 8 of the file)"), std::string::npos) << msg;
 }
 
 TEST(ObjMeshNumbers, InASceneTheRefusalIsASceneErrorOnTheColliderFile) {
   TempDir dir;
-  const fs::path file = dir.write("bad.obj", tetrahedron("v 0 0 0", "v 0 0 0\nv 0 0 abc\n"));
+  const fs::path file = dir.write("bad.obj", tetrahedron_obj("v 0 0 0", "v 0 0 0\nv 0 0 abc\n"));
   const std::string text = R"({"time_step": 0.01, "frames": 5, "colliders": [
       {"type": "mesh", "file": ")" + file.string() + R"(", "cell_size": 0.1}],
       "bodies": [{"name": "a", "mass": 2, "inertia": [1, 2, 2.5]}]})";

@@ -36,10 +36,10 @@
 #include "problems/scene.hpp"
 #include "solvers/simulator.hpp"
 
-namespace liedyn {
+namespace liedyn::moving_colliders_tests {
 namespace {
 
-constexpr double kInf = std::numeric_limits<double>::infinity();
+using fd::kInf;
 constexpr double kGravity = 9.81;
 
 Collider make_collider(const Shape& shape, bool inside, const Vector3& position = Vector3::Zero(),
@@ -632,4 +632,4 @@ TEST(MovingColliders, TheGradientRunsThroughContactWithAMovingPlane) {
 }
 
 }  // namespace
-}  // namespace liedyn
+}  // namespace liedyn::moving_colliders_tests

@@ -43,7 +43,7 @@
 #include "problems/scene.hpp"
 #include "solvers/simulator.hpp"
 
-namespace liedyn {
+namespace liedyn::optimization_tests {
 namespace {
 
 namespace fs = std::filesystem;
@@ -1636,4 +1636,4 @@ TEST_F(OptimizationCli, ResumeWithoutACheckpointFails) {
 }
 
 }  // namespace
-}  // namespace liedyn
+}  // namespace liedyn::optimization_tests

@@ -14,12 +14,10 @@
 namespace liedyn {
 namespace {
 
-constexpr double kPi = std::numbers::pi;
-
 TEST(PrescribedMotion, InterpolatesKeyframesLinearlyFromTheIdentityAndHolds) {
   PrescribedMotion m;
-  m.keyframes = {{1.0, Vector3(0.0, 0.0, 2.0), Vector3(0.0, 0.0, 3.0 * kPi)},
-                 {3.0, Vector3(1.0, 0.0, 2.0), Vector3(0.0, 0.0, 3.0 * kPi)}};
+  m.keyframes = {{1.0, Vector3(0.0, 0.0, 2.0), Vector3(0.0, 0.0, 3.0 * std::numbers::pi)},
+                 {3.0, Vector3(1.0, 0.0, 2.0), Vector3(0.0, 0.0, 3.0 * std::numbers::pi)}};
   EXPECT_EQ(m.duration(), 3.0);
   for (double t : {-1.0, 0.0}) {
     const RigidTransform T = m.at(t);
@@ -30,15 +28,17 @@ TEST(PrescribedMotion, InterpolatesKeyframesLinearlyFromTheIdentityAndHolds) {
   // i.e. −π/2: the rotation vector interpolates, so multi-turn twists are expressible).
   const RigidTransform half = m.at(0.5);
   EXPECT_LT((half.translation - Vector3(0.0, 0.0, 1.0)).norm(), 1e-15);
-  EXPECT_LT(so3::distance(half.rotation, so3::exp(Vector3(0.0, 0.0, -0.5 * kPi))), 1e-14);
+  EXPECT_LT(so3::distance(half.rotation, so3::exp(Vector3(0.0, 0.0, -0.5 * std::numbers::pi))),
+            1e-14);
   const RigidTransform second = m.at(2.0);
   EXPECT_LT((second.translation - Vector3(0.5, 0.0, 2.0)).norm(), 1e-15);
   const RigidTransform after = m.at(10.0);  // held
   EXPECT_LT((after.translation - Vector3(1.0, 0.0, 2.0)).norm(), 1e-15);
-  EXPECT_LT(so3::distance(after.rotation, so3::exp(Vector3(0.0, 0.0, kPi))), 1e-14);
+  EXPECT_LT(so3::distance(after.rotation, so3::exp(Vector3(0.0, 0.0, std::numbers::pi))), 1e-14);
   // Points turn about the pivot.
   m.center = Vector3(1.0, 0.0, 0.0);
-  const RigidTransform quarter = {Vector3::Zero(), so3::exp(Vector3(0.0, 0.0, 0.5 * kPi))};
+  const RigidTransform quarter = {Vector3::Zero(),
+                                  so3::exp(Vector3(0.0, 0.0, 0.5 * std::numbers::pi))};
   EXPECT_LT((m.move_point(quarter, Vector3(2.0, 0.0, 0.0)) - Vector3(1.0, 1.0, 0.0)).norm(),
             1e-15);
 }
@@ -52,7 +52,7 @@ Model clamped_rod(int edges, double L, const Vector3& translation, const Vector3
   RodSpec rod;
   rod.name = "rod";
   for (int i = 0; i <= edges; ++i) {
-    rod.nodes.push_back(Vector3(bow * std::sin(kPi * i / edges), 0.0, L * i / edges));
+    rod.nodes.push_back(Vector3(bow * std::sin(std::numbers::pi * i / edges), 0.0, L * i / edges));
   }
   rod.mass = 0.2;
   rod.radius = 0.01;
@@ -96,7 +96,7 @@ TEST(PrescribedMotion, StaticTwistOfOneAndAHalfTurnsSpreadsAlongTheRodByItsCells
   // measure is sin α / w) and φ is below Greenhill's buckling twist, 2.86π K_bend/K_twist =
   // 5.7π here. φ = 3π in 12 load steps, 40 edges: α = 0.24 rad inside, 0.37 rad at the ends.
   const int edges = 40;
-  const double phi = 3.0 * kPi;
+  const double phi = 3.0 * std::numbers::pi;
   Model model = clamped_rod(edges, 1.0, Vector3::Zero(), Vector3(0.0, 0.0, phi));
   model.static_equilibrium = true;
   model.load_steps = 12;
@@ -146,7 +146,7 @@ TEST(PrescribedMotion, DynamicEndFollowsThePathAndDrivesTheRod) {
   // bow: a perfectly straight rod under compression stays on the axially symmetric saddle,
   // where Newton (rightly) reports no convergence to a minimum.
   const int edges = 20;
-  const Vector3 d(0.0, 0.0, -0.3), r(0.0, 0.0, 0.5 * kPi);
+  const Vector3 d(0.0, 0.0, -0.3), r(0.0, 0.0, 0.5 * std::numbers::pi);
   Model model = clamped_rod(edges, 1.0, d, r, 1e-3);
   model.time_step = 0.01;
   Simulator sim(model, SolverOptions{});
@@ -226,7 +226,7 @@ TEST(RestShape, ARodStartsStraightWithTheRestCurvatureOfItsRestShape) {
   RodSpec helix;
   const int edges = 24;
   for (int k = 0; k <= edges; ++k) {
-    const double phi = 4.0 * kPi * k / edges;
+    const double phi = 4.0 * std::numbers::pi * k / edges;
     helix.nodes.push_back(Vector3(0.1 * std::cos(phi), 0.1 * std::sin(phi), 0.02 * phi));
   }
   helix.mass = 0.3;

@@ -22,15 +22,15 @@
 #include "lib/so3.hpp"
 #include "manifolds/quaternion.hpp"
 
-namespace liedyn {
+namespace liedyn::quaternion_tests {
 namespace {
 
 using quat::Matrix3;
 using quat::Matrix4;
 using quat::Vector3;
 using quat::Vector4;
-constexpr double kPi = std::numbers::pi;
-constexpr double kEps = std::numeric_limits<double>::epsilon();
+using fd::kPi;
+using fd::kEps;
 
 // Rotation angles of the test points: identity, tiny, ordinary, near π and π (where s → 0).
 const std::vector<double> kAngles = {0.0, 1e-9, 1e-4, 1.0, kPi - 1e-6, kPi};
@@ -411,4 +411,4 @@ TEST(QuaternionRetract, ZeroStepIsIdentityAndNormNeverDrifts) {
 }
 
 }  // namespace
-}  // namespace liedyn
+}  // namespace liedyn::quaternion_tests

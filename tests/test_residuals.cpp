@@ -45,7 +45,7 @@
 #include "lib/so3.hpp"
 #include "lib/spring.hpp"
 
-namespace liedyn {
+namespace liedyn::residuals_tests {
 namespace {
 
 using fd::kAngles;
@@ -55,10 +55,10 @@ using fd::rotation_at;
 using fd::trace;
 using fd::power_of_two_near;
 using fd::random_perpendicular;
-
-constexpr double kPi = std::numbers::pi;
-constexpr double kEps = std::numeric_limits<double>::epsilon();
-constexpr double kDeg = kPi / 180.0;
+using fd::kPi;
+using fd::kEps;
+using fd::kDeg;
+using fd::body_inertia;
 
 // ----------------------------------------------------------------------------------------
 // One test case of a term's residual form, and the three checks.
@@ -309,12 +309,6 @@ TEST(TranslationalInertiaResidual, MasslessPointNeedsNoLoad) {
 // ----------------------------------------------------------------------------------------
 // Rotational inertia  ‖(R − R̃) J^½‖²_F/(2h²).
 
-// A body-frame inertia tensor obeying the triangle inequality (1 + 1.6 > 2.2), rotated.
-Matrix3 body_inertia(double scale, std::mt19937& rng) {
-  const Matrix3 Q = rotation_at(1.3, rng);
-  return scale * Q * Eigen::Vector3d(1.0, 1.6, 2.2).asDiagonal() * Q.transpose();
-}
-
 enum class Shape { kBody, kThinRod };
 
 // Angles of R for (1), besides the case's own.
@@ -406,6 +400,8 @@ TEST(RotationalInertiaResidual, JacobianTransposeResidualIsLieGradient) {
     EXPECT_TRUE(check_gradient(c));
   });
 }
+
+#undef ROTATIONAL_TRACE
 
 TEST(RotationalInertiaResidual, ResidualLayoutIsColumnMajor) {
   // r(3k + i) = ((R − R̃) J^½/h)(i, k), as documented for the Ceres back-end.
@@ -594,6 +590,8 @@ TEST(SpringResidual, JacobianTransposeResidualIsLieGradient) {
   });
 }
 
+#undef SPRING_TRACE
+
 TEST(SpringResidual, CoincidentEndsWithPositiveRestLength) {
   // d = 0, L > 0: V = ½kL², evaluate() returns g = 0 (length_spring); the residual keeps the
   // value, r = −√k L e_x, with J = 0 so that Jᵀr = 0 = g (spring.hpp).
@@ -772,6 +770,8 @@ TEST(RodShearResidual, JacobianTransposeResidualIsLieGradient) {
   });
 }
 
+#undef ROD_TRACE
+
 TEST(RodShearResidual, CoincidentNodes) {
   // e = 0: evaluate() takes d = 0 in c(1 − dᵀt), Ψ = c, g = 0; r = −√(2c) t, J = 0.
   RodShear t;
@@ -878,6 +878,8 @@ TEST(RodBendTwistResidual, JacobianTransposeResidualIsLieGradient) {
     EXPECT_TRUE(check_gradient(c));
   });
 }
+
+#undef BEND_TRACE
 
 // ----------------------------------------------------------------------------------------
 // The checks reject the mistakes they are there for. A term whose residual form is broken on
@@ -1019,4 +1021,4 @@ TEST(ResidualChecks, RejectBrokenResidualForms) {
 }
 
 }  // namespace
-}  // namespace liedyn
+}  // namespace liedyn::residuals_tests

@@ -42,7 +42,7 @@
 #include "rod_models.hpp"
 #include "solvers/simulator.hpp"
 
-namespace liedyn {
+namespace liedyn::rod_convergence_tests {
 namespace {
 
 using namespace test_models;  // rod_models.hpp
@@ -288,4 +288,4 @@ TEST(RodConvergence, CantileverFirstBendingFrequency) {
 }
 
 }  // namespace
-}  // namespace liedyn
+}  // namespace liedyn::rod_convergence_tests

@@ -25,7 +25,7 @@
 #include "problems/scene.hpp"
 #include "solvers/simulator.hpp"
 
-namespace liedyn {
+namespace liedyn::rod_splice_tests {
 namespace {
 
 constexpr double kAgreement = 1e-7;
@@ -261,4 +261,4 @@ TEST(RodSplice, BadSplicesNameTheirField) {
 }
 
 }  // namespace
-}  // namespace liedyn
+}  // namespace liedyn::rod_splice_tests

@@ -35,10 +35,9 @@ using fd::rotation_at;
 using fd::trace;
 using fd::power_of_two_near;
 using fd::random_perpendicular;
-
-constexpr double kPi = std::numbers::pi;
-constexpr double kEps = std::numeric_limits<double>::epsilon();
-constexpr double kDeg = kPi / 180.0;
+using fd::kPi;
+using fd::kEps;
+using fd::kDeg;
 
 
 // A unit vector perpendicular to n.

@@ -31,7 +31,7 @@
 #include "rod_models.hpp"
 #include "solvers/simulator.hpp"
 
-namespace liedyn {
+namespace liedyn::rod_validation_tests {
 namespace {
 
 using namespace test_models;  // rod_models.hpp
@@ -400,4 +400,4 @@ TEST(RodValidation, HangingRodStretchesByItsWeight) {
 }
 
 }  // namespace
-}  // namespace liedyn
+}  // namespace liedyn::rod_validation_tests

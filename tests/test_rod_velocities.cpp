@@ -18,7 +18,7 @@
 #include "solvers/gradient_check.hpp"
 #include "solvers/simulator.hpp"
 
-namespace liedyn {
+namespace liedyn::rod_velocities_tests {
 namespace {
 
 constexpr int kNodes = 6;  // the rods below: 5 edges of 0.1 m along x
@@ -358,4 +358,4 @@ TEST(SceneRodVelocities, BadVelocitiesNameTheirField) {
 }
 
 }  // namespace
-}  // namespace liedyn
+}  // namespace liedyn::rod_velocities_tests

@@ -29,14 +29,15 @@
 #include "lib/so3.hpp"
 #include "manifolds/rotation_vector.hpp"
 
-namespace liedyn {
+namespace liedyn::rotation_vector_tests {
 namespace {
 
 using rotvec::Matrix3;
 using rotvec::Vector3;
 using Matrix93 = Eigen::Matrix<double, 9, 3>;
-constexpr double kPi = std::numbers::pi;
-constexpr double kEps = std::numeric_limits<double>::epsilon();
+using fd::kPi;
+using fd::kEps;
+using fd::where;
 
 // 2 and 4 are the series switches of rotation_vector.cpp (t, and t/2 in exp_jacobian).
 const std::vector<double> kAngles = {
@@ -48,13 +49,6 @@ std::vector<Vector3> test_axes() {
   std::mt19937 rng(11);
   for (int i = 0; i < 3; ++i) axes.push_back(fd::random_unit(rng));
   return axes;
-}
-
-std::string where(double angle, const Vector3& axis) {
-  std::ostringstream s;
-  s.precision(17);
-  s << "angle " << angle << ", axis " << axis.transpose();
-  return s.str();
 }
 
 // Entrywise |a − d| ≤ tol, and a must stand well above tol unless it may vanish (comparing
@@ -370,4 +364,4 @@ TEST(RotationVector, WrapKeepsTheRotationWithAngleAtMostPi) {
 }
 
 }  // namespace
-}  // namespace liedyn
+}  // namespace liedyn::rotation_vector_tests

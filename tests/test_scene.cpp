@@ -17,7 +17,7 @@
 #include "problems/scene.hpp"
 #include "problems/scene_settings.hpp"
 
-namespace liedyn {
+namespace liedyn::scene_tests {
 namespace {
 
 constexpr const char* kSource = "unit_scene.json";
@@ -1271,4 +1271,4 @@ TEST(SceneErrors, BadCollidersAndContact) {
 }
 
 }  // namespace
-}  // namespace liedyn
+}  // namespace liedyn::scene_tests

@@ -19,7 +19,7 @@ std::vector<std::string> warnings_of(const std::string& body_json, const std::st
       "checks.json"));
 }
 
-std::string box(const std::string& name, double z, bool contact = true) {
+std::string box_body(const std::string& name, double z, bool contact = true) {
   return R"({"name": ")" + name + R"(", "mass": 1, "inertia": [1, 1, 1], "position": [0, 0, )" +
          std::to_string(z) + "]" +
          (contact ? R"(, "contact": {"stiffness": 1e4, "radius": 0.01, "points": [[0, 0, -0.1], [0, 0, 0.1]]})"
@@ -28,9 +28,9 @@ std::string box(const std::string& name, double z, bool contact = true) {
 }
 
 TEST(SceneChecks, ASampleStartingInsideAColliderIsNamed) {
-  EXPECT_TRUE(warnings_of(box("box", 0.2)).empty());
-  EXPECT_TRUE(warnings_of(box("box", 0.105)).empty()) << "within its radius: an ordinary contact";
-  const auto w = warnings_of(box("box", -0.45));
+  EXPECT_TRUE(warnings_of(box_body("box", 0.2)).empty());
+  EXPECT_TRUE(warnings_of(box_body("box", 0.105)).empty()) << "within its radius: an ordinary contact";
+  const auto w = warnings_of(box_body("box", -0.45));
   ASSERT_EQ(w.size(), 1u);
   EXPECT_NE(w[0].find("bodies[0] (\"box\"): contact sample 0 starts 0.56 m inside colliders[0] (\"floor\")"),
             std::string::npos)
@@ -38,14 +38,14 @@ TEST(SceneChecks, ASampleStartingInsideAColliderIsNamed) {
 }
 
 TEST(SceneChecks, CollidersThatTouchNothing) {
-  const auto w = warnings_of(box("box", 1.0, false));
+  const auto w = warnings_of(box_body("box", 1.0, false));
   ASSERT_EQ(w.size(), 1u);
   EXPECT_NE(w[0].find("1 collider(s) touch nothing"), std::string::npos) << w[0];
 }
 
 TEST(SceneChecks, OverlappingBodies) {
-  EXPECT_TRUE(warnings_of(box("a", 1.0) + "," + box("b", 1.5)).empty());
-  const auto w = warnings_of(box("a", 1.0) + "," + box("b", 1.1));
+  EXPECT_TRUE(warnings_of(box_body("a", 1.0) + "," + box_body("b", 1.5)).empty());
+  const auto w = warnings_of(box_body("a", 1.0) + "," + box_body("b", 1.1));
   ASSERT_EQ(w.size(), 1u);
   EXPECT_NE(w[0].find("bodies[0] (\"a\") and bodies[1] (\"b\") start with overlapping contact samples"),
             std::string::npos)

@@ -8,7 +8,7 @@
 
 #include "problems/scene.hpp"
 
-namespace liedyn {
+namespace liedyn::scene_fuzz_regressions_tests {
 namespace {
 
 // The field named by the SceneError that rejects `text`. Any other exception escapes and
@@ -151,4 +151,4 @@ TEST(SceneFuzzRegressions, InertiaOverTimeStepSquaredOverflows) {
 }
 
 }  // namespace
-}  // namespace liedyn
+}  // namespace liedyn::scene_fuzz_regressions_tests

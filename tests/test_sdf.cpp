@@ -39,15 +39,15 @@
 #include "lib/sdf.hpp"
 #include "lib/so3.hpp"
 
-namespace liedyn {
+namespace liedyn::sdf_tests {
 namespace {
 
 using fd::random_unit;
 using fd::random_vector;
 using fd::rotation_at;
+using fd::kEps;
+using fd::kInf;
 
-constexpr double kEps = std::numeric_limits<double>::epsilon();
-constexpr double kInf = std::numeric_limits<double>::infinity();
 constexpr double kCoreMargin = 1e-2;
 constexpr double kSeamMargin = 1e-3;
 
@@ -1304,4 +1304,4 @@ TEST(Sdf, CatmullRomRejectsBadInput) {
 }
 
 }  // namespace
-}  // namespace liedyn
+}  // namespace liedyn::sdf_tests

@@ -17,13 +17,14 @@
 #include "fd_check.hpp"
 #include "lib/so3.hpp"
 
-namespace liedyn {
+namespace liedyn::so3_tests {
 namespace {
 
 using so3::Matrix3;
 using so3::Vector3;
-constexpr double kPi = std::numbers::pi;
-constexpr double kEps = std::numeric_limits<double>::epsilon();
+using fd::kPi;
+using fd::kEps;
+using fd::where;
 
 // Angles up to π: log's domain.
 // 9.9e-5/1.01e-4 and 0.099/0.101 straddle the Taylor-branch switches of so3.cpp, where a
@@ -47,13 +48,6 @@ Matrix3 random_rotation(std::mt19937& rng) {
   std::normal_distribution<double> normal;
   Eigen::Quaterniond q(normal(rng), normal(rng), normal(rng), normal(rng));
   return q.normalized().toRotationMatrix();
-}
-
-std::string where(double angle, const Vector3& axis) {
-  std::ostringstream s;
-  s.precision(17);
-  s << "angle " << angle << ", axis " << axis.transpose();
-  return s.str();
 }
 
 // Rotation vector with the same exp as `theta` (a log result) closest to `reference`:
@@ -360,4 +354,4 @@ TEST(So3, DistanceIsTheGeodesicAngle) {
 }
 
 }  // namespace
-}  // namespace liedyn
+}  // namespace liedyn::so3_tests

@@ -46,15 +46,15 @@
 #include "trajectory_compare.hpp"
 #include "solvers/step_solver.hpp"
 
-namespace liedyn {
+namespace liedyn::so3_manifold_tests {
 namespace {
 
 using Vector4 = Eigen::Vector4d;
 using RowMajor43 = Eigen::Matrix<double, 4, 3, Eigen::RowMajor>;
 using RowMajor34 = Eigen::Matrix<double, 3, 4, Eigen::RowMajor>;
 
-constexpr double kPi = std::numbers::pi;
-constexpr double kEps = std::numeric_limits<double>::epsilon();
+using fd::kPi;
+using fd::kEps;
 
 const std::filesystem::path kScenes = std::filesystem::path(LIEDYN_SOURCE_DIR) / "problems/scenes";
 
@@ -789,4 +789,4 @@ TEST(SO3ManifoldCeres, ManifoldAndChartAgreeOnACantilever) {
 }
 
 }  // namespace
-}  // namespace liedyn
+}  // namespace liedyn::so3_manifold_tests

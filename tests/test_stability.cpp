@@ -32,7 +32,7 @@
 #include "rod_models.hpp"
 #include "solvers/simulator.hpp"
 
-namespace liedyn {
+namespace liedyn::stability_tests {
 namespace {
 
 constexpr double kPi = std::numbers::pi;
@@ -960,4 +960,4 @@ TEST(StabilitySceneInput, DerivedOverflowsAreRejected) {
 }
 
 }  // namespace
-}  // namespace liedyn
+}  // namespace liedyn::stability_tests

@@ -26,7 +26,6 @@ namespace liedyn {
 namespace {
 
 namespace fs = std::filesystem;
-constexpr double kNaN = SweepRun::kNaN;
 
 // A body hung from the world origin by a spring (k = 20 N/m, rest length its initial 0.2 m),
 // spinning, under gravity: 0.2 s in 10 steps of 0.02 s. No analytic solution.
@@ -510,7 +509,7 @@ TEST(SweepCsv, OneRowPerRunWithTheParetoFront) {
   r.axis_names = {"time_step"};
   r.runs = {made_run("a", 1.0, 0.1),   made_run("b", 2.0, 0.05), made_run("c", 3.0, 0.2),
             made_run("d", 0.5, 0.3),   made_run("e", 0.1, 0.001), made_run("f", 2.0, 0.05),
-            made_run("g", 4.0, kNaN)};
+            made_run("g", 4.0, SweepRun::kNaN)};
   r.runs[4].failed = true;
   r.runs[0].reference = "time_step=0.0025";
   const std::vector<std::string> csv = lines(sweep_csv(r));
@@ -541,7 +540,7 @@ TEST(SweepCsv, TheParetoFrontFallsBackToOrientationThenGradient) {
   EXPECT_EQ(field(csv[1], kPareto), "1");
   EXPECT_EQ(field(csv[2], kPareto), "0");
 
-  for (SweepRun& run : r.runs) run.position_error = run.orientation_error = kNaN;
+  for (SweepRun& run : r.runs) run.position_error = run.orientation_error = SweepRun::kNaN;
   r.runs[0].gradient_error = 1e-3;
   r.runs[1].gradient_error = 1e-6;  // slower, more accurate
   csv = lines(sweep_csv(r));

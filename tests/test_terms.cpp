@@ -29,7 +29,7 @@
 #include "lib/so3.hpp"
 #include "lib/spring.hpp"
 
-namespace liedyn {
+namespace liedyn::terms_tests {
 namespace {
 
 using fd::kAngles;
@@ -37,16 +37,9 @@ using fd::random_unit;
 using fd::random_vector;
 using fd::rotation_at;
 using fd::trace;
-
-constexpr double kPi = std::numbers::pi;
-constexpr double kEps = std::numeric_limits<double>::epsilon();
-
-
-// A body-frame inertia tensor obeying the triangle inequality (1 + 1.6 > 2.2), rotated.
-Matrix3 body_inertia(double scale, std::mt19937& rng) {
-  const Matrix3 Q = rotation_at(1.3, rng);
-  return scale * Q * Eigen::Vector3d(1.0, 1.6, 2.2).asDiagonal() * Q.transpose();
-}
+using fd::kPi;
+using fd::kEps;
+using fd::body_inertia;
 
 // ----------------------------------------------------------------------------------------
 // Self-tests of the FD helpers: they must reject wrong derivatives, and the Lie Hessian is
@@ -652,4 +645,4 @@ TEST(TermCapabilities, EveryTermTypeHasExactlyItsCapabilities) {
 }
 
 }  // namespace
-}  // namespace liedyn
+}  // namespace liedyn::terms_tests

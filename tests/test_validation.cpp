@@ -30,8 +30,6 @@
 namespace liedyn {
 namespace {
 
-constexpr double kPi = std::numbers::pi;
-
 // Complete elliptic integral of the first kind K(k) (modulus k, 0 ≤ k < 1) by the
 // arithmetic–geometric mean: K(k) = π / (2 AGM(1, √(1 − k²))). Converges quadratically;
 // stop when the two means agree to round-off.
@@ -43,7 +41,7 @@ double elliptic_k(double k) {
     b = std::sqrt(a * b);
     a = mean;
   }
-  return kPi / (2.0 * a);
+  return std::numbers::pi / (2.0 * a);
 }
 
 // Time at which a sampled signal crosses zero between samples (t0, f0) and (t1, f1), by
@@ -77,14 +75,14 @@ Matrix3 generic_inertia() {
 // The AGM implementation of K itself, against known values: K(0) = π/2 and the
 // lemniscatic case K(1/√2) = Γ(1/4)² / (4√π). Round-off level agreement is expected.
 TEST(Validation, EllipticIntegralByAgm) {
-  EXPECT_NEAR(elliptic_k(0.0), kPi / 2.0, 1e-15);
+  EXPECT_NEAR(elliptic_k(0.0), std::numbers::pi / 2.0, 1e-15);
   const double gamma_quarter = std::tgamma(0.25);
-  EXPECT_NEAR(elliptic_k(std::sqrt(0.5)), gamma_quarter * gamma_quarter / (4.0 * std::sqrt(kPi)),
-              1e-14);
+  EXPECT_NEAR(elliptic_k(std::sqrt(0.5)),
+              gamma_quarter * gamma_quarter / (4.0 * std::sqrt(std::numbers::pi)), 1e-14);
   // Abramowitz & Stegun Table 17.1 (modular angle α, k = sin α): K(75°) = 2.7680631454,
   // K(85°) = 3.8317419998; 25-digit values from mpmath.ellipk.
-  EXPECT_NEAR(elliptic_k(std::sin(75.0 * kPi / 180.0)), 2.768063145368768, 1e-13);
-  EXPECT_NEAR(elliptic_k(std::sin(85.0 * kPi / 180.0)), 3.831741999784146, 1e-13);
+  EXPECT_NEAR(elliptic_k(std::sin(75.0 * std::numbers::pi / 180.0)), 2.768063145368768, 1e-13);
+  EXPECT_NEAR(elliptic_k(std::sin(85.0 * std::numbers::pi / 180.0)), 3.831741999784146, 1e-13);
 }
 
 // ---------------------------------------------------------------------------------------
@@ -357,14 +355,14 @@ TEST(Validation, ButterflyBoltFlipsWithOneNewtonIterationPerStep) {
 // The test asserts the order and the exact discrete period T_BE(h).
 TEST(Validation, CompoundPendulumPeriod) {
   const double m = 1.0, L = 0.5, g = 9.81, I = 0.1, k = 1e7, theta0 = 0.02;
-  const double T_compound = 2.0 * kPi * std::sqrt((I + m * L * L) / (m * g * L));
+  const double T_compound = 2.0 * std::numbers::pi * std::sqrt((I + m * L * L) / (m * g * L));
   // Low root of det(K − ω² M) = 0 for M = [[m, mL], [mL, I + mL²]], K = diag(k, mgL).
   const double qa = m * (I + m * L * L) - m * m * L * L;
   const double qb = -(k * (I + m * L * L) + m * m * g * L);
   const double qc = k * m * g * L;
   const double omega2 = (-qb - std::sqrt(qb * qb - 4.0 * qa * qc)) / (2.0 * qa);
-  const double T_ref = 2.0 * kPi / std::sqrt(omega2) * (1.0 + theta0 * theta0 / 16.0);
-  const double omega_ref = 2.0 * kPi / T_ref;
+  const double T_ref = 2.0 * std::numbers::pi / std::sqrt(omega2) * (1.0 + theta0 * theta0 / 16.0);
+  const double omega_ref = 2.0 * std::numbers::pi / T_ref;
   std::printf("pendulum: T_compound = %.10f s, T_ref = %.10f s (%+.3e)\n", T_compound, T_ref,
               T_ref / T_compound - 1.0);
   // The reference IS the compound-pendulum period up to the two documented corrections.
@@ -502,8 +500,8 @@ TEST(Validation, HeavyTopPrecession) {
   for (int n = 1; n <= steps; ++n) {
     if (!sim.step().converged()) ++unconverged;
     const Vector3 axis = sim.state().rotations[0].col(2);
-    double d = std::atan2(axis.y(), axis.x()) - std::remainder(azimuth, 2.0 * kPi);
-    azimuth += std::remainder(d, 2.0 * kPi);  // unwrap
+    double d = std::atan2(axis.y(), axis.x()) - std::remainder(azimuth, 2.0 * std::numbers::pi);
+    azimuth += std::remainder(d, 2.0 * std::numbers::pi);  // unwrap
     spin = axis.dot(sim.angular_velocity(0));
     sum_gyroscopic += mgl / (I3 * spin);
     sum_exact += steady(spin);
