@@ -2,7 +2,7 @@
 # Installs the Debian 12 packages liedyn needs. Idempotent; run as root (or with sudo).
 set -euo pipefail
 packages=(
-  build-essential cmake pkg-config ccache
+  build-essential cmake ninja-build pkg-config ccache
   libeigen3-dev libsuitesparse-dev
   libceres-dev coinor-libipopt-dev libnlopt-cxx-dev
   nlohmann-json3-dev libcli11-dev
