@@ -35,7 +35,8 @@ if command -v ccache >/dev/null; then
   export CCACHE_BASEDIR="$root"
   options+=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache)
 fi
-# Ninja starts a target's compiles before the libraries it links are done (Make waits), and
+# Ninja compiles a library's sources before the libraries it links are archived (Make goes
+# target by target; the test suite still waits for the CLI it runs, tests/CMakeLists.txt), and
 # unity builds compile each target's sources in batches of 8 (CMAKE_UNITY_BUILD): the
 # headers they share, Eigen's and GoogleTest's templates above all, are then compiled once
 # per batch instead of once per file. An existing build folder keeps its generator.
