@@ -959,6 +959,16 @@ Component build_rod_component(const Model& model, int r) {
       damping.time_step = model.time_step;
       p.add(damping);
     }
+    for (int j = 0; j < edges && rod.shear_damping > 0.0; ++j) {
+      if (node_offset[j] < 0 && node_offset[j + 1] < 0 && edge_offset[j] < 0) continue;
+      RodShearDamping damping;
+      damping.offsets = {node_offset[j], node_offset[j + 1], edge_offset[j]};
+      damping.damping = rod.shear_damping;
+      damping.time_step = model.time_step;
+      damping.set(model.rod_point(r, j), model.rod_point(r, j + 1), model.rod_rotation(r, j),
+                  d.rest_length[j]);
+      p.add(damping);
+    }
     for (int i = 1; i + 1 < n && rod.bending_damping != Vector3::Zero(); ++i) {
       if (edge_offset[i - 1] < 0 && edge_offset[i] < 0) continue;
       RodBendTwistDamping damping;

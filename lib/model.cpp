@@ -639,6 +639,7 @@ void Model::validate_rod(const RodSpec& rod, const std::string& path) {
   validate_contact(rod.contact, field("contact"));
   if (rod.self_contact_skip < 1) throw ModelError(field("contact.self_contact_skip"), "must be at least 1 (neighbouring edges share a node)");
   non_negative(rod.stretch_damping, "stretch_damping");
+  non_negative(rod.shear_damping, "shear_damping");
   for (int k = 0; k < 3; ++k) {
     non_negative(rod.bending_stiffness[k], "bending_stiffness[" + std::to_string(k) + "]");
     non_negative(rod.bending_damping[k], "bending_damping[" + std::to_string(k) + "]");

@@ -60,8 +60,9 @@ struct RodSpec {
   double shear_stiffness = 0.0;        // k_x, N: Ψ_x = ½ k_x l (1 − dᵀ R e_z) per edge
   Vector3 bending_stiffness = Vector3::Zero();  // K_b = diag(bend, bend, twist), N·m²
   // Internal damping (lib/rod_damping.hpp), dynamic mode: η_s [N·s] on the stretch rate,
-  // (η₁, η₂, η₃) [N·m²·s] on the bending and twist rates; 0: none.
+  // η_x [N·s] on the shear rate, (η₁, η₂, η₃) [N·m²·s] on the bending and twist rates; 0: none.
   double stretch_damping = 0.0;
+  double shear_damping = 0.0;
   Vector3 bending_damping = Vector3::Zero();
   std::vector<int> fixed_nodes;        // clamped positions
   std::vector<int> fixed_edges;        // clamped rotations

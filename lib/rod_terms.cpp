@@ -42,7 +42,7 @@ double RodStretch::evaluate(const State& q, LocalGradient<2>* g, LocalHessian<2>
 double RodShear::evaluate(const State& q, LocalGradient<3>* g, LocalHessian<3>* H) const {
   const Vector3 e = q.points[node1] - q.points[node0];
   const double L = e.norm();
-  const Vector3 t = q.rotations[edge].col(2);  // R e_z
+  const Vector3 t = q.rotations[edge] * material_axis;  // R a
   const double c = 0.5 * stiffness * rest_length;
   if (!(L > 0.0)) {
     // Coincident nodes: d is undefined. Take d = 0 (Ψ = c, the mean over directions) and no
@@ -168,7 +168,7 @@ void RodStretch::residual(const State& q, Residual& r, ResidualJacobian* J) cons
 void RodShear::residual(const State& q, Residual& r, ResidualJacobian* J) const {
   const Vector3 e = q.points[node1] - q.points[node0];
   const double L = e.norm();
-  const Vector3 t = q.rotations[edge].col(2);  // R e_z
+  const Vector3 t = q.rotations[edge] * material_axis;  // R a
   const double c = 0.5 * stiffness * rest_length;
   if (!(L > 0.0)) {
     // Coincident nodes: ½‖r‖² = c, evaluate()'s value there; J = 0, its zero gradient.

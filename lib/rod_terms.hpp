@@ -18,7 +18,10 @@
 //   ∂e/∂(x_i, x_{i+1}) = (−I, I).
 //
 // Shear / alignment, blocks (x_i, x_{i+1}, θ_i):
-//   Ψ_x = ½ k_x l (1 − dᵀt) = ¼ k_x l ‖d − t‖²,   d = e/L,  t = R_i e_z   (c := ½ k_x l).
+//   Ψ_x = ½ k_x l (1 − dᵀt) = ¼ k_x l ‖d − t‖²,   d = e/L,  t = R_i a   (c := ½ k_x l),
+//   a the unit material axis the edge aligns with: e_z for the elastic term; the damping of
+//   the shear rate (rod_damping.hpp) uses the same form with a lagged axis. t moves with R_i
+//   whatever a is (a left perturbation turns t by θ × t), so the formulas below hold for any a.
 //   (The value uses the least-squares form: no cancellation near rest.)
 //   Through e (a = dᵀt, P = I − d dᵀ, ∂d/∂e = P/L):
 //     ∂Ψ/∂e   = −c P t / L,
@@ -132,6 +135,7 @@ struct RodShear {
   double rest_length = 0.0;                      // l   [m]
   double stiffness = 0.0;                        // k_x [N]
   int stiffness_slot = -1;                       // γ index of k_x, −1: not a parameter (Ψ ∝ k_x)
+  Vector3 material_axis = Vector3::UnitZ();      // a, unit (see the top)
 
   double evaluate(const State& q, LocalGradient<3>* g, LocalHessian<3>* H) const;
   // HasParameters (term.hpp): the value is proportional to the stiffness.

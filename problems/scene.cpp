@@ -652,7 +652,7 @@ RodSpec parse_rod(const json& value, const std::string& path, const std::string&
   ObjectReader r(value, path, source,
                  {"name", "nodes", "shape", "rest_nodes", "rest_shape", "mass", "radius",
                   "stretch_stiffness", "shear_stiffness", "bending_stiffness", "stretch_damping",
-                  "bending_damping", "fixed_nodes",
+                  "shear_damping", "bending_damping", "fixed_nodes",
                   "fixed_edges", "node_velocities", "node_forces", "cables", "region_pushes",
                   "contact", "prescribed_motions"});
   RodSpec rod;
@@ -704,6 +704,7 @@ RodSpec parse_rod(const json& value, const std::string& path, const std::string&
   rod.shear_stiffness = r.number("shear_stiffness");
   rod.bending_stiffness = r.vector<3>("bending_stiffness");
   rod.stretch_damping = r.number("stretch_damping", 0.0);
+  rod.shear_damping = r.number("shear_damping", 0.0);
   rod.bending_damping = r.vector<3>("bending_damping", Vector3::Zero());
   rod.fixed_nodes = index_list(r, "fixed_nodes");
   rod.fixed_edges = index_list(r, "fixed_edges");

@@ -2,8 +2,9 @@
 // central differences in the tangent space (tests/fd_check.hpp) at every rotation of
 // fd::kAngles and relative angles from 0 to π − 1e-6, over tiny to huge time steps and
 // dampings; the residual forms; the mixed blocks ∂C/∂q_{k−1} of the lagged strains for the
-// adjoint; the dashpot laws (force η_s ε̇, moment η ω̇); and a cantilever's first mode
-// decaying at the damping ratio a Rayleigh damping gives it.
+// adjoint; the dashpot laws (force η_s ε̇, moment η ω̇, shear moment ½ η_x l γ̇) and the shear
+// rate's objectivity; and a cantilever's first mode decaying at the damping ratio a Rayleigh
+// damping gives it.
 
 #include <gtest/gtest.h>
 
@@ -204,6 +205,110 @@ TEST(RodBendTwistDamping, ResistsWithEtaTimesTheCurvatureRate) {
 }
 
 // ----------------------------------------------------------------------------------------
+// Shear rate: D = ½ (η_x/h) l (1 − dᵀ R â),  â = R̂ᵀ d̂.
+
+const fd::Dofs kShearDofs = {fd::point_dof(0), fd::point_dof(1), fd::rotation_dof(0)};
+
+struct ShearDampingCase {
+  RodShearDamping term;
+  State previous, q;
+};
+
+// An edge of rest length 0.1 m whose frame (at a rotation of kAngles) is sheared by
+// `previous_shear` radians off the edge at q_{k−1}; now the whole edge turned and moved and
+// the frame `change` radians further off. `L_previous` = 0: a crushed edge at q_{k−1}.
+ShearDampingCase shear_case(double frame_angle, double previous_shear, double change, double eta,
+                            double h, std::mt19937& rng, double L_previous = 0.1) {
+  ShearDampingCase c;
+  c.term.offsets = {0, 3, 6};
+  c.term.damping = eta;
+  c.term.time_step = h;
+  c.term.set(0, 1, 0, 0.1);
+  const Matrix3 R = rotation_at(frame_angle, rng);
+  const Vector3 x0 = fd::random_vector(rng, 0.1);
+  const Vector3 d = so3::exp(previous_shear * random_unit(rng)) * R.col(2);
+  c.previous.points = {x0, x0 + L_previous * d};
+  c.previous.rotations = {R};
+  c.term.begin_step(c.previous, Step{});
+  const Matrix3 turn = so3::exp(0.2 * random_unit(rng));
+  const Vector3 y0 = x0 + fd::random_vector(rng, 0.02);
+  c.q.points = {y0, y0 + 0.103 * (turn * d)};
+  c.q.rotations = {so3::exp(change * random_unit(rng)) * turn * R};
+  return c;
+}
+
+TEST(RodShearDamping, DerivativesResidualAndMixedBlockMatchFiniteDifferences) {
+  std::mt19937 rng(43);
+  int checked = 0;
+  for (double frame_angle : kAngles) {
+    for (double previous_shear : {0.0, 1e-9, 1e-4, 1.0, std::numbers::pi - 1e-6}) {
+      SCOPED_TRACE(trace("frame angle, previous shear", frame_angle, previous_shear));
+      const ShearDampingCase c = shear_case(frame_angle, previous_shear, 0.3, 1.0, 1e-3, rng);
+      expect_lagged_term_checks(c.term, c.q, c.previous, kShearDofs, 1e-12);
+      ++checked;
+    }
+  }
+  // Tiny and huge steps and dampings (η_x/h from 1e-3 to 1e12 N), no change over the step
+  // (D and its gradient vanish), and a crushed edge at q_{k−1} (â = e_z, no mixed block).
+  for (double h : {1e-6, 1.0}) {
+    for (double eta : {1e-3, 1e6}) {
+      SCOPED_TRACE(trace("h eta", h, eta));
+      const ShearDampingCase c = shear_case(1.0, 0.5, 0.3, eta, h, rng);
+      expect_lagged_term_checks(c.term, c.q, c.previous, kShearDofs, 1e-12);
+      ++checked;
+    }
+  }
+  {
+    const ShearDampingCase c = shear_case(1.0, 0.5, 0.3, 1.0, 1e-3, rng);
+    LocalGradient<3> g;
+    EXPECT_LE(c.term.evaluate(c.previous, &g, nullptr), 1e-16);
+    EXPECT_LE(g.norm(), 1e-12);
+    const ShearDampingCase crushed = shear_case(1.0, 0.5, 0.3, 1.0, 1e-3, rng, 0.0);
+    EXPECT_EQ(crushed.term.form.material_axis, Vector3::UnitZ());
+    EXPECT_TRUE(fd::check_term(crushed.term, crushed.q, kShearDofs));
+    EXPECT_EQ(crushed.term.previous_jacobian(crushed.q, crushed.previous).norm(), 0.0);
+    checked += 2;
+  }
+  EXPECT_EQ(checked, static_cast<int>(kAngles.size()) * 5 + 6);
+}
+
+TEST(RodShearDamping, ResistsWithHalfEtaTimesTheShearRateAndIgnoresRigidMotion) {
+  // An edge along z, l = 0.1 m, its frame turning about x by 1e-4 rad in h = 1 ms: the shear
+  // rate is γ̇ = 0.1 1/s and the moment on the frame ½ η_x l γ̇ = ½ · 4 · 0.1 · 0.1 = 0.02 N·m,
+  // against the turn (as the elastic ¼ k_x l ‖γ‖² gives ½ k_x l γ); to first order in the angle.
+  RodShearDamping term;
+  term.damping = 4.0;
+  term.time_step = 1e-3;
+  term.set(0, 1, 0, 0.1);
+  State previous;
+  previous.points = {Vector3::Zero(), Vector3(0, 0, 0.1)};
+  previous.rotations = {Matrix3::Identity()};
+  term.begin_step(previous, Step{});
+  State q = previous;
+  q.rotations[0] = so3::exp(Vector3(1e-4, 0, 0));
+  LocalGradient<3> g;
+  term.evaluate(q, &g, nullptr);
+  EXPECT_TRUE((-g.tail<3>()).isApprox(Vector3(-0.02, 0, 0), 1e-7)) << g.transpose();
+  // The shear is measured in the material frame: a sheared edge carried rigidly over the step
+  // (turned by any angle, moved) has no shear rate, so neither value nor force.
+  std::mt19937 rng(44);
+  for (double angle : kAngles) {
+    SCOPED_TRACE(trace("rigid turn", angle));
+    State sheared;
+    const Matrix3 R = rotation_at(1.0, rng);
+    sheared.points = {Vector3(0.1, 0.2, 0.3), Vector3(0.1, 0.2, 0.3) + 0.1 * (so3::exp(Vector3(0.2, 0, 0)) * R.col(2))};
+    sheared.rotations = {R};
+    term.begin_step(sheared, Step{});
+    const Matrix3 Q = rotation_at(angle, rng);
+    State carried;
+    carried.points = {Q * sheared.points[0] + Vector3(1, 2, 3), Q * sheared.points[1] + Vector3(1, 2, 3)};
+    carried.rotations = {Q * R};
+    EXPECT_LE(term.evaluate(carried, &g, nullptr), 1e-16);
+    EXPECT_LE(g.norm(), 1e-10);
+  }
+}
+
+// ----------------------------------------------------------------------------------------
 // A damped cantilever's first mode.
 
 // Mean |y| of the tip over the first and over the fifth period of the first mode of a
@@ -261,14 +366,15 @@ TEST(RodDamping, TheAdjointGradientRunsBackThroughTheDampingTerms) {
   // the distance of its final nodes to a target line; the gradient against central
   // differences (adjoint_check.hpp). Damping ratios ζ = (η/K) ω/2: 0.1 for the free rod's first
   // bending mode (ω ≈ 4.73² √(EI/(m L³)) ≈ 19 rad/s, η/K = 1e-2 s) and 0.3 for its first axial
-  // mode (ω ≈ (π/L) √(k_s L/m) ≈ 810 rad/s, η_s/k_s = 7.5e-4 s).
+  // mode (ω ≈ (π/L) √(k_s L/m) ≈ 810 rad/s, η_s/k_s = 7.5e-4 s); the shear rate is damped as
+  // the stretch rate (η_x/k_x = 7.5e-4 s).
   const std::string text = R"({
     "time_step": 0.005, "frames": 60, "gravity": [0, 0, -9.81],
     "solver": { "tolerance": 1e-12, "max_iterations": 100 },
     "rods": [ { "name": "rod", "shape": { "type": "line", "start": [0, 0, 0.3], "end": [0.3, 0, 0.35], "edges": 6 },
                 "mass": 0.05, "radius": 0.005, "stretch_stiffness": 1e3, "shear_stiffness": 1e3,
                 "bending_stiffness": [1e-3, 1e-3, 1e-3], "stretch_damping": 0.75,
-                "bending_damping": [1e-5, 1e-5, 1e-5],
+                "shear_damping": 0.75, "bending_damping": [1e-5, 1e-5, 1e-5],
                 "node_velocities": [[0, 0, 1], [0, 0.2, 1], [0, 0.4, 1.5], [0, 0.2, 1], [0.1, 0, 1], [0, 0, 0.5], [0, -0.3, 1]] } ],
     "optimization": {
       "parameters": [ { "kind": "rod_node_velocities", "rod": "rod" } ],
@@ -289,6 +395,7 @@ TEST(RodDamping, TheThreeBackEndsAgreeOnADampedRod) {
   rod.fixed_nodes = {0};
   rod.fixed_edges = {0};
   rod.stretch_damping = 0.2;
+  rod.shear_damping = 0.2;
   rod.bending_damping = Vector3(1e-4, 2e-4, 1e-4);
   model.rods.push_back(rod);
   for (const Integrator integrator : {Integrator::kBackwardEuler, Integrator::kTrapezoidal}) {
@@ -318,28 +425,33 @@ TEST(RodDamping, SceneKeysAreReadAndCheckedAndStaticModeHasNoTerms) {
   const auto text = [&](const std::string& mode, const std::string& damping) {
     return R"({ "mode": ")" + mode + R"(", "time_step": 0.01, "frames": 2, )" + rod + damping + " } ] }";
   };
-  const Scene s = parse_scene(text("dynamic", R"("stretch_damping": 0.5, "bending_damping": [1e-3, 2e-3, 3e-3])"), "d.json");
+  const Scene s = parse_scene(text("dynamic", R"("stretch_damping": 0.5, "shear_damping": 0.25, "bending_damping": [1e-3, 2e-3, 3e-3])"), "d.json");
   EXPECT_EQ(s.model.rods[0].stretch_damping, 0.5);
+  EXPECT_EQ(s.model.rods[0].shear_damping, 0.25);
   EXPECT_EQ(s.model.rods[0].bending_damping, Vector3(1e-3, 2e-3, 3e-3));
   const std::vector<Component> dynamic = build_components(s.model);
   ASSERT_EQ(dynamic.size(), 1u);
   EXPECT_EQ(dynamic[0].potential.terms<RodStretchDamping>().size(), 4u);  // every edge: node 1 moves
+  EXPECT_EQ(dynamic[0].potential.terms<RodShearDamping>().size(), 4u);
   EXPECT_EQ(dynamic[0].potential.terms<RodBendTwistDamping>().size(), 3u);
-  // Both ends of edge 0 clamped (nodes 0, 1) and edges 0 and 1 clamped: no stretch term for
-  // edge 0 and no bend term at node 1, whose rates are prescribed, not DOFs.
+  // Both ends of edge 0 clamped (nodes 0, 1) and edges 0 and 1 clamped: no stretch or shear
+  // term for edge 0 and no bend term at node 1, whose rates are prescribed, not DOFs.
   const std::string clamped_rod = R"("rods": [ { "name": "r", "shape": { "type": "line", "start": [0, 0, 0], "end": [1, 0, 0], "edges": 4 },
       "mass": 0.1, "radius": 0.01, "stretch_stiffness": 100, "shear_stiffness": 100, "bending_stiffness": [1, 1, 1],
-      "fixed_nodes": [0, 1], "fixed_edges": [0, 1], "stretch_damping": 0.5, "bending_damping": [1e-3, 2e-3, 3e-3] } ] })";
+      "fixed_nodes": [0, 1], "fixed_edges": [0, 1], "stretch_damping": 0.5, "shear_damping": 0.25, "bending_damping": [1e-3, 2e-3, 3e-3] } ] })";
   const Scene held = parse_scene(R"({ "time_step": 0.01, "frames": 2, )" + clamped_rod, "h.json");
   const std::vector<Component> held_components = build_components(held.model);
   EXPECT_EQ(held_components[0].potential.terms<RodStretchDamping>().size(), 3u);
+  EXPECT_EQ(held_components[0].potential.terms<RodShearDamping>().size(), 3u);
   EXPECT_EQ(held_components[0].potential.terms<RodBendTwistDamping>().size(), 2u);
-  const Scene st = parse_scene(text("static", R"("stretch_damping": 0.5, "bending_damping": [1e-3, 2e-3, 3e-3])"), "s.json");
+  const Scene st = parse_scene(text("static", R"("stretch_damping": 0.5, "shear_damping": 0.25, "bending_damping": [1e-3, 2e-3, 3e-3])"), "s.json");
   const std::vector<Component> statics = build_components(st.model);
   EXPECT_TRUE(statics[0].potential.terms<RodStretchDamping>().empty());
+  EXPECT_TRUE(statics[0].potential.terms<RodShearDamping>().empty());
   EXPECT_TRUE(statics[0].potential.terms<RodBendTwistDamping>().empty());
   for (const auto& [damping, field] :
        {std::pair{std::string(R"("stretch_damping": -1)"), "rods[0].stretch_damping"},
+        std::pair{std::string(R"("shear_damping": -0.5)"), "rods[0].shear_damping"},
         std::pair{std::string(R"("bending_damping": [0, -1, 0])"), "rods[0].bending_damping[1]"}}) {
     try {
       parse_scene(text("dynamic", damping), "bad.json");
