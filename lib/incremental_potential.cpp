@@ -694,7 +694,7 @@ void add_rod_body_contact_terms(const Model& model, const std::vector<bool>& key
   std::vector<std::optional<RodDiscretization>> rods(model.rods.size());
   for (std::size_t p = 0; p < pairs.size(); ++p) {
     if (!holds(key, candidates.first_rod_on_body, p)) continue;
-    const auto [r, b] = pairs[p];
+    const int r = pairs[p].first, b = pairs[p].second;  // not a structured binding: offset captures r
     const RodSpec& rod = model.rods[r];
     if (!rods[r]) rods[r] = discretize(rod);
     const std::array<int, 2> body = dofs.points[b];

@@ -83,27 +83,36 @@ struct RodStretchDamping {
   double rate() const { return damping / (rest_length * time_step); }  // η_s/(l h)
 };
 
-struct RodBendTwistDamping {
-  static constexpr int kBlocks = 2;
-  static constexpr const char* kName = "rod_bend_twist_damping";
+// A damping term that is an elastic term's form with lagged rest values (set in begin_step by
+// the term using it): value, Lie gradient, Hessian and residual are the form's.
+template <class Form>
+struct LaggedForm {
+  static constexpr int kBlocks = Form::kBlocks;
   static constexpr bool kEndOfStep = true;  // term.hpp
-  std::array<int, kBlocks> offsets{-1, -1};  // θ_{i−1}, θ_i
-  Vector3 damping = Vector3::Zero();          // (η₁, η₂, η₃) [N·m²·s]: bend, bend, twist
-  double time_step = 0.0;                     // h [s], > 0
-  // The elastic form it evaluates: edges, w, stiffness η/h, rest Darboux ω̂ (begin_step).
-  RodBendTwist form;
+  static constexpr int kResiduals = Form::kResiduals;
+  using Residual = typename Form::Residual;
+  using ResidualJacobian = typename Form::ResidualJacobian;
+  std::array<int, kBlocks> offsets;  // the form's blocks
+  Form form;
+
+  double evaluate(const State& q, LocalGradient<kBlocks>* g, LocalHessian<kBlocks>* H) const {
+    return form.evaluate(q, g, H);
+  }
+  void residual(const State& q, Residual& r, ResidualJacobian* J) const { form.residual(q, r, J); }
+
+ protected:
+  LaggedForm() { offsets.fill(-1); }
+};
+
+struct RodBendTwistDamping : LaggedForm<RodBendTwist> {
+  static constexpr const char* kName = "rod_bend_twist_damping";
+  // offsets: θ_{i−1}, θ_i; form: edges, w, stiffness η/h, rest Darboux ω̂ (begin_step).
+  Vector3 damping = Vector3::Zero();  // (η₁, η₂, η₃) [N·m²·s]: bend, bend, twist
+  double time_step = 0.0;             // h [s], > 0
 
   // Sets form's edges, bending length and η/h (a junction's frame offset is set on form).
   void set(int edge0, int edge1, double bending_length);
   void begin_step(const State& previous, const Step& previous_step);
-  double evaluate(const State& q, LocalGradient<2>* g, LocalHessian<2>* H) const {
-    return form.evaluate(q, g, H);
-  }
-
-  static constexpr int kResiduals = 3;
-  using Residual = LocalResidual<kResiduals>;
-  using ResidualJacobian = LocalResidualJacobian<kResiduals, kBlocks>;
-  void residual(const State& q, Residual& r, ResidualJacobian* J) const { form.residual(q, r, J); }
 
   // ∂C/∂(θ̂_{i−1}, θ̂_i) (formulas at the top); `previous` as given to begin_step.
   Eigen::Matrix<double, 6, 6> previous_jacobian(const State& q, const State& previous) const;
@@ -113,27 +122,15 @@ struct RodBendTwistDamping {
                         Eigen::VectorXd& da_previous) const;
 };
 
-struct RodShearDamping {
-  static constexpr int kBlocks = 3;
+struct RodShearDamping : LaggedForm<RodShear> {
   static constexpr const char* kName = "rod_shear_damping";
-  static constexpr bool kEndOfStep = true;  // term.hpp
-  std::array<int, kBlocks> offsets{-1, -1, -1};  // x_i, x_{i+1}, θ_i
-  double damping = 0.0;                          // η_x [N·s], > 0
-  double time_step = 0.0;                        // h [s], > 0
-  // The elastic form it evaluates: nodes, edge, l, stiffness η_x/h, axis â (begin_step).
-  RodShear form;
+  // offsets: x_i, x_{i+1}, θ_i; form: nodes, edge, l, stiffness η_x/h, axis â (begin_step).
+  double damping = 0.0;    // η_x [N·s], > 0
+  double time_step = 0.0;  // h [s], > 0
 
   // Sets form's nodes, edge, rest length and η_x/h.
   void set(int node0, int node1, int edge, double rest_length);
   void begin_step(const State& previous, const Step& previous_step);
-  double evaluate(const State& q, LocalGradient<3>* g, LocalHessian<3>* H) const {
-    return form.evaluate(q, g, H);
-  }
-
-  static constexpr int kResiduals = 3;
-  using Residual = LocalResidual<kResiduals>;
-  using ResidualJacobian = LocalResidualJacobian<kResiduals, kBlocks>;
-  void residual(const State& q, Residual& r, ResidualJacobian* J) const { form.residual(q, r, J); }
 
   // ∂C/∂(x̂_i, x̂_{i+1}, θ̂_i) (formulas at the top); `previous` as given to begin_step.
   Eigen::Matrix<double, 9, 9> previous_jacobian(const State& q, const State& previous) const;

@@ -227,7 +227,9 @@ std::string OutputFolder::manifest_text(const Replaces& replaces, std::vector<st
   }
   if (old.is_object() && old.contains("files") && old["files"].is_object() && old.contains("runs") &&
       old["runs"].is_object()) {
-    for (const auto& [name, entry] : old["files"].items()) {
+    for (const auto& item : old["files"].items()) {
+      const std::string& name = item.key();  // not a structured binding: the lambda captures it
+      const json& entry = item.value();
       struct stat st {};
       const bool replaced = std::any_of(staged_.begin(), staged_.end(),
                                         [&](const Staged& s) { return s.name == name; });

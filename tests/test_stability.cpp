@@ -555,6 +555,25 @@ TEST(StabilityScales, StiffnessAndMassSpanningFifteenDecadesInOneScene) {
               summary.frames_completed, summary.unconverged_steps, summary.regularized_steps);
 }
 
+// The end-of-step check refuses a step whose kinetic energy is not finite. It bounds each
+// rotation's part by π² tr(J/h²) before taking logarithms; a body so heavy in rotation that
+// the bound overflows (I_b = 5e301 kg·m² at h = 1 ms: J/h² = 2.5e307 per axis, π² tr = ∞) while
+// its energy does not (it turns by 1e-3 rad per step: ½ θᵀ I_b θ/h² = 2.5e301 J) must still
+// step: the check then takes the logarithms.
+TEST(StabilityScales, ABodyWhoseEnergyBoundOverflowsStillSteps) {
+  const Model model = single_body(1e-3, 5e301 * Matrix3::Identity(), Matrix3::Identity(),
+                                  Vector3(0.0, 0.0, 1.0));
+  for (const auto rotation : kRotations) {
+    const SolverOptions o = options(Backend::kNewton, rotation);
+    Simulator sim(model, o);
+    for (int k = 0; k < 3; ++k) {
+      const StepReport report = sim.step();
+      EXPECT_TRUE(report.converged()) << label(o) << " step " << k << ": " << report.message;
+    }
+    EXPECT_NEAR(so3::log(sim.state().rotations[0]).z(), 3e-3, 1e-12) << label(o);
+  }
+}
+
 // Where double precision allows the 1e-9 tolerance — the same cord at 1 kg (m_node/h² = 500,
 // k_s eps/(m_node/h²) ≈ 4e-10 m) — Newton must converge on every step with Lie updates and
 // quaternions although stretch and bending stiffness differ by 12 decades. Rotation vectors
