@@ -28,7 +28,7 @@
 // For a rod whose damping is proportional to its stiffness, η = β K (a Rayleigh damping
 // C = β K on the bending modes), a mode of angular frequency ω_n has the damping ratio
 // ζ_n = β ω_n/2: slow modes ring, fast ones are damped (RodDamping.* tests the first
-// cantilever mode's decay). Both terms act at the step's end (EndOfStep, term.hpp): first
+// cantilever mode's decay). The three terms act at the step's end (EndOfStep, term.hpp): first
 // order in the damping, as friction.
 //
 // Least-squares forms: those of the elastic terms, r = √(η_s/(l h)) (L − L̂),
