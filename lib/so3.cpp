@@ -7,29 +7,32 @@ namespace {
 
 // Coefficients of Rodrigues-type series, accurate for every t ≥ 0.
 //   a(t) = sin t / t,  b(t) = (1 − cos t)/t²,  c(t) = (t − sin t)/t³.
-// b uses 2 sin²(t/2)/t², which has no cancellation; a and c switch to Taylor series where
-// the closed form loses digits (c cancels badly for small t, so its branch is wider).
+// Below t = 0.1 all three are their Taylor series in t², to the term below 2e-20 (the closed
+// forms lose digits as t → 0, c badly; and the series cost less than the sines, which matters
+// for the small steps every retraction takes). Above it: sin t, and b as 2 sin²(t/2)/t², which
+// has no cancellation. c only where asked for (exp's Jacobian, J_l).
 struct RodriguesCoefficients {
   double a, b, c;
 };
 
-RodriguesCoefficients rodrigues_coefficients(double t) {
+RodriguesCoefficients rodrigues_coefficients(double t, bool with_c) {
   const double t2 = t * t;
   RodriguesCoefficients k{};
-  if (t < 1e-4) {
-    k.a = 1.0 - t2 / 6.0 + t2 * t2 / 120.0;
-    k.b = 0.5 - t2 / 24.0 + t2 * t2 / 720.0;
-  } else {
-    const double s = std::sin(0.5 * t);
-    k.a = std::sin(t) / t;
-    k.b = 2.0 * s * s / t2;
-  }
   if (t < 0.1) {
-    // 1/6 − t²/120 + t⁴/5040 − t⁶/362880 + t⁸/39916800; the next term is below 2e-20.
-    k.c = 1.0 / 6.0 + t2 * (-1.0 / 120.0 + t2 * (1.0 / 5040.0 + t2 * (-1.0 / 362880.0 +
-                                                                    t2 / 39916800.0)));
+    k.a = 1.0 + t2 * (-1.0 / 6.0 + t2 * (1.0 / 120.0 + t2 * (-1.0 / 5040.0 + t2 * (1.0 / 362880.0 +
+                                                                t2 * (-1.0 / 39916800.0)))));
+    k.b = 0.5 + t2 * (-1.0 / 24.0 + t2 * (1.0 / 720.0 + t2 * (-1.0 / 40320.0 + t2 * (1.0 / 3628800.0 +
+                                                                t2 * (-1.0 / 479001600.0)))));
+    if (with_c) {
+      k.c = 1.0 / 6.0 + t2 * (-1.0 / 120.0 + t2 * (1.0 / 5040.0 + t2 * (-1.0 / 362880.0 +
+                                                                      t2 / 39916800.0)));
+    }
   } else {
-    k.c = (t - std::sin(t)) / (t2 * t);
+    const double sine = std::sin(t);
+    const double half = std::sin(0.5 * t);
+    k.a = sine / t;
+    k.b = 2.0 * half * half / t2;
+    if (with_c) k.c = (t - sine) / (t2 * t);
   }
   return k;
 }
@@ -38,7 +41,7 @@ RodriguesCoefficients rodrigues_coefficients(double t) {
 
 Matrix3 exp(const Vector3& theta, Matrix3* J_R_theta) {
   const double t = theta.norm();
-  const RodriguesCoefficients k = rodrigues_coefficients(t);
+  const RodriguesCoefficients k = rodrigues_coefficients(t, J_R_theta != nullptr);
   const Matrix3 W = hat(theta);
   const Matrix3 W2 = W * W;
   if (J_R_theta != nullptr) *J_R_theta = Matrix3::Identity() + k.b * W + k.c * W2;
@@ -46,7 +49,7 @@ Matrix3 exp(const Vector3& theta, Matrix3* J_R_theta) {
 }
 
 Matrix3 left_jacobian(const Vector3& theta) {
-  const RodriguesCoefficients k = rodrigues_coefficients(theta.norm());
+  const RodriguesCoefficients k = rodrigues_coefficients(theta.norm(), true);
   const Matrix3 W = hat(theta);
   return Matrix3::Identity() + k.b * W + k.c * W * W;
 }

@@ -33,6 +33,7 @@ namespace liedyn::integrators_tests {
 namespace {
 
 using fd::kAngles;
+using fd::kPi;
 using fd::random_unit;
 using fd::random_vector;
 using fd::rotation_at;
@@ -91,6 +92,13 @@ TEST(RotationHistoryTerm, GradientIsTheFieldAtTheReferenceAndReferencingMovesIt)
     EXPECT_LE((g - term.field).norm(), 8 * kEps * term.field.norm()) << a;
     EXPECT_LE(H.norm(), 8 * kEps * term.field.norm()) << a;
     EXPECT_LE(term.reference_distance(q), 8 * kEps);
+    // The distance is the angle between R and R_ref at the extremes too (it is taken from
+    // their chord): to round-off, and within the chord's lost digits near π.
+    for (const double moved : {1e-9, 1e-4, 1.0, kPi - 1e-6, kPi}) {
+      term.reference = so3::exp(moved * random_unit(rng)) * q.rotations[0];
+      EXPECT_NEAR(term.reference_distance(q), moved, moved < 3.0 ? 8 * kEps * std::max(1.0, moved) : 1e-7)
+          << a << " " << moved;
+    }
   }
 }
 
