@@ -11,7 +11,10 @@ python3-numba, python3-numpy, python3-scipy, python3-tqdm, python3-typing-extens
   /usr/bin/python3 scripts/timoshenko_comparison.py --pyelastica /tmp/pyelastica [--liedyn build/liedyn]
 
 Reports, for PyElastica (position Verlet at its example's dt = 0.07 L/100, at dt/4 and dt/16)
-and liedyn (each integrator at several h), the tip at t = 10 s, its distance from each code's
+and liedyn (each integrator at several h and Newton tolerances: the scene's 1e-9, and 1e-5, at
+which its steps converge at their first Newton step — one assembly and one factorisation,
+without the trial gradient of a line search — and whose tip errors are the same; a converged
+step errs by about the square of its last Newton step), the tip at t = 10 s, its distance from each code's
 finest run, the largest tip distance from liedyn's finest run over the whole 10 s (liedyn),
 and wall times: PyElastica's loop alone (after numba's compilation), liedyn's `bench` (its
 time steps alone, no outputs).
@@ -69,12 +72,13 @@ def pyelastica_tip(dt):
     return dt, [tip[2], tip[1], tip[0]], seconds
 
 
-def liedyn_run(liedyn, integrator, h):
-    """liedyn's tip series (time, x, y, z) and its `bench` time for one integrator and h."""
+def liedyn_run(liedyn, integrator, h, tolerance):
+    """liedyn's tip series (time, x, y, z) and its `bench` time for one integrator, h and Newton
+    tolerance, and its Newton iterations over the run."""
     frames = int(round(FINAL_TIME / h))
     h = FINAL_TIME / frames
     settings = ["--set", f"integrator={integrator}", "--set", f"time_step={h!r}",
-                "--set", f"frames={frames}"]
+                "--set", f"frames={frames}", "--set", f"solver.tolerance={tolerance}"]
     with tempfile.TemporaryDirectory() as out:
         subprocess.run([liedyn, "simulate", SCENE, "--out", out, "--quiet", *settings], check=True,
                        capture_output=True)
@@ -83,9 +87,11 @@ def liedyn_run(liedyn, integrator, h):
             for r in csv.DictReader(f):
                 if r["object"] == "beam" and r["kind"] == "node" and r["index"] == str(N_ELEM):
                     series.append((float(r["time"]), float(r["x"]), float(r["y"]), float(r["z"])))
+        with open(os.path.join(out, "frames.csv"), newline="") as f:
+            iterations = sum(int(r["newton_iterations"]) for r in csv.DictReader(f))
     bench = subprocess.run([liedyn, "bench", SCENE, "--repeat", "3", "--json", *settings],
                            check=True, capture_output=True, text=True)
-    return h, series, json.loads(bench.stdout)["total_seconds"]
+    return h, series, json.loads(bench.stdout)["total_seconds"], iterations
 
 
 def distance(a, b):
@@ -111,32 +117,37 @@ def main():
     parser.add_argument("--liedyn", default=os.path.join(ROOT, "build", "liedyn"))
     parser.add_argument("--steps", default="8e-3,4e-3,2e-3,1e-3,5e-4",
                         help="liedyn's time steps (and the finest / 2 as its reference)")
+    parser.add_argument("--tolerances", default="1e-9,1e-5",
+                        help="liedyn's Newton tolerances (‖δ‖∞, m and rad); the reference runs at 1e-10")
     args = parser.parse_args()
     sys.path.insert(0, args.pyelastica)
 
     pyelastica = [pyelastica_tip(EXAMPLE_DT / k) for k in (1, 4, 16)]
     hs = sorted((float(h) for h in args.steps.split(",")), reverse=True)
-    reference_h, reference, _ = liedyn_run(args.liedyn, "trapezoidal", hs[-1] / 2)
+    tolerances = [float(t) for t in args.tolerances.split(",")]
+    reference_h, reference, _, _ = liedyn_run(args.liedyn, "trapezoidal", hs[-1] / 2, 1e-10)
     print(f"liedyn reference: trapezoidal, h = {reference_h:.4g} s, tip at {FINAL_TIME:g} s: "
           + ", ".join(f"{c:.8f}" for c in reference[-1][1:]))
     print(f"PyElastica reference: position Verlet, dt = {pyelastica[-1][0]:.4g} s, tip: "
           + ", ".join(f"{c:.8f}" for c in pyelastica[-1][1]))
     print(f"the two references differ by {distance(reference[-1][1:], pyelastica[-1][1]):.3e} m\n")
-    print("| code | integrator | h [s] | tip z at 10 s [m] | tip error at 10 s [m] | largest error "
-          "over 10 s [m] | wall time [s] | µs per step |")
-    print("|---|---|---|---|---|---|---|---|")
+    print("| code | integrator | h [s] | tolerance | Newton iterations per step | tip z at 10 s [m] | "
+          "tip error at 10 s [m] | largest error over 10 s [m] | wall time [s] | µs per step |")
+    print("|---|---|---|---|---|---|---|---|---|---|")
     for dt, tip, seconds in pyelastica:
         steps = round(FINAL_TIME / dt)
-        print(f"| PyElastica | position Verlet | {dt:.4g} | {tip[2]:.8f} | "
+        print(f"| PyElastica | position Verlet | {dt:.4g} | – | – | {tip[2]:.8f} | "
               f"{distance(tip, pyelastica[-1][1]):.2e} (its own finest) | – | {seconds:.3f} | "
               f"{1e6 * seconds / steps:.0f} |")
     for integrator in ("backward_euler", "trapezoidal", "bdf2"):
-        for h in hs:
-            h, series, seconds = liedyn_run(args.liedyn, integrator, h)
+        for tolerance, h in ((t, h) for t in tolerances for h in hs):
+            h, series, seconds, iterations = liedyn_run(args.liedyn, integrator, h, tolerance)
             tip = series[-1][1:]
-            print(f"| liedyn | {integrator} | {h:.4g} | {tip[2]:.8f} | "
+            steps = round(FINAL_TIME / h)
+            print(f"| liedyn | {integrator} | {h:.4g} | {tolerance:g} | {iterations / steps:.2f} | "
+                  f"{tip[2]:.8f} | "
                   f"{distance(tip, reference[-1][1:]):.2e} | {largest_deviation(series, reference):.2e} | "
-                  f"{seconds:.3f} | {1e6 * seconds / round(FINAL_TIME / h):.0f} |")
+                  f"{seconds:.3f} | {1e6 * seconds / steps:.0f} |")
             sys.stdout.flush()
 
 
