@@ -178,6 +178,11 @@ StepReport StepSolver::solve(State& q) {
     }
     for (const RotationalInertia& t : c.potential.terms<RotationalInertia>()) {
       inertia_rotation_.push_back(block_of(c.rotations, t.rotation));
+      // A rotation's step angle is at most π, so its kinetic energy ½ θᵀ I_b θ/h² is at most
+      // π² tr(J/h²) (I_b/h² is PSD with trace 2 tr(J/h²)); J/h² is fixed with the terms.
+      if (inertia_rotation_.back() >= 0) {
+        rotation_energy_bound_ += std::numbers::pi * std::numbers::pi * t.J_over_h2.trace();
+      }
     }
     has_exact_constraints_ = c.potential.exact_constraints() > 0;  // fixed with the terms
     sized_ = true;
@@ -291,14 +296,9 @@ const char* StepSolver::non_finite_value(const StepReport& report, const State& 
     const Vector3 dx = q.points[c.points[i].index] - returned_.point(i);
     kinetic += 0.5 * translational[t].mass_over_h2 * dx.squaredNorm();
   }
-  // A rotation's step angle is at most π, so its kinetic energy ½ θᵀ I_b θ/h² is at most
-  // π² tr(J/h²) (I_b/h² is PSD with trace 2 tr(J/h²)): where that bound leaves the sum
+  // Where the rotations' bound (rotation_energy_bound_, set with the blocks) leaves the sum
   // finite, so is the sum, and the logarithms below (the check's main cost) are not needed.
-  double bound = kinetic;
-  for (std::size_t t = 0; t < rotational.size(); ++t) {
-    if (inertia_rotation_[t] >= 0) bound += std::numbers::pi * std::numbers::pi * rotational[t].J_over_h2.trace();
-  }
-  if (std::isfinite(bound)) return nullptr;
+  if (std::isfinite(kinetic + rotation_energy_bound_)) return nullptr;
   for (std::size_t t = 0; t < rotational.size(); ++t) {
     const int i = inertia_rotation_[t];
     if (i < 0) continue;

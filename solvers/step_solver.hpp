@@ -312,6 +312,8 @@ class StepSolver {
   bool has_returned_ = false;
   std::vector<int> inertia_point_;     // per translational inertia term: its point's block
   std::vector<int> inertia_rotation_;  // per rotational inertia term: its rotation's block
+  // Σ π² tr(J/h²) over those rotations, the bound of their kinetic energy (non_finite_value).
+  double rotation_energy_bound_ = 0.0;
 };
 
 // The step solver for `component` that `options` choose (options validated by the caller):
