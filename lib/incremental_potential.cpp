@@ -26,6 +26,8 @@ void step_back(State& q, const Step& step) {
 
 void IncrementalPotential::begin_step(const State& previous, const Step& previous_step,
                                       int frame, const Step* step_before, int start_frame) {
+  frame_ = frame;
+  start_frame_ = start_frame;
   for_each_term_vector([&](auto& terms) {
     using T = typename std::decay_t<decltype(terms)>::value_type;
     if constexpr (BeginsStep<T>) {

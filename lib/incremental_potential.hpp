@@ -108,6 +108,10 @@ class IncrementalPotential {
   // initial step, count from there; the schedules count from frame 0.
   void begin_step(const State& previous, const Step& previous_step, int frame = 1,
                   const Step* step_before = nullptr, int start_frame = 0);
+  // The step the last begin_step set up, and its run's start frame (0 before any): Newton
+  // counts a reused factorisation's age in steps of one run (SolverOptions::hessian_reuse).
+  int frame() const { return frame_; }
+  int start_frame() const { return start_frame_; }
 
   // The time integrator (Model::Integrator) of a dynamic step, once, after the terms are
   // added: the trapezoidal one adds a history term beside each inertia term and weights the
@@ -330,6 +334,7 @@ class IncrementalPotential {
 
   Integrator integrator_ = Integrator::kBackwardEuler;
   double state_weight_ = 1.0;  // weight() of the terms of the state
+  int frame_ = 0, start_frame_ = 0;  // frame() and start_frame()
   // Scratch, sized by set_integrator and at the first step: the state terms' gradients at
   // q_{k−1} and q_{k−2}, and the whole state q_{k−2} (trapezoidal; BDF2: q_0 and its gradient
   // at frame 2), and BDF2's initial step corrected by the initial acceleration.

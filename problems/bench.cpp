@@ -41,6 +41,8 @@ TimedRun time_scene(const Scene& scene, SolverOptions options,
     run.sum.iterations += report.iterations;
     run.sum.factorizations += report.factorizations;
     run.sum.assemblies += report.assemblies;
+    run.sum.reused_factorizations += report.reused_factorizations;
+    run.sum.reuse_error = std::max(run.sum.reuse_error, report.reuse_error);
     run.sum.assembly_seconds += report.assembly_seconds;
     run.sum.solve_seconds += report.solve_seconds;
     run.max_iterations_in_frame = std::max(run.max_iterations_in_frame, report.iterations);
@@ -58,7 +60,7 @@ BenchResult bench_scene(const Scene& scene, int repeats) {
   result.repeats = std::max(repeats, 1);
   for (const Component& c : build_components(scene.model)) result.dofs += c.dofs;
 
-  std::vector<double> total, assembly, solve, iterations, assemblies, factorizations;
+  std::vector<double> total, assembly, solve, iterations, assemblies, factorizations, reused;
   for (int r = 0; r < result.repeats; ++r) {
     const TimedRun run = time_scene(scene, scene.solver);
     total.push_back(run.total_seconds);
@@ -67,6 +69,8 @@ BenchResult bench_scene(const Scene& scene, int repeats) {
     iterations.push_back(run.frames > 0 ? double(run.sum.iterations) / run.frames : 0.0);
     assemblies.push_back(run.frames > 0 ? double(run.sum.assemblies) / run.frames : 0.0);
     factorizations.push_back(run.frames > 0 ? double(run.sum.factorizations) / run.frames : 0.0);
+    reused.push_back(run.frames > 0 ? double(run.sum.reused_factorizations) / run.frames : 0.0);
+    result.reuse_error = run.sum.reuse_error;
     result.max_iterations_in_frame = run.max_iterations_in_frame;
     result.unconverged_steps = run.unconverged_steps;
     result.failed = run.failed;
@@ -79,6 +83,7 @@ BenchResult bench_scene(const Scene& scene, int repeats) {
   result.iterations_per_frame = median(iterations);
   result.assemblies_per_frame = median(assemblies);
   result.factorizations_per_frame = median(factorizations);
+  result.reused_per_frame = median(reused);
   return result;
 }
 
@@ -92,6 +97,12 @@ std::string format_bench(const BenchResult& r) {
      << r.max_iterations_in_frame << "), " << r.assemblies_per_frame
      << " assemblies and " << r.factorizations_per_frame
      << " factorisations per frame (iterations + assembled convergence checks)\n";
+  if (r.reused_per_frame > 0.0) {
+    os << "reuse        " << r.reused_per_frame
+       << " solves per frame ended on a reused factorisation (solver.hessian_reuse); their steps' "
+          "largest measured relative error "
+       << r.reuse_error << "\n";
+  }
   os << "assembly     " << r.assembly_us << " µs per assembly\n";
   os << "solve        " << r.solve_us << " µs per factorisation + solve\n";
   os << "iteration    " << r.assembly_us + r.solve_us
@@ -112,6 +123,7 @@ std::string bench_json(const BenchResult& r) {
      << ", \"iteration_us\": " << r.assembly_us + r.solve_us << ", \"iterations_per_frame\": "
      << r.iterations_per_frame << ", \"assemblies_per_frame\": " << r.assemblies_per_frame
      << ", \"factorizations_per_frame\": " << r.factorizations_per_frame
+     << ", \"reused_per_frame\": " << r.reused_per_frame << ", \"reuse_error\": " << r.reuse_error
      << ", \"max_iterations_in_frame\": " << r.max_iterations_in_frame
      << ", \"unconverged_steps\": " << r.unconverged_steps
      << ", \"failed\": " << (r.failed ? "true" : "false") << "}\n";

@@ -25,6 +25,10 @@ struct BenchResult {
   double iterations_per_frame = 0.0;   // Newton updates
   double assemblies_per_frame = 0.0;
   double factorizations_per_frame = 0.0;  // including regularisation retries
+  // solver.hessian_reuse > 1: solves ended by a chord step on a reused factorisation, and the
+  // largest measured error of such a step (StepReport::reuse_error; last repeat).
+  double reused_per_frame = 0.0;
+  double reuse_error = 0.0;
   int max_iterations_in_frame = 0;
   int unconverged_steps = 0;           // in the last repeat
   bool failed = false;                 // a step failed; figures cover the frames before it

@@ -830,8 +830,8 @@ Scene parse(const json& root, const std::string& source, const std::filesystem::
   if (top.has("solver")) {
     ObjectReader s(top.get("solver"), "solver", source,
                    {"backend", "rotation", "tolerance", "max_iterations", "armijo",
-                    "min_step_length", "convergence_check", "assembly_threads", "island_threads",
-                    "ceres", "ipopt"});
+                    "min_step_length", "convergence_check", "hessian_reuse", "assembly_threads",
+                    "island_threads", "ceres", "ipopt"});
     scene.solver.backend = named_value(s, "backend", "solver.backend", "newton", &parse_backend,
                                        "backend", "\"newton\", \"ceres\" or \"ipopt\"");
     scene.solver.rotation =
@@ -844,6 +844,7 @@ Scene parse(const json& root, const std::string& source, const std::filesystem::
     scene.solver.convergence_check =
         named_value(s, "convergence_check", "solver.convergence_check", "estimated",
                     &parse_convergence_check, "convergence check", "\"estimated\" or \"assembled\"");
+    if (s.has("hessian_reuse")) scene.solver.hessian_reuse = s.integer("hessian_reuse", 1);
     if (s.has("assembly_threads")) {
       scene.solver.assembly_threads =
           s.integer("assembly_threads", 0, SolverOptions::kMaxAssemblyThreads);

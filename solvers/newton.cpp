@@ -36,6 +36,8 @@ Newton<System>::Newton(Component component, const SolverOptions& options)
       skew_(component_.dofs),
       correction_(component_.dofs),
       trial_gradient_(component_.dofs),
+      chord_delta_(component_.dofs),
+      reuse_window_(options.hessian_reuse),
       saved_(component_),
       entry_(component_) {
   const std::size_t n = component_.rotations.size();
@@ -190,6 +192,22 @@ StepReport Newton<System>::iterate(State& q, int max_iterations) {
   // stall test below tolerates: ‖g‖ and ‖δ‖ count as progress too.
   const bool follow_history = component_.potential.has_rotation_history();
   const bool skew = follow_history && options_.rotation == RotationParameterization::kLie;
+  // SolverOptions::hessian_reuse: a chord step on a recent factorisation first (newton.hpp).
+  const bool reuse = max_iterations > 0 && factorization_reusable();
+  if (reuse && chord_step(q, chart, report)) {
+    chord_backoff_ = 0;
+    return report;
+  }
+  if (reuse) {
+    // Where chord steps keep failing (Newton needs several iterations: a pendulum swinging
+    // through large angles) each attempt costs gradients for nothing: after the second
+    // failure in a row skip 1 solve before the next attempt, then 2, 4, … at most the window.
+    chord_skip_ = chord_backoff_;
+    chord_backoff_ = std::min(std::max(1, 2 * chord_backoff_), options_.hessian_reuse);
+  }
+  // Where that factorisation served or was offered this solve, the first new one measures
+  // the error of its steps (newton.hpp).
+  bool measure_reuse = reusable_ && (reuse || chords_since_factorization_ > 0);
   bool whole_steps = true;  // every line search so far took the whole step
   for (;;) {
     if (follow_history) component_.potential.rereference_history(q);
@@ -213,14 +231,32 @@ StepReport Newton<System>::iterate(State& q, int max_iterations) {
     if (!std::isfinite(psi + g.sum()) || !system_.hessian_finite()) {
       return fail(StepStatus::kNonFinite);
     }
+    // Before the systems' K is set for the new factorisation: the old one's step, −δ̃.
+    if (measure_reuse) measure_reuse = solve_with_last_factorization(g, chord_delta_);
     // The trapezoidal integrator, Lie rotations (newton.hpp): (H + K) δ = −g, factorised where
     // the system can (H δ = −g once a step was damped), else by the fixed-point steps.
     const bool direct = skew && system_.can_factorize_skew();
     skew_factorized_ = direct && whole_steps;
     if (direct) system_.set_history_skew(skew_factorized_ ? &component_.potential : nullptr);
     bool regularized = false;
-    if (!factorize_and_solve(report, regularized)) return fail(StepStatus::kNonFinite);
+    const bool factorized = factorize_and_solve(report, regularized);
+    reusable_ = factorized && !regularized;
+    if (!factorized) return fail(StepStatus::kNonFinite);
     if (skew && !direct) correct_for_history_skew();
+    if (measure_reuse) {
+      measure_reuse = false;
+      adapt_reuse_window(report);
+    }
+    if (reusable_) {
+      factorization_frame_ = component_.potential.frame();
+      factorization_start_ = component_.potential.start_frame();
+      chords_since_factorization_ = 0;
+      // A window closed by a large error opens again, at 2, after hessian_reuse factorisations.
+      if (reuse_window_ == 1 && ++closed_factorizations_ >= options_.hessian_reuse) {
+        reuse_window_ = 2;
+        closed_factorizations_ = 0;
+      }
+    }
     if (options_.measure_time) {
       const auto t2 = Clock::now();
       report.assembly_seconds += std::chrono::duration<double>(t1 - t0).count();
@@ -317,18 +353,8 @@ bool Newton<System>::converged_by_estimate(const State& q, const RotationVectorC
   if (follow_history) component_.potential.rereference_history(q, trial_gradient_);
   if (chart != nullptr) chart->to_chart_gradient(trial_gradient_);
   if (!std::isfinite(trial_gradient_.sum())) return false;
-  system_.solve_linear(trial_gradient_, correction_);  // −δ̂, with the last factorisation
-  if (follow_history && options_.rotation == RotationParameterization::kLie && !skew_factorized_) {
-    // As correct_for_history_skew: −δ̂ ← −δ̂₀ − H⁻¹K(−δ̂).
-    delta0_ = correction_;
-    for (int m = 0; m < kSkewCorrections; ++m) {
-      component_.potential.history_skew(correction_, skew_);
-      system_.solve_linear(skew_, delta_);
-      correction_ = delta0_ - delta_;
-    }
-    // Where the series does not settle (‖H⁻¹K‖ not small) the estimate says nothing.
-    if (!(delta_.norm() <= 0.5 * delta0_.norm())) return false;
-  }
+  // −δ̂, with the last factorisation; where its series does not settle the estimate says nothing.
+  if (!solve_with_last_factorization(trial_gradient_, correction_)) return false;
   if (options_.measure_time) {
     report.solve_seconds += std::chrono::duration<double>(Clock::now() - start).count();
   }
@@ -341,6 +367,86 @@ bool Newton<System>::converged_by_estimate(const State& q, const RotationVectorC
   report.psi = psi;
   if (report.assemblies == 1) report.second_gradient_norm = report.gradient_norm;
   return true;
+}
+
+template <class System>
+bool Newton<System>::solve_with_last_factorization(const Vector& b, Vector& x) {
+  system_.solve_linear(b, x);
+  if (!(component_.potential.has_rotation_history() &&
+        options_.rotation == RotationParameterization::kLie && !skew_factorized_)) {
+    return true;
+  }
+  // As correct_for_history_skew: x ← x₀ − H⁻¹K x.
+  delta0_ = x;
+  for (int m = 0; m < kSkewCorrections; ++m) {
+    component_.potential.history_skew(x, skew_);
+    system_.solve_linear(skew_, delta_);
+    x = delta0_ - delta_;
+  }
+  return delta_.norm() <= 0.5 * delta0_.norm();
+}
+
+template <class System>
+bool Newton<System>::factorization_reusable() {
+  // Dense systems (rigid bodies, ≤ kDenseLimit DOFs) factorise for about what a gradient pass
+  // costs: chord steps, which converge linearly, cost them more than Newton's (newton.hpp).
+  if (!std::is_same_v<System, SparseSystem>) return false;
+  if (options_.hessian_reuse == 1 || !reusable_) return false;
+  if (chord_skip_ > 0) {
+    --chord_skip_;
+    return false;
+  }
+  // Within the window of the factorisation's step, in the same run (a restart counts its
+  // steps from the new start frame: Simulator::set_state).
+  const IncrementalPotential& P = component_.potential;
+  const int age = P.frame() - factorization_frame_;
+  return P.start_frame() == factorization_start_ && age >= 0 && age < reuse_window_;
+}
+
+template <class System>
+bool Newton<System>::chord_step(State& q, const RotationVectorChart* chart, StepReport& report) {
+  IncrementalPotential& P = component_.potential;
+  double last = std::numeric_limits<double>::infinity();
+  for (int i = 0; i < kMaxChordSteps; ++i) {
+    if (P.has_rotation_history()) P.rereference_history(q);
+    const double psi = P.value_and_gradient(q, trial_gradient_);
+    if (chart != nullptr) chart->to_chart_gradient(trial_gradient_);
+    if (!std::isfinite(psi + trial_gradient_.sum())) return false;
+    if (!solve_with_last_factorization(trial_gradient_, correction_)) return false;
+    const double step_norm = correction_.template lpNorm<Eigen::Infinity>();
+    // Not contracting (or not finite): Newton's own iterations take over from here.
+    if (!(step_norm <= kChordContraction * last)) return false;
+    delta_ = -correction_;
+    retract(q, 1.0);
+    report.gradient_norm = trial_gradient_.norm();
+    if (i == 0) report.first_gradient_norm = report.gradient_norm;
+    if (i == 1) report.second_gradient_norm = report.gradient_norm;
+    if (step_norm <= options_.tolerance) {
+      ++chords_since_factorization_;
+      report.status = StepStatus::kConverged;
+      report.step_norm = step_norm;
+      report.psi = psi;
+      report.reused_factorizations = 1;
+      return true;
+    }
+    ++report.iterations;
+    last = step_norm;
+  }
+  return false;
+}
+
+template <class System>
+void Newton<System>::adapt_reuse_window(StepReport& report) {
+  // chord_delta_ = −δ̃ (the old factorisation's step at this iterate), delta_ = δ (the new one).
+  const double newton = delta_.template lpNorm<Eigen::Infinity>();
+  if (!(newton > 0.0)) return;
+  const double error = (chord_delta_ + delta_).template lpNorm<Eigen::Infinity>() / newton;
+  report.reuse_error = std::max(report.reuse_error, error);
+  if (!(error <= kMaxReuseError)) {
+    reuse_window_ = std::max(1, reuse_window_ / 2);
+  } else if (error < 0.2 * kMaxReuseError) {
+    reuse_window_ = std::min(options_.hessian_reuse, 2 * reuse_window_);
+  }
 }
 
 std::unique_ptr<StepSolver> make_newton(Component component, const SolverOptions& options) {

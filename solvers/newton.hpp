@@ -43,6 +43,30 @@
 // separatrix, came out 2.5 % short at h = 10 ms instead of the integrator's own 1e-4
 // (Trapezoidal.TheBoltKeepsItsFlipPeriod). The convergence test alone (check()) moves nothing.
 //
+// Reusing a factorisation (SolverOptions::hessian_reuse = N > 1; docs/design.md §9.2): where
+// the predictor already lands within a few tolerances of the solution (a smooth motion), a
+// step's cost is its assembly and factorisation, and the Hessian they build barely differs
+// from the last step's. A solve then starts with chord steps on the last factorisation M,
+// made at most N − 1 steps earlier in the run (not shifted, same start frame):
+// δ̃ = −M⁻¹ g(q), one value-and-gradient pass and one solve each, q ← q ⊕ δ̃, for at most
+// kMaxChordSteps while each δ̃ is at most kChordContraction (½) of the last; ‖δ̃‖∞ ≤ tolerance
+// ends the solve, converged, with that step taken. With ε = ‖I − M⁻¹H‖ (H the Hessian of the
+// equations at the iterate) the step lacks (I − M⁻¹H)δ of Newton's, so the state errs by about
+// ε·tolerance, against Newton's ~tolerance² — both within the tolerance while ε < 1. A chord
+// sequence that stops contracting hands over to Newton's iterations from where it got, which
+// assemble and factorise as usual. Measured error: where a new factorisation is made and the
+// old one served (or was offered) chord steps, the old one's step at the same iterate is solved
+// too, and ε ≈ ‖δ̃ − δ‖∞/‖δ‖∞ is reported (StepReport::reuse_error); above kMaxReuseError (½)
+// the window of steps a factorisation may serve halves (at 1 none; it reopens at 2 after N
+// factorisations), below a fifth of it it doubles back up to N. Where chord steps keep failing
+// (steps that need Newton iterations) the attempts back off: after the second failure in a
+// row 1, 2, 4, … up to N solves are skipped. Sparse systems only (rods, components beyond
+// kDenseLimit DOFs): a dense system's factorisation costs about a gradient pass, and chord
+// steps, which converge linearly, cost more than Newton's quadratic ones (measured: the bolt
+// under the trapezoidal rule at 1e-9 took 3.9 chord steps per step, 2.4× the time). Not used
+// by check() (the exact test) or by the adjoint, which factorises the converged step's own
+// Hessian. Ceres and Ipopt ignore N.
+//
 // Stall: a solve whose iterates stop improving ends early, unconverged, as
 // StepStatus::kStalled (state updated, like kMaxIterations): after kStallIterations (10)
 // consecutive updates after which none of Ψ, ‖g‖ and ‖δ‖∞ is lower than at the last
@@ -147,6 +171,19 @@ class Newton final : public StepSolver {
   // ‖H⁻¹ g‖∞ ≤ tolerance with the last factorisation.
   bool converged_by_estimate(const State& q, const RotationVectorChart* chart, double psi,
                              StepReport& report);
+  // x = M⁻¹ b with the last factorisation M, and where M lacks the trapezoidal history's K
+  // the fixed-point corrections for it (as correct_for_history_skew); false where they do
+  // not settle. Uses delta0_, skew_ and delta_ as scratch.
+  bool solve_with_last_factorization(const Vector& b, Vector& x);
+  // Reusing a factorisation (above): whether the last one may serve this solve, the chord
+  // step (true, with q updated and the report filled in, if it is within the tolerance), and
+  // the window's adaptation to the error measured at a new factorisation (chord_delta_).
+  bool factorization_reusable();
+  bool chord_step(State& q, const RotationVectorChart* chart, StepReport& report);
+  void adapt_reuse_window(StepReport& report);
+  static constexpr double kMaxReuseError = 0.5;
+  static constexpr int kMaxChordSteps = 5;
+  static constexpr double kChordContraction = 0.5;
 
   // Sets the rotation-vector or quaternion parameters from the rotations of q (and the
   // rotations from them, so that both agree exactly).
@@ -160,6 +197,18 @@ class Newton final : public StepSolver {
   Vector trial_gradient_;              // g at the line search's full step (the estimate)
   double contraction_ = 0.0;           // C in ‖δ̂‖∞ ≈ C ‖δ‖∞², from the last estimate
   bool skew_factorized_ = false;       // the factorisation includes K (above)
+  // Reusing a factorisation (above): the old factorisation's step −δ̃ where a new one is
+  // made; whether the last factorisation may be reused (made, and not shifted), the frame and
+  // start frame of its step (IncrementalPotential::frame), the chord steps it has served, and
+  // the window of steps it may serve (SolverOptions::hessian_reuse, halved where the
+  // measured error exceeds kMaxReuseError).
+  Vector chord_delta_;
+  bool reusable_ = false;
+  int factorization_frame_ = 0, factorization_start_ = 0;
+  int chords_since_factorization_ = 0;
+  int reuse_window_ = 1;
+  int closed_factorizations_ = 0;  // factorisations since the window closed (1)
+  int chord_backoff_ = 0, chord_skip_ = 0;  // after failed chord steps: solves to skip
   ComponentSnapshot saved_, entry_;  // line-search backtracking; restore on failure
   // Rotation vectors: the chart (current and saved r's and J_l(r)'s).
   RotationVectorChart chart_;

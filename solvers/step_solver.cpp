@@ -20,6 +20,9 @@ void SolverOptions::validate() const {
     throw ModelError("solver.tolerance", "must be a finite positive number");
   }
   if (max_iterations < 1) throw ModelError("solver.max_iterations", "must be at least 1");
+  if (hessian_reuse < 1) {
+    throw ModelError("solver.hessian_reuse", "must be at least 1 (1: a new factorisation at every step)");
+  }
   if (!(armijo > 0.0 && armijo < 0.5)) throw ModelError("solver.armijo", "must be in (0, 0.5)");
   if (!(min_step_length > 0.0 && min_step_length < 1.0)) {
     throw ModelError("solver.min_step_length", "must be in (0, 1)");
@@ -152,6 +155,8 @@ void StepReport::merge(const StepReport& other) {
   multiplier_updates = std::max(multiplier_updates, other.multiplier_updates);
   history_updates = std::max(history_updates, other.history_updates);
   history_moved = std::max(history_moved, other.history_moved);
+  reused_factorizations += other.reused_factorizations;
+  reuse_error = std::max(reuse_error, other.reuse_error);
   if (!other.message.empty()) message += (message.empty() ? "" : "; ") + other.message;
 }
 
@@ -242,6 +247,8 @@ void StepSolver::accumulate(StepReport& report, StepReport next) {
   next.multiplier_updates = report.multiplier_updates;
   next.history_updates = report.history_updates;
   next.history_moved = report.history_moved;
+  next.reused_factorizations += report.reused_factorizations;
+  next.reuse_error = std::max(next.reuse_error, report.reuse_error);
   report = std::move(next);
 }
 

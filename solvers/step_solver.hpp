@@ -100,6 +100,12 @@ struct SolverOptions {
   // How Newton judges an update (ConvergenceCheck above; newton.hpp). Estimated by default: a
   // step that converges in one iteration then costs one assembly and one factorisation.
   ConvergenceCheck convergence_check = ConvergenceCheck::kEstimated;
+  // How many time steps one factorisation of the Hessian may serve (Newton; newton.hpp,
+  // "Reusing a factorisation"); ≥ 1. 1 (the default) factorises at every solve. N > 1 starts
+  // a solve with the factorisation of a step at most N − 1 steps earlier in the run, and ends
+  // it there when that chord step is within the tolerance; the other back-ends ignore it, as
+  // they ignore convergence_check.
+  int hessian_reuse = 1;
   // Measure wall time of assembly and of factorisation + solve (StepReport; Newton). Off by
   // default: the clock reads cost ~10 % of a single rigid body's Newton iteration.
   bool measure_time = false;
@@ -181,6 +187,12 @@ struct StepReport {
   // torque fields' references, and how far (rad) the last move was. Merged: the largest.
   int history_updates = 0;
   double history_moved = 0.0;
+  // Newton with SolverOptions::hessian_reuse > 1 (newton.hpp): the solves that ended with a
+  // chord step on a reused factorisation (summed over a step's solves and components), and
+  // the largest measured relative error of such a step, ‖δ̃ − δ‖∞/‖δ‖∞, where a new
+  // factorisation met the old one (0 where none was measured). Merged: the sum, the largest.
+  int reused_factorizations = 0;
+  double reuse_error = 0.0;
   // Why the step did not converge, when there is more to say than the status: the
   // back-end's own termination (Ceres, Ipopt), what stalled, what was not finite (else
   // empty).

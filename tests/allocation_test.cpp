@@ -257,6 +257,7 @@ struct Outcome {
   long malloc_calls = 0;
   int steps_converged = 0;
   int total_iterations = 0;
+  int reused_factorizations = 0;  // solves ended on a reused factorisation (hessian_reuse)
 };
 
 // One warm-up step, then `steps` steps counted.
@@ -270,6 +271,7 @@ Outcome run_counted(Simulator& sim, int steps) {
       const StepReport r = sim.step();
       out.steps_converged += r.converged() ? 1 : 0;
       out.total_iterations += r.iterations;
+      out.reused_factorizations += r.reused_factorizations;
     }
     counter.stop();
     out.operator_new_calls = counter.operator_new_calls();
@@ -464,6 +466,28 @@ TEST(Allocation, SecondOrderStepsDoNotAllocate) {
       model->integrator = integrator;
       Simulator sim(*model, SolverOptions{});
       expect_no_allocation(run_counted(sim, kSteps), kSteps);
+    }
+  }
+}
+
+// Reused factorisations (SolverOptions::hessian_reuse; sparse systems only): chord steps,
+// the error measured at a new factorisation, under backward Euler and the trapezoidal rule,
+// on a banded rod and a CHOLMOD chain of bodies (the trapezoidal rule's skew corrections).
+TEST(Allocation, StepsOnReusedFactorisationsDoNotAllocate) {
+  Model chain = spring_chain(20);
+  Model rod = clamped_rod();
+  rod.time_step = 1e-3;  // at 10 ms its solves take Newton iterations that chord steps cannot
+  for (const auto integrator : {liedyn::Integrator::kBackwardEuler, liedyn::Integrator::kTrapezoidal}) {
+    for (Model* model : {&chain, &rod}) {
+      model->integrator = integrator;
+      SCOPED_TRACE(std::to_string(model->bodies.size()) + " bodies, " +
+                   std::to_string(model->rods.size()) + " rods, " + liedyn::to_string(integrator));
+      SolverOptions options;
+      options.hessian_reuse = 4;
+      Simulator sim(*model, options);
+      const Outcome out = run_counted(sim, kSteps);
+      expect_no_allocation(out, kSteps);
+      EXPECT_GT(out.reused_factorizations, 0);
     }
   }
 }

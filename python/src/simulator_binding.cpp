@@ -231,6 +231,11 @@ void bind_simulator(py::module_& m) {
       .def_readonly("assemblies", &StepReport::assemblies)
       .def_readonly("factorizations", &StepReport::factorizations)
       .def_readonly("regularized_iterations", &StepReport::regularized_iterations)
+      .def_readonly("reused_factorizations", &StepReport::reused_factorizations,
+                    "Solves ended by chord steps on a reused factorisation (solver.hessian_reuse).")
+      .def_readonly("reuse_error", &StepReport::reuse_error,
+                    "Largest measured relative error of those steps where a new factorisation "
+                    "was made (0 if none was measured).")
       .def_readonly("constraint_violation", &StepReport::constraint_violation)
       .def_readonly("message", &StepReport::message, "Why it did not converge, if there is more to say.")
       .def("__repr__", [](const StepReport& r) {

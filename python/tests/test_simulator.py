@@ -267,3 +267,15 @@ def test_a_restarted_simulator_pickles(bolt):
     copy.step()
     sim.step()
     np.testing.assert_array_equal(copy.quaternions(), sim.quaternions())
+
+
+def test_steps_on_a_reused_factorisation_are_reported(scenes):
+    # solver.hessian_reuse = 4 on the beam, whose solves end on chord steps: a factorisation
+    # at steps 1, 5, 9, the others on it; the error is measured where a new one is made.
+    scene = liedyn.Scene.from_file(scenes / "timoshenko_beam.json").with_settings(
+        {"frames": 12, "integrator": "backward_euler", "solver.tolerance": 1e-5, "solver.hessian_reuse": 4})
+    sim = liedyn.Simulator(scene)
+    reports = [sim.step() for _ in range(12)]
+    assert [r.factorizations for r in reports] == [1, 0, 0, 0] * 3
+    assert [r.reused_factorizations for r in reports] == [0, 1, 1, 1] * 3
+    assert reports[0].reuse_error == 0.0 and 0.0 < reports[4].reuse_error < 0.05
