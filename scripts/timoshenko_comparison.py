@@ -14,7 +14,8 @@ Reports, for PyElastica (position Verlet at its example's dt = 0.07 L/100, at dt
 and liedyn (each integrator at several h and Newton tolerances: the scene's 1e-9, and 1e-5, at
 which its steps converge at their first Newton step — one assembly and one factorisation,
 without the trial gradient of a line search — and whose tip errors are the same; a converged
-step errs by about the square of its last Newton step), the tip at t = 10 s, its distance from each code's
+step errs by about the square of its last Newton step; and with a factorisation at every step
+or one per ten, solver.hessian_reuse), the tip at t = 10 s, its distance from each code's
 finest run, the largest tip distance from liedyn's finest run over the whole 10 s (liedyn),
 and wall times: PyElastica's loop alone (after numba's compilation), liedyn's `bench` (its
 time steps alone, no outputs).
@@ -72,13 +73,14 @@ def pyelastica_tip(dt):
     return dt, [tip[2], tip[1], tip[0]], seconds
 
 
-def liedyn_run(liedyn, integrator, h, tolerance):
-    """liedyn's tip series (time, x, y, z) and its `bench` time for one integrator, h and Newton
-    tolerance, and its Newton iterations over the run."""
+def liedyn_run(liedyn, integrator, h, tolerance, reuse=1):
+    """liedyn's tip series (time, x, y, z) and its `bench` time for one integrator, h, Newton
+    tolerance and solver.hessian_reuse, and its Newton iterations over the run."""
     frames = int(round(FINAL_TIME / h))
     h = FINAL_TIME / frames
     settings = ["--set", f"integrator={integrator}", "--set", f"time_step={h!r}",
-                "--set", f"frames={frames}", "--set", f"solver.tolerance={tolerance}"]
+                "--set", f"frames={frames}", "--set", f"solver.tolerance={tolerance}",
+                "--set", f"solver.hessian_reuse={reuse}"]
     with tempfile.TemporaryDirectory() as out:
         subprocess.run([liedyn, "simulate", SCENE, "--out", out, "--quiet", *settings], check=True,
                        capture_output=True)
@@ -119,32 +121,36 @@ def main():
                         help="liedyn's time steps (and the finest / 2 as its reference)")
     parser.add_argument("--tolerances", default="1e-9,1e-5",
                         help="liedyn's Newton tolerances (‖δ‖∞, m and rad); the reference runs at 1e-10")
+    parser.add_argument("--hessian-reuse", default="1,10",
+                        help="liedyn's solver.hessian_reuse values (steps one factorisation may serve)")
     args = parser.parse_args()
     sys.path.insert(0, args.pyelastica)
 
     pyelastica = [pyelastica_tip(EXAMPLE_DT / k) for k in (1, 4, 16)]
     hs = sorted((float(h) for h in args.steps.split(",")), reverse=True)
     tolerances = [float(t) for t in args.tolerances.split(",")]
+    reuses = [int(n) for n in args.hessian_reuse.split(",")]
     reference_h, reference, _, _ = liedyn_run(args.liedyn, "trapezoidal", hs[-1] / 2, 1e-10)
     print(f"liedyn reference: trapezoidal, h = {reference_h:.4g} s, tip at {FINAL_TIME:g} s: "
           + ", ".join(f"{c:.8f}" for c in reference[-1][1:]))
     print(f"PyElastica reference: position Verlet, dt = {pyelastica[-1][0]:.4g} s, tip: "
           + ", ".join(f"{c:.8f}" for c in pyelastica[-1][1]))
     print(f"the two references differ by {distance(reference[-1][1:], pyelastica[-1][1]):.3e} m\n")
-    print("| code | integrator | h [s] | tolerance | Newton iterations per step | tip z at 10 s [m] | "
-          "tip error at 10 s [m] | largest error over 10 s [m] | wall time [s] | µs per step |")
-    print("|---|---|---|---|---|---|---|---|---|---|")
+    print("| code | integrator | h [s] | tolerance | hessian_reuse | Newton iterations per step | "
+          "tip z at 10 s [m] | tip error at 10 s [m] | largest error over 10 s [m] | wall time [s] | "
+          "µs per step |")
+    print("|---|---|---|---|---|---|---|---|---|---|---|")
     for dt, tip, seconds in pyelastica:
         steps = round(FINAL_TIME / dt)
-        print(f"| PyElastica | position Verlet | {dt:.4g} | – | – | {tip[2]:.8f} | "
+        print(f"| PyElastica | position Verlet | {dt:.4g} | – | – | – | {tip[2]:.8f} | "
               f"{distance(tip, pyelastica[-1][1]):.2e} (its own finest) | – | {seconds:.3f} | "
               f"{1e6 * seconds / steps:.0f} |")
     for integrator in ("backward_euler", "trapezoidal", "bdf2"):
-        for tolerance, h in ((t, h) for t in tolerances for h in hs):
-            h, series, seconds, iterations = liedyn_run(args.liedyn, integrator, h, tolerance)
+        for tolerance, reuse, h in ((t, n, h) for t in tolerances for n in reuses for h in hs):
+            h, series, seconds, iterations = liedyn_run(args.liedyn, integrator, h, tolerance, reuse)
             tip = series[-1][1:]
             steps = round(FINAL_TIME / h)
-            print(f"| liedyn | {integrator} | {h:.4g} | {tolerance:g} | {iterations / steps:.2f} | "
+            print(f"| liedyn | {integrator} | {h:.4g} | {tolerance:g} | {reuse} | {iterations / steps:.2f} | "
                   f"{tip[2]:.8f} | "
                   f"{distance(tip, reference[-1][1:]):.2e} | {largest_deviation(series, reference):.2e} | "
                   f"{seconds:.3f} | {1e6 * seconds / steps:.0f} |")

@@ -11,6 +11,7 @@
 
 #include "problems/scene.hpp"
 #include "problems/scene_settings.hpp"
+#include "exact_test.hpp"
 #include "solvers/newton.hpp"
 #include "solvers/simulator.hpp"
 
@@ -75,29 +76,18 @@ struct Counts {
 Counts run_and_check(const Case& c, ConvergenceCheck check) {
   Scene scene = load_scene(kScenes / c.file, c.settings);
   scene.solver.convergence_check = check;
-  Simulator sim(scene.model, scene.solver);
-  std::vector<Component> components = build_components(scene.model);
-  EXPECT_EQ(components.size(), 1u);
-  const std::unique_ptr<StepSolver> exact = make_newton(std::move(components[0]), scene.solver);
   Counts counts;
-  Step before = sim.last_step();  // Δq_{k−2} (the initial step at the first two steps)
-  for (int k = 1; k <= scene.frames; ++k) {
-    const State previous = sim.state();
-    const Step previous_step = sim.last_step();
-    const StepReport report = sim.step();
-    EXPECT_TRUE(report.converged()) << k;
-    ++counts.steps;
-    counts.assemblies += report.assemblies;
-    counts.factorizations += report.factorizations;
-    if (report.assemblies == report.iterations) {
-      ++counts.estimated;
-      exact->component().potential.begin_step(previous, previous_step, k, &before);
-      State q = sim.state();
-      const StepReport verdict = exact->check(q);
-      EXPECT_LE(verdict.step_norm, 1.5 * scene.solver.tolerance) << "step " << k;
-    }
-    if (k >= 2) before = previous_step;
-  }
+  testing::run_with_exact_test(
+      scene, scene.solver,
+      [](const StepReport& report) { return report.assemblies == report.iterations; },
+      [&](int k, const StepReport& report, const StepReport* verdict) {
+        ++counts.steps;
+        counts.assemblies += report.assemblies;
+        counts.factorizations += report.factorizations;
+        if (verdict == nullptr) return;
+        ++counts.estimated;
+        EXPECT_LE(verdict->step_norm, 1.5 * scene.solver.tolerance) << "step " << k;
+      });
   return counts;
 }
 

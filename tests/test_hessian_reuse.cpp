@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "exact_test.hpp"
 #include "problems/scene.hpp"
 #include "problems/scene_settings.hpp"
 #include "solvers/newton.hpp"
@@ -62,35 +63,23 @@ struct Counts {
 Counts run_and_check(const Case& c, int reuse) {
   Scene scene = load_scene(kScenes / c.file, c.settings);
   scene.solver.hessian_reuse = reuse;
-  Simulator sim(scene.model, scene.solver);
-  std::vector<Component> components = build_components(scene.model);
-  EXPECT_EQ(components.size(), 1u);
   SolverOptions exact_options = scene.solver;
   exact_options.hessian_reuse = 1;
-  const std::unique_ptr<StepSolver> exact = make_newton(std::move(components[0]), exact_options);
   Counts counts;
-  Step before = sim.last_step();  // Δq_{k−2} (the initial step at the first two steps)
-  for (int k = 1; k <= scene.frames; ++k) {
-    const State previous = sim.state();
-    const Step previous_step = sim.last_step();
-    const StepReport report = sim.step();
-    EXPECT_TRUE(report.converged()) << k;
-    ++counts.steps;
-    counts.factorizations += report.factorizations;
-    counts.reuse_error = std::max(counts.reuse_error, report.reuse_error);
-    if (report.reused_factorizations > 0) {
-      EXPECT_EQ(report.assemblies, 0) << "step " << k;
-      EXPECT_EQ(report.factorizations, 0) << "step " << k;
-      ++counts.chord_ended;
-      exact->component().potential.begin_step(previous, previous_step, k, &before);
-      State q = sim.state();
-      const StepReport verdict = exact->check(q);
-      counts.largest_verdict =
-          std::max(counts.largest_verdict, verdict.step_norm / scene.solver.tolerance);
-      EXPECT_LE(verdict.step_norm, scene.solver.tolerance) << "step " << k;
-    }
-    if (k >= 2) before = previous_step;
-  }
+  testing::run_with_exact_test(
+      scene, exact_options, [](const StepReport& report) { return report.reused_factorizations > 0; },
+      [&](int k, const StepReport& report, const StepReport* verdict) {
+        ++counts.steps;
+        counts.factorizations += report.factorizations;
+        counts.reuse_error = std::max(counts.reuse_error, report.reuse_error);
+        if (verdict == nullptr) return;
+        EXPECT_EQ(report.assemblies, 0) << "step " << k;
+        EXPECT_EQ(report.factorizations, 0) << "step " << k;
+        ++counts.chord_ended;
+        counts.largest_verdict =
+            std::max(counts.largest_verdict, verdict->step_norm / scene.solver.tolerance);
+        EXPECT_LE(verdict->step_norm, scene.solver.tolerance) << "step " << k;
+      });
   return counts;
 }
 
