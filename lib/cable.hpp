@@ -46,6 +46,7 @@ struct CableSegment {
 
   // Step k's tension from the schedule (kept constant without one).
   void begin_frame(int k) { tension = control.at(k, Eigen::Matrix<double, 1, 1>(tension))(0); }
+  bool scheduled() const { return !control.schedule.empty(); }
 
   // V = T ‖p_b − p_a‖, and its Lie gradient and Lie Hessian as derived at the top. Valid for any
   // T (linear in it); only T ≥ 0 is physical, and only then is K PSD. Does not check T (it runs

@@ -26,6 +26,9 @@ void step_back(State& q, const Step& step) {
 
 void IncrementalPotential::begin_step(const State& previous, const Step& previous_step,
                                       int frame, const Step* step_before, int start_frame) {
+  // This step continues the last one set up (the next frame of the same run): what the
+  // trapezoidal history may carry over (below).
+  const bool continues = frame == frame_ + 1 && start_frame == start_frame_;
   frame_ = frame;
   start_frame_ = start_frame;
   for_each_term_vector([&](auto& terms) {
@@ -34,6 +37,7 @@ void IncrementalPotential::begin_step(const State& previous, const Step& previou
       for (T& t : terms) t.begin_step(previous, previous_step);
     }
     if constexpr (Scheduled<T>) {
+      static_assert(SaysWhetherScheduled<T>, "a Scheduled term says whether it has a schedule (term.hpp)");
       for (T& t : terms) t.begin_frame(frame);
     }
   });
@@ -46,12 +50,18 @@ void IncrementalPotential::begin_step(const State& previous, const Step& previou
   // The history terms' fields (lib/history.hpp). At frame 1 the history is the initial
   // velocities: the trapezoidal rule's first step, c = ¼ ∇V(q_0) − π_0/h.
   const bool first = frame - start_frame <= 1;
-  state_terms_gradient(previous, gradient_previous_);
+  // ∇V(q_{k−2}) is the last step's ∇V(q_{k−1}) where this step continues it (the next frame of
+  // the run, q_{k−2} its q_{k−1} to round-off) and the state terms are the same functions at
+  // both steps (none fixes per-step data or follows a schedule): one gradient pass instead of two.
   older_ = previous;  // sized at the first step (which needs no q_{k−2}): no allocation after it
-  if (!first) {
-    step_back(older_, previous_step);
-    state_terms_gradient(older_, gradient_older_);
-  }
+  if (!first) step_back(older_, previous_step);
+  const bool carried =
+      !first && continues && at_gradient_state(older_) && !state_terms_change_per_step();
+  carried_history_gradient_ = carried;
+  if (carried) gradient_older_.swap(gradient_previous_);
+  state_terms_gradient(previous, gradient_previous_);
+  keep_gradient_state(previous);
+  if (!first && !carried) state_terms_gradient(older_, gradient_older_);
   const auto lagged = [&](int offset) -> Vector3 {
     if (first) return 0.25 * gradient_previous_.segment<3>(offset);
     return 0.5 * gradient_previous_.segment<3>(offset) + 0.25 * gradient_older_.segment<3>(offset);
@@ -72,6 +82,19 @@ void IncrementalPotential::begin_step(const State& previous, const Step& previou
     history[t].field = lagged(history[t].offsets[0]) - momentum;
     history[t].reference = so3::orthonormalize(dR * R);  // the simulator's first iterate
   }
+}
+
+bool IncrementalPotential::state_terms_change_per_step() const {
+  bool changes = false;
+  for_each_term_vector([&](const auto& terms) {
+    using T = typename std::decay_t<decltype(terms)>::value_type;
+    for (const T& t : terms) {
+      if (!state_term(t)) continue;
+      if constexpr (BeginsStep<T>) changes = true;
+      if constexpr (Scheduled<T>) changes = changes || t.scheduled();
+    }
+  });
+  return changes;
 }
 
 void IncrementalPotential::begin_bdf2_step(const State& previous, const Step& previous_step,
@@ -155,6 +178,40 @@ void IncrementalPotential::set_integrator(Integrator integrator, int dofs) {
     h.rotation = t.rotation;
     add(h);
   }
+  gradient_state_points_.resize(terms<PointHistory>().size());
+  gradient_state_rotations_.resize(terms<RotationHistory>().size());
+}
+
+void IncrementalPotential::keep_gradient_state(const State& q) {
+  const std::vector<PointHistory>& points = terms<PointHistory>();
+  const std::vector<RotationHistory>& rotations = terms<RotationHistory>();
+  for (std::size_t i = 0; i < points.size(); ++i) gradient_state_points_[i] = q.points[points[i].point];
+  for (std::size_t i = 0; i < rotations.size(); ++i) {
+    gradient_state_rotations_[i] = q.rotations[rotations[i].rotation];
+  }
+}
+
+bool IncrementalPotential::at_gradient_state(const State& q) const {
+  // To round-off: q_{k−2} = step_back(q_{k−1}, Δq_{k−1}) recovers the last step's q_{k−1} to a
+  // few ulps; a state that differs by more (another trajectory: the adjoint's components set up
+  // frame by frame backwards, an optimiser's next run) is not it.
+  constexpr double kRoundoff = 1e-13;
+  const std::vector<PointHistory>& points = terms<PointHistory>();
+  const std::vector<RotationHistory>& rotations = terms<RotationHistory>();
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    const Vector3& x = gradient_state_points_[i];
+    if (!((q.points[points[i].point] - x).lpNorm<Eigen::Infinity>() <=
+          kRoundoff * (1.0 + x.lpNorm<Eigen::Infinity>()))) {
+      return false;
+    }
+  }
+  for (std::size_t i = 0; i < rotations.size(); ++i) {
+    if (!((q.rotations[rotations[i].rotation] - gradient_state_rotations_[i]).lpNorm<Eigen::Infinity>() <=
+          kRoundoff)) {
+      return false;
+    }
+  }
+  return true;
 }
 
 void IncrementalPotential::rereference_history(const State& q) {

@@ -101,6 +101,9 @@ class IncrementalPotential {
   // step `frame` = k ≥ 1, the step that produces q_k. Under the trapezoidal integrator also
   // the history terms' fields (lib/history.hpp): two gradient assemblies of the weighted
   // terms, at q_{k−1} and q_{k−2} (one at frame 1, whose history is the initial velocities).
+  // (Where the step continues the last one and no state term changes between steps — begins
+  // steps or follows a schedule — the last step's gradient at q_{k−1} serves as this one's at
+  // q_{k−2}: one assembly.)
   // Under BDF2 the inertia terms' extrapolation from three states, which needs Δq_{k−2} as
   // `step_before` too (at frame 1 the initial step again; docs/design.md §15).
   // `start_frame`: the frame of the state the run started from (0), or was restarted from
@@ -112,6 +115,8 @@ class IncrementalPotential {
   // counts a reused factorisation's age in steps of one run (SolverOptions::hessian_reuse).
   int frame() const { return frame_; }
   int start_frame() const { return start_frame_; }
+  // Trapezoidal: whether the last begin_step took ∇V(q_{k−2}) from the step before (above).
+  bool carried_history_gradient() const { return carried_history_gradient_; }
 
   // The time integrator (Model::Integrator) of a dynamic step, once, after the terms are
   // added: the trapezoidal one adds a history term beside each inertia term and weights the
@@ -308,6 +313,13 @@ class IncrementalPotential {
   // Σ ∇Ψ_t over the state terms, unweighted, at q, in the component's tangent layout (g sized
   // by the caller): ∇V(q) of (14.4), and of the initial acceleration under BDF2.
   void state_terms_gradient(const State& q, Eigen::VectorXd& g) const;
+  // Whether a term of the state fixes per-step data (BeginsStep) or follows a schedule: its
+  // gradient at a state then differs from one step to the next (term.hpp).
+  bool state_terms_change_per_step() const;
+  // Trapezoidal: the state at which gradient_previous_ was taken, on the component's own blocks
+  // (its history terms' points and rotations), and whether q is it to round-off.
+  void keep_gradient_state(const State& q);
+  bool at_gradient_state(const State& q) const;
   // BDF2's extrapolations x̃ and R̃ of the inertia terms (begin_step; docs/design.md §15).
   void begin_bdf2_step(const State& previous, const Step& previous_step, const Step& step_before,
                        int steps);
@@ -335,6 +347,7 @@ class IncrementalPotential {
   Integrator integrator_ = Integrator::kBackwardEuler;
   double state_weight_ = 1.0;  // weight() of the terms of the state
   int frame_ = 0, start_frame_ = 0;  // frame() and start_frame()
+  bool carried_history_gradient_ = false;
   // Scratch, sized by set_integrator and at the first step: the state terms' gradients at
   // q_{k−1} and q_{k−2}, and the whole state q_{k−2} (trapezoidal; BDF2: q_0 and its gradient
   // at frame 2), and BDF2's initial step corrected by the initial acceleration.
@@ -344,6 +357,8 @@ class IncrementalPotential {
   Eigen::VectorXd adjoint_older_, adjoint_gradient_;
   State older_;
   Step corrected_step_;
+  std::vector<Vector3> gradient_state_points_;   // keep_gradient_state
+  std::vector<Matrix3> gradient_state_rotations_;
 
   template <class Tuple>
   struct VectorsOf;

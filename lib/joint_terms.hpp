@@ -245,6 +245,7 @@ struct JointMotor {
 
   void begin_step(const State& previous, const Step& previous_step);
   void begin_frame(int k) { torque = control.at(k, Eigen::Matrix<double, 1, 1>(torque))(0); }
+  bool scheduled() const { return !control.schedule.empty(); }
   double evaluate(const State& q, LocalGradient<2>* g, LocalHessian<2>* H) const;
   void add_step_adjoint(const State& q, const State& previous, const Step& previous_step,
                         const LocalGradient<kBlocks>& z, Eigen::VectorXd& a_previous,
@@ -283,6 +284,7 @@ struct JointForceMotor {
 
   void begin_step(const State& previous, const Step& previous_step);
   void begin_frame(int k) { force = control.at(k, Eigen::Matrix<double, 1, 1>(force))(0); }
+  bool scheduled() const { return !control.schedule.empty(); }
   double evaluate(const State& q, LocalGradient<4>* g, LocalHessian<4>* H) const;
   void add_step_adjoint(const State& q, const State& previous, const Step& previous_step,
                         const LocalGradient<kBlocks>& z, Eigen::VectorXd& a_previous,

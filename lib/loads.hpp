@@ -43,6 +43,7 @@ struct ConstantForce {
 
   // Step k's force from the schedule (kept constant without one).
   void begin_frame(int k) { force = control.at(k, force); }
+  bool scheduled() const { return !control.schedule.empty(); }
   double evaluate(const State& q, LocalGradient<2>* g, LocalHessian<2>* H) const;
   // PointLoad (term.hpp): only a force on a point without rotation (a rod node) has no lever.
   bool point_load(int& on, Vector3& load) const {
@@ -82,6 +83,7 @@ struct ConstantTorque {
 
   void begin_step(const State& previous, const Step& previous_step);
   void begin_frame(int k) { torque = control.at(k, torque); }
+  bool scheduled() const { return !control.schedule.empty(); }
   double evaluate(const State& q, LocalGradient<1>* g, LocalHessian<1>* H) const;
 
   // For the adjoint (C = the Lie gradient above, linear in τ; P = R R_{k−1}ᵀ):

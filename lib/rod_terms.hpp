@@ -171,6 +171,7 @@ struct RodBendTwist {
   Matrix3 frame_offset = Matrix3::Identity();  // T
 
   void begin_frame(int k) { rest_darboux = rest_control.at(k, rest_darboux); }
+  bool scheduled() const { return !rest_control.schedule.empty(); }
   double evaluate(const State& q, LocalGradient<2>* g, LocalHessian<2>* H) const;
   // For the adjoint, with W = Gᵀ R_a and the gradient (−W K Δω, W K Δω):
   //   ∂C/∂ω̄ = (W K, −W K),   ∂C/∂(K₁, K₂, K₃) = (−W diag(Δω), W diag(Δω)).

@@ -21,6 +21,7 @@
 //                         void begin_step(const State& previous, const Step& previous_step);
 //   Scheduled         — a quantity that changes per frame (ScheduledParameter below):
 //                         void begin_frame(int k);
+//                         bool scheduled() const;   (false: no schedule, the value is kept)
 //   LoadScaled        — a load that static load stepping scales: member `double scale`,
 //                         which multiplies value, gradient and Hessian.
 //   EnergyOfState     — `static constexpr bool kEnergyOfState = true`: its value is a
@@ -128,6 +129,10 @@ concept BeginsStep = requires(T& t, const State& previous, const Step& previous_
 
 template <class T>
 concept Scheduled = requires(T& t, int frame) { t.begin_frame(frame); };
+// Checked where it is used (IncrementalPotential::state_terms_change_per_step): a term that
+// lacked begin_frame's companion would otherwise stop being Scheduled without a word.
+template <class T>
+concept SaysWhetherScheduled = requires(const T& t) { { t.scheduled() } -> std::same_as<bool>; };
 
 template <class T>
 concept LoadScaled = requires(T& t) { { t.scale } -> std::same_as<double&>; };

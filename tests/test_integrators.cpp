@@ -267,6 +267,68 @@ TEST(Trapezoidal, StepsSatisfyTheDiscreteEquations) {
   EXPECT_LE(worst, 1e-6 * largest) << "largest force " << largest;
 }
 
+// The history field c (14.4) needs ∇V at q_{k−1} and q_{k−2}; where a step continues the last
+// one and no state term changes between steps, the last step's ∇V(q_{k−1}) serves as
+// ∇V(q_{k−2}). Every step's fields equal those a fresh potential computes from scratch at the
+// same step: on PyElastica's Timoshenko beam with its constant tip force (carried from the
+// second step on), with the tip force following a schedule and with a world torque on a body
+// (a term that begins steps: never carried), and after a restart of the run (its first two
+// steps are not carried).
+TEST(Trapezoidal, TheHistoryCarriesItsGradientOnlyWhereItIsTheSame) {
+  const auto check = [](const Model& model, int frames, bool carries, int start_frame) {
+    Simulator sim(model, SolverOptions{});
+    std::vector<State> q = {sim.state()};
+    std::vector<Step> dq = {sim.last_step()};
+    for (int k = 1; k <= frames; ++k) {
+      ASSERT_TRUE(sim.step().converged()) << k;
+      q.push_back(sim.state());
+      dq.push_back(sim.last_step());
+    }
+    std::vector<Component> carrying = build_components(model);
+    ASSERT_EQ(carrying.size(), 1u);
+    IncrementalPotential& P = carrying[0].potential;
+    for (int k = start_frame + 1; k <= frames; ++k) {
+      SCOPED_TRACE(k);
+      const Step& before = dq[std::max(k - 2, start_frame)];
+      P.begin_step(q[k - 1], dq[k - 1], k, &before, start_frame);
+      std::vector<Component> fresh = build_components(model);
+      fresh[0].potential.begin_step(q[k - 1], dq[k - 1], k, &before, start_frame);
+      EXPECT_FALSE(fresh[0].potential.carried_history_gradient());
+      EXPECT_EQ(P.carried_history_gradient(), carries && k >= start_frame + 2);
+      const auto& points = P.terms<PointHistory>();
+      const auto& rotations = P.terms<RotationHistory>();
+      double scale = 0.0, worst = 0.0;
+      for (std::size_t i = 0; i < points.size(); ++i) {
+        const Vector3& expected = fresh[0].potential.terms<PointHistory>()[i].field;
+        scale = std::max(scale, expected.cwiseAbs().maxCoeff());
+        worst = std::max(worst, (points[i].field - expected).cwiseAbs().maxCoeff());
+      }
+      for (std::size_t i = 0; i < rotations.size(); ++i) {
+        const Vector3& expected = fresh[0].potential.terms<RotationHistory>()[i].field;
+        scale = std::max(scale, expected.cwiseAbs().maxCoeff());
+        worst = std::max(worst, (rotations[i].field - expected).cwiseAbs().maxCoeff());
+      }
+      ASSERT_GT(scale, 0.0);
+      EXPECT_LE(worst, 1e-9 * scale);
+    }
+  };
+  Scene beam = load_scene(kScenes / "timoshenko_beam.json", {"integrator=trapezoidal"});
+  check(beam.model, 12, true, 0);
+  // A restart at frame 5 (Simulator::set_state): steps 6 and 7 begin a new history.
+  check(beam.model, 12, true, 5);
+  Model scheduled = beam.model;
+  for (int k = 0; k < 12; ++k) {
+    scheduled.rods[0].node_forces[0].control.schedule.push_back(Vector3(0.0, 0.0, -15.0 - k));
+  }
+  check(scheduled, 12, false, 0);
+  Model body = load_scene(kScenes / "butterfly_bolt.json", {"integrator=trapezoidal"}).model;
+  TorqueSpec torque;
+  torque.body = 0;
+  torque.torque = Vector3(0.1, -0.2, 0.3);
+  body.torques.push_back(torque);
+  check(body, 12, false, 0);
+}
+
 // Under a constant force the trapezoidal rule is exact: x(t) = x₀ + v₀t + ½gt², every frame.
 // Under BDF2 too: its start (the initial acceleration in the step before the second step,
 // docs/design.md §15) is exact for a parabola, and so is its difference formula.
