@@ -23,6 +23,9 @@
 //   bool hessian_finite() const;
 //   double hessian_scale() const;                   // max |H_ii|
 //   bool can_factorize_skew() const;                // can M include K (below)?
+//   static constexpr bool kReusesFactorizations;    // does a factorisation cost enough more
+//                                                   // than a gradient pass that later steps
+//                                                   // should reuse it (hessian_reuse)?
 //   void set_history_skew(const IncrementalPotential* potential);  // M = H + μI + K from
 //                                                   // now on, or H + μI (nullptr)
 //   bool factorize(double mu);                      // M = H + μI: positive definite?
@@ -72,6 +75,9 @@ class DenseSystem {
   bool hessian_finite() const;
   double hessian_scale() const;
   bool can_factorize_skew() const { return true; }
+  // A dense factorisation of a few bodies costs about a gradient pass: reusing it saves less
+  // than the chord steps' slower convergence costs (newton.hpp, "Reusing a factorisation").
+  static constexpr bool kReusesFactorizations = false;
   void set_history_skew(const IncrementalPotential* potential);
   bool factorize(double mu);
   void solve(Vector& delta);
@@ -129,6 +135,8 @@ class SparseSystem {
   double hessian_scale() const;
   // Banded (known after the first assembly, which chooses the factorisation).
   bool can_factorize_skew() const { return factorization() == Factorization::kBanded; }
+  // Rods and large couplings: assembly and factorisation are most of a step.
+  static constexpr bool kReusesFactorizations = true;
   void set_history_skew(const IncrementalPotential* potential);
   bool factorize(double mu);
   void solve(Vector& delta);

@@ -388,10 +388,7 @@ bool Newton<System>::solve_with_last_factorization(const Vector& b, Vector& x) {
 
 template <class System>
 bool Newton<System>::factorization_reusable() {
-  // Dense systems (rigid bodies, ≤ kDenseLimit DOFs) factorise for about what a gradient pass
-  // costs: chord steps, which converge linearly, cost them more than Newton's (newton.hpp).
-  if (!std::is_same_v<System, SparseSystem>) return false;
-  if (options_.hessian_reuse == 1 || !reusable_) return false;
+  if (!System::kReusesFactorizations || options_.hessian_reuse == 1 || !reusable_) return false;
   if (chord_skip_ > 0) {
     --chord_skip_;
     return false;

@@ -60,9 +60,10 @@
 // the window of steps a factorisation may serve halves (at 1 none; it reopens at 2 after N
 // factorisations), below a fifth of it it doubles back up to N. Where chord steps keep failing
 // (steps that need Newton iterations) the attempts back off: after the second failure in a
-// row 1, 2, 4, … up to N solves are skipped. Sparse systems only (rods, components beyond
-// kDenseLimit DOFs): a dense system's factorisation costs about a gradient pass, and chord
-// steps, which converge linearly, cost more than Newton's quadratic ones (measured: the bolt
+// row 1, 2, 4, … up to N solves are skipped. Only where the linear system says its
+// factorisations are worth reusing (System::kReusesFactorizations: the sparse one, rods and
+// components beyond kDenseLimit DOFs): a dense system's factorisation costs about a gradient
+// pass, and chord steps, which converge linearly, cost more than Newton's quadratic ones (the bolt
 // under the trapezoidal rule at 1e-9 took 3.9 chord steps per step, 2.4× the time). Not used
 // by check() (the exact test) or by the adjoint, which factorises the converged step's own
 // Hessian. Ceres and Ipopt ignore N.
