@@ -23,6 +23,13 @@ void SolverOptions::validate() const {
   if (hessian_reuse < 1) {
     throw ModelError("solver.hessian_reuse", "must be at least 1 (1: a new factorisation at every step)");
   }
+  // Chord steps end a solve on an old factorisation's step; "assembled" asks that every verdict
+  // be made on a new one. Honouring both would factorise at every solve and gain nothing.
+  if (hessian_reuse > 1 && convergence_check == ConvergenceCheck::kAssembled) {
+    throw ModelError("solver.hessian_reuse",
+                     "must be 1 with convergence_check \"assembled\" (chord steps end solves on "
+                     "an old factorisation, which that check rules out)");
+  }
   if (!(armijo > 0.0 && armijo < 0.5)) throw ModelError("solver.armijo", "must be in (0, 0.5)");
   if (!(min_step_length > 0.0 && min_step_length < 1.0)) {
     throw ModelError("solver.min_step_length", "must be in (0, 1)");

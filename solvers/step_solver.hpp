@@ -104,7 +104,7 @@ struct SolverOptions {
   // "Reusing a factorisation"); ≥ 1. 1 (the default) factorises at every solve. N > 1 starts
   // a solve with the factorisation of a step at most N − 1 steps earlier in the run, and ends
   // it there when that chord step is within the tolerance; the other back-ends ignore it, as
-  // they ignore convergence_check.
+  // they ignore convergence_check. Must be 1 with ConvergenceCheck::kAssembled (validate()).
   int hessian_reuse = 1;
   // Measure wall time of assembly and of factorisation + solve (StepReport; Newton). Off by
   // default: the clock reads cost ~10 % of a single rigid body's Newton iteration.

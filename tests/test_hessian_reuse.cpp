@@ -9,6 +9,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "exact_test.hpp"
@@ -188,13 +189,27 @@ TEST(HessianReuse, SceneKeyIsParsedAndBadValuesNamed) {
       EXPECT_EQ(e.field(), "solver.hessian_reuse");
     }
   }
-  SolverOptions options;
-  options.hessian_reuse = 0;
+  // With the assembled convergence check (a new factorisation for every verdict) chord steps,
+  // which end solves on an old one, are refused rather than silently overriding it.
   try {
-    options.validate();
+    parse_scene(base + R"(4, "convergence_check": "assembled"}})", "inline");
     FAIL() << "accepted";
-  } catch (const ModelError& e) {
-    EXPECT_NE(std::string(e.what()).find("solver.hessian_reuse"), std::string::npos);
+  } catch (const SceneError& e) {
+    EXPECT_EQ(e.field(), "solver.hessian_reuse");
+    EXPECT_NE(std::string(e.what()).find("assembled"), std::string::npos);
+  }
+  EXPECT_EQ(parse_scene(base + R"(1, "convergence_check": "assembled"}})", "inline").solver.hessian_reuse, 1);
+  for (const auto& [reuse, check] : {std::pair{0, ConvergenceCheck::kEstimated},
+                                     std::pair{2, ConvergenceCheck::kAssembled}}) {
+    SolverOptions options;
+    options.hessian_reuse = reuse;
+    options.convergence_check = check;
+    try {
+      options.validate();
+      FAIL() << "accepted " << reuse;
+    } catch (const ModelError& e) {
+      EXPECT_NE(std::string(e.what()).find("solver.hessian_reuse"), std::string::npos);
+    }
   }
 }
 

@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <string>
 #include <vector>
 
@@ -24,7 +25,7 @@ using Eigen::VectorXd;
 
 TEST(OptimizerWarmStart, IpoptResumeOnTheCableCostsAtMostTwiceWhatWasLeft) {
   const Scene scene =
-      load_scene(std::string(LIEDYN_SOURCE_DIR) + "/problems/scenes/optimization/cable_tip_curve.json");
+      load_scene(std::filesystem::path(LIEDYN_SOURCE_DIR) / "problems/scenes/optimization/cable_tip_curve.json");
   const DifferentiableSimulation sim = make_differentiable_simulation(scene);
   ASSERT_TRUE(sim.parameters().bounded());
   const Bounds bounds{sim.parameters().lower_bounds(), sim.parameters().upper_bounds()};
