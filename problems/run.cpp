@@ -48,7 +48,8 @@ RunFiles::RunFiles(OutputFolder& out, const Scene& scene, int every)
   frames_ << "frame,time,newton_iterations,gradient_norm,converged,kinetic_energy,"
              "potential_energy,angular_momentum_x,angular_momentum_y,angular_momentum_z,"
              "step_norm,regularized_iterations,status,max_penetration,constraint_violation,"
-             "multiplier_updates,contact_pairs,min_rod_separation\n";
+             "multiplier_updates,contact_pairs,min_rod_separation,assemblies,factorizations,"
+             "reused_factorizations,reuse_error\n";
 }
 
 void RunFiles::finish(const FrameRecord& last) {
@@ -105,7 +106,14 @@ void RunFiles::add(const FrameRecord& r) {
           << r.constraint_violation << ',' << (report ? report->multiplier_updates : 0) << ','
           << r.contact_pairs << ',';
   if (r.min_rod_separation) frames_ << *r.min_rod_separation;  // empty without
-  frames_ << '\n';
+  // What the solver spent on the step (solver.hessian_reuse: solves ended on an old
+  // factorisation and the measured error of its steps).
+  if (report != nullptr) {
+    frames_ << ',' << report->assemblies << ',' << report->factorizations << ','
+            << report->reused_factorizations << ',' << report->reuse_error << '\n';
+  } else {
+    frames_ << ",0,0,0,0\n";
+  }
 }
 
 SimulationSummary simulate_into(const Scene& scene, OutputFolder* out, std::ostream* progress,

@@ -147,7 +147,7 @@ TEST_F(PlotCli, BadInputIsRefusedNamingFileLineAndColumn) {
     bad += line + "\n";
   }
   refused(bad, "out/frames.csv: line 5: kinetic_energy \"x");
-  refused(good + "11,0.2\n", "out/frames.csv: line 13: has 2 fields, the header 18");
+  refused(good + "11,0.2\n", "out/frames.csv: line 13: has 2 fields, the header 22");
   refused("time,frame\n0,0\n", "out/frames.csv: line 1: is not frames.csv's header");
   refused("frame,kinetic_energy\n0,1\n", "out/frames.csv: time: is not a column of this file");
   // No folder, a folder with nothing to plot.

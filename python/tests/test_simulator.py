@@ -269,7 +269,7 @@ def test_a_restarted_simulator_pickles(bolt):
     np.testing.assert_array_equal(copy.quaternions(), sim.quaternions())
 
 
-def test_steps_on_a_reused_factorisation_are_reported(scenes):
+def test_steps_on_a_reused_factorisation_are_reported(scenes, tmp_path):
     # solver.hessian_reuse = 4 on the beam, whose solves end on chord steps: a factorisation
     # at steps 1, 5, 9, the others on it; the error is measured where a new one is made.
     scene = liedyn.Scene.from_file(scenes / "timoshenko_beam.json").with_settings(
@@ -279,3 +279,10 @@ def test_steps_on_a_reused_factorisation_are_reported(scenes):
     assert [r.factorizations for r in reports] == [1, 0, 0, 0] * 3
     assert [r.reused_factorizations for r in reports] == [0, 1, 1, 1] * 3
     assert reports[0].reuse_error == 0.0 and 0.0 < reports[4].reuse_error < 0.05
+    # frames.csv says the same, frame 0 (the initial state) first.
+    liedyn.simulate(scene, out=tmp_path / "run")
+    rows = read_csv(tmp_path / "run" / "frames.csv")[1:]
+    assert [int(r["factorizations"]) for r in rows] == [r.factorizations for r in reports]
+    assert [int(r["assemblies"]) for r in rows] == [r.assemblies for r in reports]
+    assert [int(r["reused_factorizations"]) for r in rows] == [1 - r.factorizations for r in reports]
+    assert [float(r["reuse_error"]) for r in rows] == pytest.approx([r.reuse_error for r in reports], rel=1e-5)
