@@ -16,8 +16,9 @@ which its steps converge at their first Newton step — one assembly and one fac
 without the trial gradient of a line search — and whose tip errors are the same; a converged
 step errs by about the square of its last Newton step; and with a factorisation at every step
 or one per ten, solver.hessian_reuse), the tip at t = 10 s, its distance from each code's
-finest run, the largest tip distance from liedyn's finest run over the whole 10 s (liedyn),
-and wall times: PyElastica's loop alone (after numba's compilation), liedyn's `bench` (its
+finest run, the largest tip distance from each code's finest run over the whole 10 s (at the
+run's own steps, PyElastica's recorded in a second, untimed run),
+and wall times: PyElastica's loop alone (after numba's compilation; median of 3), liedyn's `bench` (its
 time steps alone, no outputs).
 """
 import argparse
@@ -38,16 +39,17 @@ N_ELEM, LENGTH, RADIUS, DENSITY, E, G = 100, 3.0, 0.25, 5000.0, 1e6, 1e4
 EXAMPLE_DT = 0.07 * LENGTH / N_ELEM
 
 
-def pyelastica_tip(dt):
-    """PyElastica's tip at FINAL_TIME (in liedyn's axes: rod along x, load along −z) and the
-    loop's wall time. Its rod lies along +z with the load along −x: x and z swap."""
+def pyelastica_run(dt):
+    """PyElastica's tip series (time, x, y, z; in liedyn's axes: rod along x, load along −z)
+    and its loop's wall time (the median of three runs without the recording). Its rod lies along +z
+    with the load along −x: x and z swap."""
     import numpy as np
     import elastica as ea
 
     class Sim(ea.BaseSystemCollection, ea.Constraints, ea.Forcing):
         pass
 
-    def run(steps, dt):
+    def run(steps, dt, record):
         sim = Sim()
         rod = ea.CosseratRod.straight_rod(
             N_ELEM, np.zeros(3), np.array([0.0, 0.0, 1.0]), np.array([0.0, 1.0, 0.0]), LENGTH,
@@ -61,16 +63,22 @@ def pyelastica_tip(dt):
         sim.add_forcing_to(rod).using(ea.EndpointForces, 0.0 * force, force, ramp_up_time=1e-12)
         sim.finalize()
         stepper, t = ea.PositionVerlet(), np.float64(0.0)
+        series = []
         start = time.perf_counter()
         for _ in range(steps):
             t = stepper.step(sim, t, np.float64(dt))
-        return rod.position_collection[:, -1], time.perf_counter() - start
+            if record:
+                tip = rod.position_collection[:, -1]
+                series.append((float(t), tip[2], tip[1], tip[0]))
+        return series, time.perf_counter() - start
 
     steps = int(math.ceil(FINAL_TIME / dt - 1e-9))
     dt = FINAL_TIME / steps
-    run(20, dt)  # numba compiles here
-    tip, seconds = run(steps, dt)
-    return dt, [tip[2], tip[1], tip[0]], seconds
+    run(20, dt, record=False)  # numba compiles here
+    # Timed without recording, the median of three runs (as liedyn's bench --repeat 3).
+    seconds = sorted(run(steps, dt, record=False)[1] for _ in range(3))[1]
+    series, _ = run(steps, dt, record=True)
+    return dt, series, seconds
 
 
 def liedyn_run(liedyn, integrator, h, tolerance, reuse=1):
@@ -121,31 +129,37 @@ def main():
                         help="liedyn's time steps (and the finest / 2 as its reference)")
     parser.add_argument("--tolerances", default="1e-9,1e-5",
                         help="liedyn's Newton tolerances (‖δ‖∞, m and rad); the reference runs at 1e-10")
+    parser.add_argument("--integrators", default="backward_euler,trapezoidal,bdf2",
+                        help="liedyn's integrators")
     parser.add_argument("--hessian-reuse", default="1,10",
                         help="liedyn's solver.hessian_reuse values (steps one factorisation may serve)")
     args = parser.parse_args()
     sys.path.insert(0, args.pyelastica)
 
-    pyelastica = [pyelastica_tip(EXAMPLE_DT / k) for k in (1, 4, 16)]
+    pyelastica = [pyelastica_run(EXAMPLE_DT / k) for k in (1, 4, 16)]
     hs = sorted((float(h) for h in args.steps.split(",")), reverse=True)
     tolerances = [float(t) for t in args.tolerances.split(",")]
     reuses = [int(n) for n in args.hessian_reuse.split(",")]
     reference_h, reference, _, _ = liedyn_run(args.liedyn, "trapezoidal", hs[-1] / 2, 1e-10)
     print(f"liedyn reference: trapezoidal, h = {reference_h:.4g} s, tip at {FINAL_TIME:g} s: "
           + ", ".join(f"{c:.8f}" for c in reference[-1][1:]))
+    pyelastica_reference = pyelastica[-1][1]
     print(f"PyElastica reference: position Verlet, dt = {pyelastica[-1][0]:.4g} s, tip: "
-          + ", ".join(f"{c:.8f}" for c in pyelastica[-1][1]))
-    print(f"the two references differ by {distance(reference[-1][1:], pyelastica[-1][1]):.3e} m\n")
+          + ", ".join(f"{c:.8f}" for c in pyelastica_reference[-1][1:]))
+    print(f"the two references differ by "
+          f"{distance(reference[-1][1:], pyelastica_reference[-1][1:]):.3e} m\n")
     print("| code | integrator | h [s] | tolerance | hessian_reuse | Newton iterations per step | "
           "tip z at 10 s [m] | tip error at 10 s [m] | largest error over 10 s [m] | wall time [s] | "
           "µs per step |")
     print("|---|---|---|---|---|---|---|---|---|---|---|")
-    for dt, tip, seconds in pyelastica:
+    for dt, series, seconds in pyelastica:
         steps = round(FINAL_TIME / dt)
+        tip = series[-1][1:]
         print(f"| PyElastica | position Verlet | {dt:.4g} | – | – | – | {tip[2]:.8f} | "
-              f"{distance(tip, pyelastica[-1][1]):.2e} (its own finest) | – | {seconds:.3f} | "
-              f"{1e6 * seconds / steps:.0f} |")
-    for integrator in ("backward_euler", "trapezoidal", "bdf2"):
+              f"{distance(tip, pyelastica_reference[-1][1:]):.2e} (its own finest) | "
+              f"{largest_deviation(series, pyelastica_reference):.2e} (its own finest) | "
+              f"{seconds:.3f} | {1e6 * seconds / steps:.0f} |")
+    for integrator in args.integrators.split(","):
         for tolerance, reuse, h in ((t, n, h) for t in tolerances for n in reuses for h in hs):
             h, series, seconds, iterations = liedyn_run(args.liedyn, integrator, h, tolerance, reuse)
             tip = series[-1][1:]
