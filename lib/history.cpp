@@ -29,13 +29,11 @@ Matrix3 RotationHistory::inertia_shift(const Matrix3& J_over_h2_inverse) const {
   return -0.5 * so3::hat(field) * reference * J_over_h2_inverse;
 }
 
-double RotationHistory::reference_distance(const State& q) const {
-  // The angle θ of R R_refᵀ from the chord ‖R − R_ref‖_F = 2√2 sin(θ/2), exact for rotations
-  // (‖R − R_ref‖² = 2(3 − tr(R R_refᵀ)) = 4(1 − cos θ)) and accurate at the small angles
-  // compared with the tolerance (no trace near 3 to cancel), without the logarithm's atan2 —
-  // StepSolver::solve asks after every solve. Near π it loses digits (asin's slope), where
-  // the test against the tolerance has long been decided.
-  const double chord = (q.rotations[rotation] - reference).norm();
+double RotationHistory::chord_angle(double chord) {
+  // Exact for rotations (‖R₁ − R₂‖² = 2(3 − tr(R₁R₂ᵀ)) = 4(1 − cos θ)) and accurate at the
+  // small angles compared with the tolerance (no trace near 3 to cancel), without the
+  // logarithm's atan2 — StepSolver::solve asks after every solve. Near π it loses digits
+  // (asin's slope), where the test against the tolerance has long been decided.
   return 2.0 * std::asin(std::min(1.0, chord / (2.0 * std::numbers::sqrt2)));
 }
 

@@ -75,7 +75,11 @@ struct RotationHistory {
   // Moves R_ref to the rotation in q.
   void rereference(const State& q) { reference = q.rotations[rotation]; }
   // The angle rereference(q) would move R_ref, |log(R R_refᵀ)| (0 where R is R_ref).
-  double reference_distance(const State& q) const;
+  double reference_distance(const State& q) const { return chord_angle(reference_chord(q)); }
+  // ‖R − R_ref‖_F, which grows with that angle (the largest over many terms needs one chord_angle).
+  double reference_chord(const State& q) const { return (q.rotations[rotation] - reference).norm(); }
+  // The angle θ between two rotations from their chord ‖R₁ − R₂‖_F = 2√2 sin(θ/2).
+  static double chord_angle(double chord);
 };
 
 }  // namespace liedyn

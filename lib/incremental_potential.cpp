@@ -74,11 +74,11 @@ void IncrementalPotential::begin_step(const State& previous, const Step& previou
     const Matrix3& dR = previous_step.rotations[history[t].rotation];
     const Matrix3& J = inertia[t].J_over_h2;  // Ĵ = J/h²
     // The previous step's momentum over h, in gradient units: μ_{k−3/2}/h = 2 vee(R_{k−1} Ĵ
-    // R_{k−2}ᵀ) with R_{k−2}ᵀ = R_{k−1}ᵀ ΔR; at frame 1, π_0/h = R_0 (I_b/h²) R_0ᵀ log(ΔR_0)
-    // with I_b/h² = tr(Ĵ) 1 − Ĵ.
+    // R_{k−2}ᵀ) with R_{k−2} = ΔRᵀ R_{k−1} (older_); at frame 1, π_0/h = R_0 (I_b/h²) R_0ᵀ
+    // log(ΔR_0) with I_b/h² = tr(Ĵ) 1 − Ĵ.
     const Vector3 momentum =
         first ? Vector3(R * (J.trace() * Matrix3::Identity() - J) * R.transpose() * so3::log(dR))
-              : Vector3(2.0 * so3::vee(R * J * R.transpose() * dR));
+              : Vector3(2.0 * so3::vee(R * J * older_.rotations[history[t].rotation].transpose()));
     history[t].field = lagged(history[t].offsets[0]) - momentum;
     history[t].reference = so3::orthonormalize(dR * R);  // the simulator's first iterate
   }
@@ -219,11 +219,9 @@ void IncrementalPotential::rereference_history(const State& q) {
 }
 
 double IncrementalPotential::history_reference_distance(const State& q) const {
-  double moved = 0.0;
-  for (const RotationHistory& t : terms<RotationHistory>()) {
-    moved = std::max(moved, t.reference_distance(q));
-  }
-  return moved;
+  double chord = 0.0;  // the angle grows with the chord: one conversion for the largest
+  for (const RotationHistory& t : terms<RotationHistory>()) chord = std::max(chord, t.reference_chord(q));
+  return RotationHistory::chord_angle(chord);
 }
 
 void IncrementalPotential::state_terms_gradient(const State& q, Eigen::VectorXd& g) const {
