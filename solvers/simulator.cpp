@@ -132,10 +132,14 @@ StepReport Simulator::step() {
     } else {  // no parallel region at all: even an inactive one allocates in libgomp
       for (int i = 0; i < islands; ++i) solve_island(i);
     }
-    const int earlier_iterations = report.iterations;
+    // What earlier rounds spent counts too (their states are discarded, their work is not).
+    const int iterations = report.iterations, assemblies = report.assemblies,
+              factorizations = report.factorizations;
     report = StepReport{};
     for (const StepReport& r : now.reports) report.merge(r);
-    report.iterations += earlier_iterations;
+    report.iterations += iterations;
+    report.assemblies += assemblies;
+    report.factorizations += factorizations;
     if (!report.state_updated()) break;
     // Two bodies that reached each other only within the step: solve it again with them
     // coupled, from the same start (a few rounds at most: each adds pairs).
