@@ -60,8 +60,8 @@ class Trajectory:
     positions: F×N×3 (bodies' centres of mass, then every rod's nodes), m.
     quaternions: F×M×4, w first (bodies, then every rod's edges).
     time, kinetic_energy, potential_energy, max_penetration, gradient_norm, step_norm,
-    iterations, converged, status: one entry per frame (frame 0: the initial state, no solve),
-    as in frames.csv.
+    iterations, converged, status, assemblies, factorizations, reused_factorizations,
+    reuse_error: one entry per frame (frame 0: the initial state, no solve), as in frames.csv.
     """
 
     scene: Scene
@@ -76,6 +76,10 @@ class Trajectory:
     iterations: np.ndarray
     converged: np.ndarray
     status: list
+    assemblies: np.ndarray
+    factorizations: np.ndarray
+    reused_factorizations: np.ndarray
+    reuse_error: np.ndarray
     _recording: Optional[_Recording] = None  # what to_csv writes (simulate's runs only)
 
     @property
@@ -137,16 +141,18 @@ def simulate(scene: Scene, frames: Optional[int] = None,
 
 def _problem_trajectory(self: DifferentiableProblem, gamma) -> Trajectory:
     """The forward run at γ (positions and quaternions; the other columns are not recorded
-    by the adjoint's run and are NaN)."""
+    by the adjoint's run: NaN, and zeros for the counts)."""
     arrays = self._trajectory(np.asarray(gamma, dtype=float))
     frames = len(arrays["time"])
     nan = np.full(frames, np.nan)
+    zeros = np.zeros(frames, dtype=np.int32)
     return Trajectory(scene=self.scene, time=arrays["time"], positions=arrays["positions"],
                       quaternions=arrays["quaternions"], kinetic_energy=nan,
                       potential_energy=nan.copy(), max_penetration=nan.copy(),
-                      gradient_norm=nan.copy(), step_norm=nan.copy(),
-                      iterations=np.zeros(frames, dtype=np.int32),
-                      converged=np.ones(frames, dtype=bool), status=["converged"] * frames)
+                      gradient_norm=nan.copy(), step_norm=nan.copy(), iterations=zeros,
+                      converged=np.ones(frames, dtype=bool), status=["converged"] * frames,
+                      assemblies=zeros.copy(), factorizations=zeros.copy(),
+                      reused_factorizations=zeros.copy(), reuse_error=nan.copy())
 
 
 DifferentiableProblem.trajectory = _problem_trajectory

@@ -163,7 +163,8 @@ struct Recording {
     const py::ssize_t r = f > 0 ? static_cast<py::ssize_t>(frames[0].state.rotations.size()) : 0;
     std::vector<double> time, positions, quaternions, kinetic, potential, gradient_norm, step_norm,
         penetration;
-    py::array_t<int> iterations(f);
+    py::array_t<int> iterations(f), assemblies(f), factorizations(f), reused(f);
+    std::vector<double> reuse_error;
     py::array_t<bool> converged(f);
     py::list status;
     for (py::ssize_t k = 0; k < f; ++k) {
@@ -178,6 +179,10 @@ struct Recording {
       gradient_norm.push_back(report ? report->gradient_norm : 0.0);
       step_norm.push_back(report ? report->step_norm : 0.0);
       iterations.mutable_at(k) = report ? report->iterations : 0;
+      assemblies.mutable_at(k) = report ? report->assemblies : 0;
+      factorizations.mutable_at(k) = report ? report->factorizations : 0;
+      reused.mutable_at(k) = report ? report->reused_factorizations : 0;
+      reuse_error.push_back(report ? report->reuse_error : 0.0);
       converged.mutable_at(k) = report ? report->converged() : true;
       status.append(report ? to_string(report->status) : "initial");
     }
@@ -191,6 +196,10 @@ struct Recording {
     d["gradient_norm"] = owned_array(std::move(gradient_norm), {f});
     d["step_norm"] = owned_array(std::move(step_norm), {f});
     d["iterations"] = iterations;
+    d["assemblies"] = assemblies;
+    d["factorizations"] = factorizations;
+    d["reused_factorizations"] = reused;
+    d["reuse_error"] = owned_array(std::move(reuse_error), {f});
     d["converged"] = converged;
     d["status"] = status;
     return d;

@@ -280,7 +280,12 @@ def test_steps_on_a_reused_factorisation_are_reported(scenes, tmp_path):
     assert [r.reused_factorizations for r in reports] == [0, 1, 1, 1] * 3
     assert reports[0].reuse_error == 0.0 and 0.0 < reports[4].reuse_error < 0.05
     # frames.csv says the same, frame 0 (the initial state) first.
-    liedyn.simulate(scene, out=tmp_path / "run")
+    run = liedyn.simulate(scene, out=tmp_path / "run")
+    np.testing.assert_array_equal(run.factorizations[1:], [r.factorizations for r in reports])
+    np.testing.assert_array_equal(run.assemblies[1:], [r.assemblies for r in reports])
+    np.testing.assert_array_equal(run.reused_factorizations[1:], [r.reused_factorizations for r in reports])
+    np.testing.assert_array_equal(run.reuse_error[1:], [r.reuse_error for r in reports])
+    assert run.factorizations[0] == 0 and run.reuse_error[0] == 0.0
     rows = read_csv(tmp_path / "run" / "frames.csv")[1:]
     assert [int(r["factorizations"]) for r in rows] == [r.factorizations for r in reports]
     assert [int(r["assemblies"]) for r in rows] == [r.assemblies for r in reports]
