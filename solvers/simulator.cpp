@@ -132,14 +132,11 @@ StepReport Simulator::step() {
     } else {  // no parallel region at all: even an inactive one allocates in libgomp
       for (int i = 0; i < islands; ++i) solve_island(i);
     }
-    // What earlier rounds spent counts too (their states are discarded, their work is not).
-    const int iterations = report.iterations, assemblies = report.assemblies,
-              factorizations = report.factorizations;
-    report = StepReport{};
-    for (const StepReport& r : now.reports) report.merge(r);
-    report.iterations += iterations;
-    report.assemblies += assemblies;
-    report.factorizations += factorizations;
+    // A round's report, added to the earlier rounds' (their states are discarded, their work
+    // is not).
+    StepReport solved;
+    for (const StepReport& r : now.reports) solved.merge(r);
+    report.accumulate(std::move(solved));
     if (!report.state_updated()) break;
     // Two bodies that reached each other only within the step: solve it again with them
     // coupled, from the same start (a few rounds at most: each adds pairs).

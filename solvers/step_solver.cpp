@@ -167,6 +167,26 @@ void StepReport::merge(const StepReport& other) {
   if (!other.message.empty()) message += (message.empty() ? "" : "; ") + other.message;
 }
 
+void StepReport::accumulate(StepReport next) {
+  next.iterations += iterations;
+  next.regularized_iterations += regularized_iterations;
+  next.factorizations += factorizations;
+  next.assemblies += assemblies;
+  next.assembly_seconds += assembly_seconds;
+  next.solve_seconds += solve_seconds;
+  const auto earliest = [](double mine, double theirs) { return std::isnan(mine) ? theirs : mine; };
+  next.first_gradient_norm = earliest(first_gradient_norm, next.first_gradient_norm);
+  next.second_gradient_norm = earliest(second_gradient_norm, next.second_gradient_norm);
+  next.first_hessian_condition = earliest(first_hessian_condition, next.first_hessian_condition);
+  // The loops' counters (StepSolver::solve counts its updates into the step's report).
+  next.multiplier_updates += multiplier_updates;
+  next.history_updates += history_updates;
+  next.history_moved = std::max(next.history_moved, history_moved);
+  next.reused_factorizations += reused_factorizations;
+  next.reuse_error = std::max(next.reuse_error, reuse_error);
+  *this = std::move(next);
+}
+
 std::string short_number(double x) {
   char text[32];
   std::snprintf(text, sizeof text, "%.3g", x);
@@ -219,7 +239,7 @@ StepReport StepSolver::solve(State& q) {
       report.message = report.message.empty() ? message : message + "; " + report.message;
       break;
     }
-    accumulate(report, minimize(q));
+    report.accumulate(minimize(q));
     ++report.history_updates;
   }
   if (!report.state_updated()) {
@@ -240,25 +260,6 @@ StepReport StepSolver::solve(State& q) {
   return report;
 }
 
-void StepSolver::accumulate(StepReport& report, StepReport next) {
-  // The step's totals, and the last solve's final values.
-  next.iterations += report.iterations;
-  next.regularized_iterations += report.regularized_iterations;
-  next.factorizations += report.factorizations;
-  next.assemblies += report.assemblies;
-  next.assembly_seconds += report.assembly_seconds;
-  next.solve_seconds += report.solve_seconds;
-  next.first_gradient_norm = report.first_gradient_norm;
-  next.second_gradient_norm = report.second_gradient_norm;
-  next.first_hessian_condition = report.first_hessian_condition;
-  next.multiplier_updates = report.multiplier_updates;
-  next.history_updates = report.history_updates;
-  next.history_moved = report.history_moved;
-  next.reused_factorizations += report.reused_factorizations;
-  next.reuse_error = std::max(next.reuse_error, report.reuse_error);
-  report = std::move(next);
-}
-
 void StepSolver::enforce_exact_constraints(State& q, StepReport& report) {
   IncrementalPotential& P = component().potential;
   double violation = P.constraint_violation(q);
@@ -270,7 +271,7 @@ void StepSolver::enforce_exact_constraints(State& q, StepReport& report) {
     }
     previous = violation;
     P.update_multipliers(q);
-    accumulate(report, minimize(q));
+    report.accumulate(minimize(q));
     ++report.multiplier_updates;
     if (!report.state_updated()) return;
     violation = P.constraint_violation(q);

@@ -205,6 +205,10 @@ struct StepReport {
   bool converged() const { return status == StepStatus::kConverged; }
   // Merges the report of another component of the same time step.
   void merge(const StepReport& other);
+  // Adds a later solve of the same step (a multiplier or history update, a contact round):
+  // counts summed, status and final values from `next`, the first-iteration diagnostics of
+  // the earliest solve that has them. A default report is its identity.
+  void accumulate(StepReport next);
 };
 
 // The positions and rotations of a component's DOF blocks, copied out of a State and back: a
@@ -309,9 +313,6 @@ class StepSolver {
   const char* non_finite_value(const StepReport& report, const State& q) const;
   // The augmented Lagrangian loop above, after the first minimisation gave `report`.
   void enforce_exact_constraints(State& q, StepReport& report);
-  // Adds a further solve's `next` into the step's `report`: counts summed, final values and
-  // status from `next`, first-iteration diagnostics and loop counters kept.
-  static void accumulate(StepReport& report, StepReport next);
 
   double tolerance_;
   bool has_exact_constraints_ = false;
