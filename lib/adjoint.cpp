@@ -125,14 +125,15 @@ void IncrementalPotential::add_history_adjoint(const State& q, const State& prev
                      da_before, dgamma);
     return;
   }
-  if (integrator_ != Integrator::kTrapezoidal) return;
+  const double beta = newmark_beta(integrator_);
+  if (beta == 0.0) return;
   const bool first = frame <= 1;
   const std::vector<RotationHistory>& rotations = terms<RotationHistory>();
-  // c = ½ ∇V(q_{k−1}) + ¼ ∇V(q_{k−2}) − μ_{k−3/2}/h   (frame 1: ¼ ∇V(q_0) − π_0/h).
+  // c = (1 − 2β) ∇V(q_{k−1}) + β ∇V(q_{k−2}) − μ_{k−3/2}/h   (frame 1: (½ − β) ∇V(q_0) − π_0/h).
   Eigen::VectorXd& u = adjoint_older_;
   u.setZero(z.size());
-  add_weighted_terms_adjoint(previous, gradient_previous_, first ? 0.25 : 0.5, frame, previous,
-                             previous_step, z, u, a_previous, da_previous, dgamma);
+  add_weighted_terms_adjoint(previous, gradient_previous_, first ? 0.5 - beta : 1.0 - 2.0 * beta,
+                             frame, previous, previous_step, z, u, a_previous, da_previous, dgamma);
   for (const PointHistory& t : terms<PointHistory>()) {
     a_previous.segment<3>(tangent_point(t.point)) += u.segment<3>(t.offsets[0]);
   }
@@ -141,7 +142,7 @@ void IncrementalPotential::add_history_adjoint(const State& q, const State& prev
   }
   if (!first) {
     u.setZero();
-    add_weighted_terms_adjoint(older_, gradient_older_, 0.25, frame, previous, previous_step, z,
+    add_weighted_terms_adjoint(older_, gradient_older_, beta, frame, previous, previous_step, z,
                                u, a_previous, da_previous, dgamma);
     add_older_adjoint(previous, previous_step, u, a_previous, da_previous);
   }

@@ -46,9 +46,10 @@ void IncrementalPotential::begin_step(const State& previous, const Step& previou
     begin_bdf2_step(previous, previous_step, *step_before, frame - start_frame);
     return;
   }
-  if (integrator_ != Integrator::kTrapezoidal) return;
+  const double beta = newmark_beta(integrator_);
+  if (beta == 0.0) return;
   // The history terms' fields (lib/history.hpp). At frame 1 the history is the initial
-  // velocities: the trapezoidal rule's first step, c = ¼ ∇V(q_0) − π_0/h.
+  // velocities: Newmark's first step, c = (½ − β) ∇V(q_0) − π_0/h.
   const bool first = frame - start_frame <= 1;
   // ∇V(q_{k−2}) is the last step's ∇V(q_{k−1}) where this step continues it (the next frame of
   // the run, q_{k−2} its q_{k−1} to round-off) and the state terms are the same functions at
@@ -63,8 +64,9 @@ void IncrementalPotential::begin_step(const State& previous, const Step& previou
   keep_gradient_state(previous);
   if (!first && !carried) state_terms_gradient(older_, gradient_older_);
   const auto lagged = [&](int offset) -> Vector3 {
-    if (first) return 0.25 * gradient_previous_.segment<3>(offset);
-    return 0.5 * gradient_previous_.segment<3>(offset) + 0.25 * gradient_older_.segment<3>(offset);
+    if (first) return (0.5 - beta) * gradient_previous_.segment<3>(offset);
+    return (1.0 - 2.0 * beta) * gradient_previous_.segment<3>(offset) +
+           beta * gradient_older_.segment<3>(offset);
   };
   for (PointHistory& t : terms<PointHistory>()) t.field = lagged(t.offsets[0]);
   const std::vector<RotationalInertia>& inertia = terms<RotationalInertia>();
@@ -159,8 +161,9 @@ void IncrementalPotential::set_integrator(Integrator integrator, int dofs) {
     gradient_older_.setZero(dofs);
     return;
   }
-  if (integrator != Integrator::kTrapezoidal) return;
-  state_weight_ = 0.25;
+  const double beta = newmark_beta(integrator);
+  if (beta == 0.0) return;
+  state_weight_ = beta;
   // History term t belongs to inertia term t of its kind (same point or rotation, same
   // offset): begin_step and the Ceres back-end pair them by index.
   gradient_previous_.setZero(dofs);

@@ -145,16 +145,26 @@ const char* to_string(Integrator integrator) {
   switch (integrator) {
     case Integrator::kBackwardEuler: return "backward_euler";
     case Integrator::kTrapezoidal: return "trapezoidal";
+    case Integrator::kFoxGoodwin: return "fox_goodwin";
     case Integrator::kBdf2: return "bdf2";
   }
   return "unknown";
 }
 
 std::optional<Integrator> parse_integrator(std::string_view name) {
-  for (const auto i : {Integrator::kBackwardEuler, Integrator::kTrapezoidal, Integrator::kBdf2}) {
+  for (const auto i : {Integrator::kBackwardEuler, Integrator::kTrapezoidal, Integrator::kFoxGoodwin,
+                       Integrator::kBdf2}) {
     if (name == to_string(i)) return i;
   }
   return std::nullopt;
+}
+
+double newmark_beta(Integrator integrator) {
+  switch (integrator) {
+    case Integrator::kTrapezoidal: return 0.25;
+    case Integrator::kFoxGoodwin: return 1.0 / 12.0;
+    default: return 0.0;
+  }
 }
 
 void Model::validate() const {
@@ -358,8 +368,32 @@ void Model::validate() const {
     }
   }
   if (!static_equilibrium) validate_motion_speeds();
+  if (!static_equilibrium && integrator == Integrator::kFoxGoodwin) validate_conditional_stability();
   validate_contact_names();
   if (static_equilibrium) validate_anchoring();
+}
+
+void Model::validate_conditional_stability() const {
+  // The Simulator checks ωh < √6 on the modes of the terms a set of islands starts with
+  // (lib/stability.hpp); these stiffnesses appear within a run, where no check can see them.
+  const std::string why =
+      " under the fox_goodwin integrator, which is stable only for ωh < √6 on every mode: its "
+      "stiffness appears within a step, where no check at the start can see it (trapezoidal and "
+      "bdf2 are stable at any h)";
+  for (std::size_t i = 0; i < bodies.size(); ++i) {
+    if (bodies[i].contact.enabled()) throw ModelError(index_field("bodies", i, "contact"), "cannot have contact" + why);
+  }
+  for (std::size_t r = 0; r < rods.size(); ++r) {
+    if (rods[r].contact.enabled()) throw ModelError(index_field("rods", r, "contact"), "cannot have contact" + why);
+  }
+  for (std::size_t i = 0; i < joints.size(); ++i) {
+    const JointSpec& j = joints[i];
+    // A hinge's limit is as elastic as its rotation, a slider's as its position.
+    const double compliance = j.type == JointSpec::Type::kHinge ? j.compliance_rotation : j.compliance;
+    if (j.has_limits && compliance > 0.0) {
+      throw ModelError(index_field("joints", i, "limits"), "cannot be elastic (a compliant joint's)" + why);
+    }
+  }
 }
 
 void Model::validate_motion_speeds() const {

@@ -161,16 +161,25 @@ struct TorqueSpec {
 //     discretisation of rotational inertia (discrete momentum 2 vee(R_k J R_{k−1}ᵀ)/h), solved
 //     as a minimisation (lib/history.hpp). Friction, motors and exact joints act at the
 //     step's end, as under backward Euler.
+//   * fox_goodwin — the same with the forces weighted (f_k + 10 f_{k−1} + f_{k−2})/12 (Newmark's
+//     β = 1/12 where the trapezoidal rule is β = ¼): fourth order in the phase of a linear
+//     oscillation of points (Numerov's method), where the trapezoidal rule errs by (ωh)²/12, but
+//     only conditionally stable, for ωh < √6 on every mode (docs/design.md §14.6). The Simulator
+//     checks that bound at the state each set of islands starts from (lib/stability.hpp), and
+//     validate() refuses contact and elastic joint limits, whose stiffness appears within a run.
 //   * bdf2 — second order and L-stable: the backward difference of the second derivative,
 //     M (2x_k − 5x_{k−1} + 4x_{k−2} − x_{k−3})/h² = f_k, as backward Euler's incremental
 //     potential with twice the inertia about an extrapolation from three states (docs/design.md
 //     §15). It damps what h does not resolve, as backward Euler, but resolved motion only at
 //     O((ωh)⁴) per step.
-enum class Integrator { kBackwardEuler, kTrapezoidal, kBdf2 };
-// The scene file's names ("backward_euler", "trapezoidal", "bdf2") and back (nullopt for
-// another).
+enum class Integrator { kBackwardEuler, kTrapezoidal, kFoxGoodwin, kBdf2 };
+// The scene file's names ("backward_euler", "trapezoidal", "fox_goodwin", "bdf2") and back
+// (nullopt for another).
 const char* to_string(Integrator integrator);
 std::optional<Integrator> parse_integrator(std::string_view name);
+// β of the integrators that weight the forces of three states β f_k + (1 − 2β) f_{k−1} + β f_{k−2}
+// (lib/history.hpp): ¼ for trapezoidal, 1/12 for fox_goodwin; 0 for the others.
+double newmark_beta(Integrator integrator);
 
 struct Model {
   double time_step = 0.01;  // h, s, > 0
@@ -244,6 +253,8 @@ struct Model {
   static void validate_motions(const RodSpec& rod, const std::string& path);
   // Dynamic mode: prescribed rotations below π per time step.
   void validate_motion_speeds() const;
+  // Dynamic mode under fox_goodwin: no contact and no elastic joint limits (Integrator).
+  void validate_conditional_stability() const;
   // The static-mode checks of validate().
   void validate_anchoring() const;
   // The contact checks of validate(): colliders, materials, samples; `path` as above.

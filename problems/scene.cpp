@@ -17,6 +17,7 @@
 #include "../lib/body_contact.hpp"
 #include "../lib/mass_properties.hpp"
 #include "../lib/so3.hpp"
+#include "../lib/stability.hpp"
 #include "analytic.hpp"
 #include "input_file.hpp"
 #include "json_reader.hpp"
@@ -1059,6 +1060,7 @@ Scene parse(const json& root, const std::string& source, const std::filesystem::
   // Physical checks (positivity, inertia, …) live with the model, which names the field.
   try {
     scene.model.validate();
+    check_stable_start(scene.model);
     scene.solver.validate();
     if (optimization != nullptr) scene.optimization = parse_optimization(*optimization, scene);
   } catch (const ModelError& e) {

@@ -8,6 +8,7 @@
 #include <utility>
 
 #include "../lib/so3.hpp"
+#include "../lib/stability.hpp"
 #include "../lib/trajectory.hpp"
 
 namespace liedyn {
@@ -37,6 +38,7 @@ Simulator::Simulator(Model model, const SolverOptions& options)
 Simulator::StepIslands& Simulator::islands_at(const std::vector<bool>& key) {
   return islands_.at(key, [&] {
     std::vector<Component> components = build_components(model_, key);
+    check_stable_step(model_, components, state_, frame_);
     StepIslands islands;
     for (Component& c : components) islands.solvers.push_back(make_step_solver(std::move(c), options_));
     islands.reports.resize(islands.solvers.size());

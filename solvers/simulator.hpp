@@ -29,7 +29,9 @@ class Simulator {
   Simulator(Model model, const SolverOptions& options);
 
   // Advances one time step. When the report says the state was not updated, the simulator
-  // is left exactly as before the call.
+  // is left exactly as before the call. Under fox_goodwin, building a set of islands checks
+  // its stable step (lib/stability.hpp): the constructor throws ModelError for the first set,
+  // step() for one that a joint's active frames first make within the run.
   StepReport step();
 
   // Restarts the run from state q with the step dq (velocities dq/h; zero in static mode) at

@@ -221,11 +221,18 @@ ChainRun run_chain(Integrator integrator) {
 
 // Each step of a spring chain under gravity (springs between body points: forces and torques
 // on every body) satisfies the scheme's equations (lib/history.hpp), with
-// r_k = m (x_k − 2x_{k−1} + x_{k−2})/h² + ¼ (∇V_k + 2∇V_{k−1} + ∇V_{k−2}) on points and
-// (2 vee(R_k J R_{k−1}ᵀ) − 2 vee(R_{k−1} J R_{k−2}ᵀ))/h² + ¼ (…) on rotations; the first step
-// with the initial velocities in place of q_{−1}.
-TEST(Trapezoidal, StepsSatisfyTheDiscreteEquations) {
-  const ChainRun run = run_chain(Integrator::kTrapezoidal);
+// r_k = m (x_k − 2x_{k−1} + x_{k−2})/h² + β ∇V_k + (1 − 2β) ∇V_{k−1} + β ∇V_{k−2} on points
+// and (2 vee(R_k J R_{k−1}ᵀ) − 2 vee(R_{k−1} J R_{k−2}ᵀ))/h² + (…) on rotations; the first
+// step with the initial velocities in place of q_{−1} (and (½ − β) ∇V_0): the trapezoidal
+// rule (β = ¼) and Fox–Goodwin's (β = 1/12).
+class NewmarkSteps : public ::testing::TestWithParam<Integrator> {};
+INSTANTIATE_TEST_SUITE_P(Integrators, NewmarkSteps,
+                         ::testing::Values(Integrator::kTrapezoidal, Integrator::kFoxGoodwin),
+                         [](const auto& info) { return std::string(to_string(info.param)); });
+
+TEST_P(NewmarkSteps, SatisfyTheDiscreteEquations) {
+  const double beta = newmark_beta(GetParam());
+  const ChainRun run = run_chain(GetParam());
   const Model& model = run.model;
   const std::vector<State>& q = run.q;
   ASSERT_EQ(q.size(), 41u);
@@ -239,8 +246,8 @@ TEST(Trapezoidal, StepsSatisfyTheDiscreteEquations) {
     const Eigen::VectorXd g_k = energy_gradient(P, q[k]);
     const Eigen::VectorXd g_1 = energy_gradient(P, q[k - 1]);
     const Eigen::VectorXd g_2 = k >= 2 ? energy_gradient(P, q[k - 2]) : Eigen::VectorXd();
-    const Eigen::VectorXd force =
-        k >= 2 ? Eigen::VectorXd(0.25 * (g_k + 2 * g_1 + g_2)) : Eigen::VectorXd(0.25 * (g_k + g_1));
+    const Eigen::VectorXd force = k >= 2 ? Eigen::VectorXd(beta * (g_k + g_2) + (1 - 2 * beta) * g_1)
+                                         : Eigen::VectorXd(beta * g_k + (0.5 - beta) * g_1);
     largest = std::max(largest, force.cwiseAbs().maxCoeff());
     for (std::size_t i = 0; i < model.bodies.size(); ++i) {
       const RigidBody& b = model.bodies[i];
@@ -342,7 +349,7 @@ TEST(SecondOrder, FreeFallIsExact) {
   model.bodies.push_back(b);
   SolverOptions options;
   options.tolerance = 1e-12;
-  for (const Integrator integrator : {Integrator::kTrapezoidal, Integrator::kBdf2}) {
+  for (const Integrator integrator : {Integrator::kTrapezoidal, Integrator::kFoxGoodwin, Integrator::kBdf2}) {
     SCOPED_TRACE(to_string(integrator));
     model.integrator = integrator;
     Simulator sim(model, options);
@@ -609,7 +616,7 @@ TEST(Trapezoidal, LinearSystemsFactoriseTheSkewNewtonMatrix) {
 // The same steps whichever back-end and parameterisation solves them (test_backends.cpp's
 // bound and reasoning: all stop on the shared test, here also on the history's reference).
 TEST(SecondOrder, EveryBackEndAndParameterisationTakesTheSameSteps) {
-  for (const Integrator integrator : {Integrator::kTrapezoidal, Integrator::kBdf2}) {
+  for (const Integrator integrator : {Integrator::kTrapezoidal, Integrator::kFoxGoodwin, Integrator::kBdf2}) {
   SCOPED_TRACE(to_string(integrator));
   Model model = test_models::spring_chain(2);
   model.integrator = integrator;
@@ -785,6 +792,7 @@ TEST(Trapezoidal, SceneKeyIsParsedAndAnUnknownOneNamed) {
   const std::string base = R"({"time_step": 0.01, "frames": 1, "bodies": [{"name": "b", "mass": 1, "inertia": [1, 1, 1]}], "integrator": )";
   EXPECT_EQ(parse_scene(base + "\"trapezoidal\"}", "inline").model.integrator, Integrator::kTrapezoidal);
   EXPECT_EQ(parse_scene(base + "\"bdf2\"}", "inline").model.integrator, Integrator::kBdf2);
+  EXPECT_EQ(parse_scene(base + "\"fox_goodwin\"}", "inline").model.integrator, Integrator::kFoxGoodwin);
   try {
     parse_scene(base + "\"midpoint\"}", "inline");
     FAIL() << "accepted";
@@ -831,7 +839,7 @@ TEST(HistoryAdjoint, BlocksMatchFiniteDifferencesOverAllAngles) {
   rod.gravity = Vector3(0.0, 0.0, -9.81);
   rod.rods.push_back(test_models::uniform_rod(3, 0.3, 0.1, 0.01, 4e2, 1e2, 0.5));
   std::mt19937 rng(17);
-  for (const Integrator integrator : {Integrator::kTrapezoidal, Integrator::kBdf2}) {
+  for (const Integrator integrator : {Integrator::kTrapezoidal, Integrator::kFoxGoodwin, Integrator::kBdf2}) {
     for (Model* model : {&chain, &rod}) {
       model->integrator = integrator;
       std::vector<Component> components = build_components(*model);
@@ -839,7 +847,7 @@ TEST(HistoryAdjoint, BlocksMatchFiniteDifferencesOverAllAngles) {
       IncrementalPotential& p = components[0].potential;
       const State q0 = model->initial_state();
       for (const int frame : {1, 2, 4}) {
-        const int log_frame = integrator == Integrator::kTrapezoidal ? 1 : 2;
+        const int log_frame = integrator == Integrator::kBdf2 ? 2 : 1;
         for (const double angle : kAngles) {
           if (frame == log_frame && std::abs(angle - std::numbers::pi) < 1e-5) continue;
           SCOPED_TRACE(trace("integrator, frame, angle", int(integrator), frame, angle));
@@ -916,7 +924,7 @@ TEST(HistoryAdjoint, BlocksMatchFiniteDifferencesOverAllAngles) {
 TEST(SecondOrder, StaticModeIsUnaffected) {
   const Scene scene = load_scene(kScenes / "cantilever_static.json");
   const test::Trajectory euler = test::run_frames(scene.model, scene.solver, 5, "backward_euler");
-  for (const Integrator integrator : {Integrator::kTrapezoidal, Integrator::kBdf2}) {
+  for (const Integrator integrator : {Integrator::kTrapezoidal, Integrator::kFoxGoodwin, Integrator::kBdf2}) {
     Model model = scene.model;
     model.integrator = integrator;
     const test::Trajectory other = test::run_frames(model, scene.solver, 5, to_string(integrator));
@@ -1056,7 +1064,7 @@ TEST(Bdf2, DampsWhatTheStepDoesNotResolveAndKeepsWhatItDoes) {
 // number does not matter).
 TEST(SetState, RestartsTheIntegratorsHistory) {
   for (const Integrator integrator :
-       {Integrator::kBackwardEuler, Integrator::kTrapezoidal, Integrator::kBdf2}) {
+       {Integrator::kBackwardEuler, Integrator::kTrapezoidal, Integrator::kFoxGoodwin, Integrator::kBdf2}) {
     SCOPED_TRACE(to_string(integrator));
     Model model = test_models::spring_chain(3);
     model.integrator = integrator;

@@ -34,7 +34,7 @@ def test_problem_describes_its_parameters(die, cli, scenes, tmp_path):
     assert die.loss_scale == pytest.approx(die.loss(die.gamma0))
 
 
-@pytest.mark.parametrize("integrator", ["backward_euler", "trapezoidal", "bdf2"])
+@pytest.mark.parametrize("integrator", ["backward_euler", "trapezoidal", "fox_goodwin", "bdf2"])
 def test_gradient_matches_central_differences(scenes, integrator):
     scene = liedyn.Scene.from_file(scenes / "optimization" / "die_throw.json").with_settings(
         {"solver.tolerance": 1e-13, "integrator": integrator})

@@ -91,6 +91,15 @@ def test_with_settings_sets_dotted_paths_and_validates(scenes):
         scene.with_settings({"bodies.5.mass": 1.0})  # a path that leads nowhere
 
 
+def test_a_step_beyond_fox_goodwins_stable_step_is_named(scenes):
+    beam = liedyn.Scene.from_file(scenes / "timoshenko_beam.json")
+    assert beam.with_settings({"integrator": "fox_goodwin", "time_step": 0.0025}).integrator == "fox_goodwin"
+    with pytest.raises(liedyn.SceneError) as error:
+        beam.with_settings({"integrator": "fox_goodwin", "time_step": 0.0027})
+    assert error.value.field == "time_step"
+    assert "fox_goodwin" in error.value.reason and "0.0026" in error.value.reason
+
+
 def test_scene_pickles_through_its_json(scenes):
     scene = liedyn.Scene.from_file(scenes / "optimization" / "die_throw.json")
     copy = pickle.loads(pickle.dumps(scene))
