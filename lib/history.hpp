@@ -1,20 +1,20 @@
 #pragma once
-// The history terms of the trapezoidal integrator (Model::Integrator; derivation in
-// docs/design.md §14): what a step needs of the states before it, as a constant force field
-// on each point and a constant world torque field on each rotation.
+// The history terms of the trapezoidal and Fox–Goodwin integrators (Model::Integrator;
+// derivation in docs/design.md §14 and §14.2): what a step needs of the states before it, as a
+// constant force field on each point and a constant world torque field on each rotation.
 //
-// The trapezoidal step from q_{k−1} (and q_{k−2} = q_{k−1} ⊖ Δq_{k−1}) solves, with
-// f = −∇V the forces of the conservative terms,
-//   points     m (x_k − 2x_{k−1} + x_{k−2})/h² = ¼ (f_k + 2 f_{k−1} + f_{k−2}),
-//   rotations  (μ_{k−½} − μ_{k−3/2})/h = ¼ (τ_k + 2 τ_{k−1} + τ_{k−2}),
+// The step from q_{k−1} (and q_{k−2} = q_{k−1} ⊖ Δq_{k−1}) solves, with f = −∇V the forces of
+// the conservative terms and β = newmark_beta (¼ trapezoidal, 1/12 Fox–Goodwin),
+//   points     m (x_k − 2x_{k−1} + x_{k−2})/h² = β f_k + (1 − 2β) f_{k−1} + β f_{k−2},
+//   rotations  (μ_{k−½} − μ_{k−3/2})/h = β τ_k + (1 − 2β) τ_{k−1} + β τ_{k−2},
 // with μ_{k−½} = 2 vee(R_k J R_{k−1}ᵀ)/h the Lie group variational integrator's discrete
 // (spatial) angular momentum. It is the stationary point of
-//   Ψ = Σ m/(2h²)‖x − x̃‖² + Σ −tr(R J R_{k−1}ᵀ)/h² + ¼ V(q) + Σ_t Ψ_t(q) + history,
+//   Ψ = Σ m/(2h²)‖x − x̃‖² + Σ −tr(R J R_{k−1}ᵀ)/h² + β V(q) + Σ_t Ψ_t(q) + history,
 // x̃ = x_{k−1} + Δx_{k−1} (the inertia terms' own), Ψ_t the terms that act at the step's end
 // (term.hpp, EndOfStep), where the history's gradient is the constant
-//   c = ½ ∇V(q_{k−1}) + ¼ ∇V(q_{k−2}) − μ_{k−3/2}/h      (μ only on rotations).
-// The first step, from q_0 and the initial velocities, is the trapezoidal rule itself:
-// c = ¼ ∇V(q_0) − π_0/h with π_0 = R_0 I_b R_0ᵀ ω_0 the momentum of ω_0 = log(ΔR_0)/h.
+//   c = (1 − 2β) ∇V(q_{k−1}) + β ∇V(q_{k−2}) − μ_{k−3/2}/h      (μ only on rotations).
+// The first step, from q_0 and the initial velocities, is Newmark's own first step:
+// c = (½ − β) ∇V(q_0) − π_0/h with π_0 = R_0 I_b R_0ᵀ ω_0 the momentum of ω_0 = log(ΔR_0)/h.
 //
 // On a point the field is the gradient of a linear potential, c·x. On SO(3) no function has
 // a constant world gradient (its Lie Hessian would have to be antisymmetric), so a rotation's

@@ -1,8 +1,9 @@
 #pragma once
 // The incremental potential Ψ(q_k; q_{k−1}, Δq_{k−1}) of a time step (paper §4.2):
 //   Ψ = Σ inertia terms + Σ potentials (gravity, forces, torques, springs)
-// under backward Euler; under the trapezoidal integrator (Model::Integrator) the potentials
-// of the state count ¼ and history terms carry the rest (lib/history.hpp, weight() below).
+// under backward Euler; under the trapezoidal and Fox–Goodwin integrators (Model::Integrator)
+// the potentials of the state count β (¼, 1/12) and history terms carry the rest
+// (lib/history.hpp, weight() below).
 // One IncrementalPotential per independent component of a model (bodies not coupled by
 // springs are minimised separately). A component composes exactly the term types its
 // scene uses: each type lives in its own vector, and an empty vector costs nothing.
@@ -124,16 +125,16 @@ class IncrementalPotential {
   // component's tangent size.
   void set_integrator(Integrator integrator, int dofs);
   Integrator integrator() const { return integrator_; }
-  // The factor of term t in Ψ: 1, or ¼ under the trapezoidal integrator for a term that is
-  // neither EndOfStep (term.hpp) nor an exact Constraint (its force is weighted over three
-  // states, the history holding the other ¾). Every consumer of a term's value, gradient,
+  // The factor of term t in Ψ: 1, or β (newmark_beta: ¼ trapezoidal, 1/12 Fox–Goodwin) for a
+  // term that is neither EndOfStep (term.hpp) nor an exact Constraint (its force is weighted
+  // over three states, the history holding the other 1 − β). Every consumer of a term's value, gradient,
   // Hessian or residual applies it (assembly, value(), the Ceres forms).
   template <class T>
   double weight(const T& t) const {
     return state_term(t) ? state_weight_ : 1.0;
   }
   // Whether term t is a potential of the state: neither EndOfStep (term.hpp) nor an exact
-  // Constraint. The trapezoidal history holds these (weight() ¼).
+  // Constraint. The trapezoidal and Fox–Goodwin history holds these (weight() β).
   template <class T>
   static bool state_term(const T& t) {
     if constexpr (EndOfStep<T>) {

@@ -164,7 +164,7 @@ struct TorqueSpec {
 //   * fox_goodwin — the same with the forces weighted (f_k + 10 f_{k−1} + f_{k−2})/12 (Newmark's
 //     β = 1/12 where the trapezoidal rule is β = ¼): fourth order in the phase of a linear
 //     oscillation of points (Numerov's method), where the trapezoidal rule errs by (ωh)²/12, but
-//     only conditionally stable, for ωh < √6 on every mode (docs/design.md §14.6). The Simulator
+//     only conditionally stable, for ωh < √6 on every mode (docs/design.md §14.2). The Simulator
 //     checks that bound at the state each set of islands starts from (lib/stability.hpp), and
 //     validate() refuses contact and elastic joint limits, whose stiffness appears within a run.
 //   * bdf2 — second order and L-stable: the backward difference of the second derivative,

@@ -5,7 +5,6 @@
 #include <Eigen/SparseCore>
 #include <algorithm>
 #include <cmath>
-#include <cstdint>
 #include <random>
 #include <sstream>
 #include <stdexcept>
