@@ -5,6 +5,7 @@
 #include <Eigen/SparseCore>
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <random>
 #include <sstream>
 #include <stdexcept>
@@ -63,8 +64,12 @@ std::vector<Matrix3> inverse_mass_factors(const Component& c, const State& q) {
   }
   std::vector<Matrix3> factors(M.size());
   for (std::size_t b = 0; b < M.size(); ++b) {
-    if (!has[b]) throw std::logic_error("largest_mode_step_squared: a DOF block without inertia");
+    // Model::validate makes every mass and inertia positive (definite): a block without one is
+    // a caller's error, not a model's.
     const Eigen::LLT<Matrix3> llt(M[b]);
+    if (!has[b] || llt.info() != Eigen::Success) {
+      throw std::logic_error("largest_mode_step_squared: a DOF block without a positive definite inertia");
+    }
     factors[b] = llt.matrixL().solve(Matrix3::Identity());
   }
   return factors;
@@ -117,7 +122,10 @@ double largest_mode_step_squared(const Component& c, const State& q) {
     if (k + 1 < steps) T(k, k + 1) = T(k + 1, k) = beta[k];
   }
   const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eigen(T, Eigen::EigenvaluesOnly);
-  return std::max(0.0, eigen.eigenvalues().maxCoeff());
+  const double largest = eigen.eigenvalues().maxCoeff();
+  // A stiffness that is not finite at q has no stable step (and std::max would drop a NaN).
+  if (std::isnan(largest)) return std::numeric_limits<double>::infinity();
+  return std::max(0.0, largest);
 }
 
 void check_stable_step(const Model& model, const std::vector<Component>& components, const State& q,

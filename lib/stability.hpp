@@ -23,8 +23,9 @@
 namespace liedyn {
 
 // The largest (ωh)² of the component's modes at q (0 when no term of the state is stiff there;
-// negative eigenvalues, a buckling direction, do not count). The component must have inertia
-// terms on every DOF block (a dynamic step).
+// negative eigenvalues, a buckling direction, do not count; +∞ where the stiffness is not
+// finite). The component must have positive definite inertia on every DOF block (a dynamic
+// step; std::logic_error otherwise).
 double largest_mode_step_squared(const Component& component, const State& q);
 
 // Throws ModelError on "time_step" when integrator β < ¼ (newmark_beta) and some component's

@@ -25,11 +25,13 @@ if [ "${1:-}" = "--sanitize" ]; then
   # Every test runs ~15× slower here. Left out, as they repeat for minutes what the rest of the
   # suite runs under the sanitizers already: the arm's two L-BFGS runs to their target (~1000
   # iterations, 300 s; its gradcheck stays), the gradcheck of every joint type's scene (100 s;
-  # the joint terms' adjoint blocks have their own tests), the endoscope's and the coiled rope's whole runs
+  # the joint terms' adjoint blocks have their own tests), every joint scene under the nine
+  # back-end and parameterisation pairs (235 s; JointsChain.BackEndsAndParameterisationsAgree
+  # runs the three back-ends and parameterisations on joints here), the endoscope's and the coiled rope's whole runs
   # (110 and 75 s; ContactSearch.* runs both scenes' contact search, and the rod-contact terms
   # have their own tests) and the downstream project's install and build (packaging, checked
   # by the Release run).
-  ctest_options+=(-E '^(JointsCli[.](TheArmReachesItsTargetWithNloptAndIpopt|GradcheckPassesThroughEveryJointTypeElasticAndExact)|RodContactScenes[.](TheEndoscopeRidesOverThePolyp|TheCoiledRopeLiesOnItselfAndWithoutSelfContactPassesThrough)|downstream_find_package)$')
+  ctest_options+=(-E '^(JointsCli[.](TheArmReachesItsTargetWithNloptAndIpopt|GradcheckPassesThroughEveryJointTypeElasticAndExact|EveryJointSceneRunsUnderEveryBackEndAndParameterisation)|RodContactScenes[.](TheEndoscopeRidesOverThePolyp|TheCoiledRopeLiesOnItselfAndWithoutSelfContactPassesThrough)|downstream_find_package)$')
 fi
 # ccache (outside the clone) makes repeated CI runs on the same machine cheap.
 if command -v ccache >/dev/null; then
