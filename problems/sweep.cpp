@@ -325,7 +325,7 @@ std::vector<std::pair<std::string, std::string>> reference_overrides(
         // One reference for every integrator on the axis, the most accurate one's: a backward
         // Euler reference at h/4 is itself first-order wrong, and each integrator measured
         // against its own would hide that (docs/design.md §14); fox_goodwin's, where the axis
-        // has it (fourth order in the phase of points, §14.6), errs less than the trapezoidal
+        // has it (fourth order in the phase of points, §14.2), errs less than the trapezoidal
         // rule's at the same h.
         overrides.emplace_back("integrator",
                                std::any_of(group.begin(), group.end(),
