@@ -1,4 +1,4 @@
-// The fox_goodwin integrator (Model::Integrator; docs/design.md §14.6): Newmark's β = 1/12,
+// The fox_goodwin integrator (Model::Integrator; docs/design.md §14.2): Newmark's β = 1/12,
 // fourth order in the phase of an oscillation and stable for ωh < √6 — the phase measured on a
 // linear oscillator against the scheme's closed form and the trapezoidal rule's, the stability
 // bound estimated (lib/stability.hpp) against a dense eigensolver and enforced at its edge, and
